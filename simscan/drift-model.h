@@ -1,0 +1,59 @@
+/*
+ *  Drift trajectories p(t) of shared/spec/interfaces.md section 4.  A feature
+ *  truly at X appears in the image at X + p(t), t the moment its pixel was
+ *  scanned; t = 0 is the start of the first frame.  Metres and seconds.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef SIMSCAN_DRIFT_MODEL_H
+#define SIMSCAN_DRIFT_MODEL_H
+
+#include <glib.h>
+
+G_BEGIN_DECLS
+
+typedef enum {
+    DRIFT_MODEL_NONE = 0,      /* p = p0 + v t (the paper's assumption) */
+    DRIFT_MODEL_SETTLING,      /* p' = v + u exp(-t/tau) */
+    DRIFT_MODEL_OSCILLATION,   /* p = p0 + v t + a sin(2 pi t/period + phase) */
+    DRIFT_MODEL_JUMP,          /* p = p0 + v t + step [t >= t_jump] */
+    DRIFT_MODEL_RANDOM_WALK,   /* p' = v + w(t), w a seeded random walk */
+    DRIFT_MODEL_NTYPES
+} DriftModelType;
+
+typedef struct {
+    DriftModelType type;
+    gdouble p0[2];         /* m */
+    gdouble v[2];          /* m/s */
+    gdouble u[2];          /* settling: initial excess velocity, m/s */
+    gdouble tau;           /* settling: s */
+    gdouble a[2];          /* oscillation amplitude, m */
+    gdouble period;        /* s */
+    gdouble phase;         /* rad */
+    gdouble step[2];       /* jump, m */
+    gdouble t_jump;        /* s */
+    gdouble walk_sigma;    /* random walk: velocity diffusion, m/s per sqrt(s) */
+    gdouble walk_dt;       /* random walk: time step of the path, s */
+    guint32 walk_seed;
+    /* private: the random walk's precomputed path */
+    gdouble walk_t_end;
+    gint walk_n;
+    gdouble *walk_p;       /* 2*walk_n positions of the walk part */
+} DriftModel;
+
+/* Sets every field to the model with no drift at all. */
+void          drift_model_init       (DriftModel *model, DriftModelType type);
+/* Random walk only: precomputes the path over [0, t_end].  Others: no-op. */
+void          drift_model_prepare    (DriftModel *model, gdouble t_end);
+void          drift_model_clear      (DriftModel *model);
+void          drift_model_eval       (const DriftModel *model, gdouble t,
+                                      gdouble *px, gdouble *py);
+/* Velocity p'(t), m/s. */
+void          drift_model_velocity   (const DriftModel *model, gdouble t,
+                                      gdouble *vx, gdouble *vy);
+const gchar*  drift_model_type_name  (DriftModelType type);  /* "none", "settling", ... */
+gboolean      drift_model_type_from_name(const gchar *name, DriftModelType *type);
+
+G_END_DECLS
+
+#endif
