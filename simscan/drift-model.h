@@ -41,9 +41,22 @@ typedef struct {
     gdouble *walk_p;       /* 2*walk_n positions of the walk part */
 } DriftModel;
 
-/* Sets every field to the model with no drift at all. */
+/* The paper's measured drift velocity, m/s (about 300 s per 256-line image). */
+#define DRIFT_MODEL_PAPER_VX 0.08e-9
+#define DRIFT_MODEL_PAPER_VY 0.02e-9
+
+/* Sets every field to the model with no drift at all (p0, v, u, a, step,
+ * walk_sigma zero; tau, period, walk_dt 1 s so the formulas stay finite). */
 void          drift_model_init       (DriftModel *model, DriftModelType type);
-/* Random walk only: precomputes the path over [0, t_end].  Others: no-op. */
+/* Deep copy (the random walk's path included); dest need not be initialised,
+ * and must be cleared afterwards. */
+void          drift_model_copy       (DriftModel *dest, const DriftModel *src);
+/* Random walk only: precomputes the path over [0, t_end] (replacing any
+ * earlier one).  The walk's velocity w starts at 0 and is constant over each
+ * step of walk_dt, taking independent N(0, walk_sigma^2 walk_dt) increments
+ * per axis, so p is its exact integral (piecewise linear).  Before t = 0 the
+ * walk part is 0; after t_end it continues with its last velocity.  Without
+ * a path (not prepared) the walk part is 0.  Others: no-op. */
 void          drift_model_prepare    (DriftModel *model, gdouble t_end);
 void          drift_model_clear      (DriftModel *model);
 void          drift_model_eval       (const DriftModel *model, gdouble t,
