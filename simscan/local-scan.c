@@ -1,0 +1,246 @@
+/*
+ *  The paper's local-scan procedure on a probe function.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <math.h>
+#include "local-scan.h"
+
+/* The search moves L0 by this many particle radii: any particle whose centre
+ * lies within 0.75 R of some line is cut above half its height. */
+#define SEARCH_STEP_RADII 1.5
+
+typedef struct {
+    const LocalScanParams *params;
+    LocalScanProbe probe;
+    gpointer probe_data;
+    gdouble threshold;
+    gdouble t;          /* instrument clock, advanced by every line */
+    gint lines;
+    gdouble *heights;   /* points samples of the current line */
+} LineScanner;
+
+void
+local_scan_params_init(LocalScanParams *params)
+{
+    params->radius = 25e-9;
+    params->r_max = 100e-9;
+    params->points = 64;
+    params->tip_speed = 4e-6;
+    params->line_overhead = 0.0;
+    params->threshold_fraction = 0.5;
+}
+
+gdouble
+local_scan_line_length(const LocalScanParams *params)
+{
+    return 2.0*(params->radius + params->r_max);
+}
+
+gdouble
+local_scan_line_time(const LocalScanParams *params)
+{
+    return params->line_overhead
+           + local_scan_line_length(params)/params->tip_speed;
+}
+
+/* Samples one line of the instrument centred at (xc, yc) along x or y; the
+ * drift goes on while the tip moves, so each sample has its own time. */
+static void
+scan_line(LineScanner *scanner, gdouble xc, gdouble yc, gboolean along_x)
+{
+    const LocalScanParams *params = scanner->params;
+    gint n = params->points, i;
+    gdouble length = local_scan_line_length(params);
+    gdouble step = length/(n - 1);
+    gdouble t0 = scanner->t + params->line_overhead;
+    gdouble dt = (length/params->tip_speed)/(n - 1);
+
+    for (i = 0; i < n; i++) {
+        gdouble s = -0.5*length + i*step;
+        gdouble x = along_x ? xc + s : xc;
+        gdouble y = along_x ? yc : yc + s;
+
+        scanner->heights[i] = scanner->probe(scanner->probe_data, x, y,
+                                             t0 + i*dt);
+    }
+    scanner->t += local_scan_line_time(params);
+    scanner->lines++;
+}
+
+/* The chord of the last line nearest to `expect` (position along the line,
+ * relative to its centre): end points where the height crosses the threshold,
+ * interpolated linearly between samples.  Runs cut by the line's ends are
+ * incomplete chords and never used. */
+static gboolean
+find_chord_midpoint(const LineScanner *scanner, gdouble expect, gdouble *mid)
+{
+    const gdouble *h = scanner->heights;
+    gdouble thr = scanner->threshold;
+    gint n = scanner->params->points, i = 0, first, last;
+    gdouble length = local_scan_line_length(scanner->params);
+    gdouble step = length/(n - 1), best = G_MAXDOUBLE;
+    gboolean found = FALSE;
+
+    while (i < n) {
+        gdouble left, right, m;
+
+        if (h[i] <= thr) {
+            i++;
+            continue;
+        }
+        first = i;
+        while (i < n && h[i] > thr)
+            i++;
+        last = i - 1;
+        if (first == 0 || last == n-1)
+            continue;
+        left = (first - 1) + (thr - h[first-1])/(h[first] - h[first-1]);
+        right = last + (h[last] - thr)/(h[last] - h[last+1]);
+        m = -0.5*length + 0.5*(left + right)*step;
+        if (fabs(m - expect) < best) {
+            best = fabs(m - expect);
+            *mid = m;
+            found = TRUE;
+        }
+    }
+    return found;
+}
+
+/* L0 and its up/down moves: returns the offset (m) of the line that hit. */
+static gboolean
+search_horizontal_chord(LineScanner *scanner, gdouble x0, gdouble y0,
+                        gdouble *x_mid, gdouble *y_line)
+{
+    const LocalScanParams *params = scanner->params;
+    gdouble step = SEARCH_STEP_RADII*params->radius;
+    gdouble reach = params->r_max + params->radius;
+    gint k;
+
+    for (k = 0; k == 0 || ((k + 1)/2)*step <= reach; k++) {
+        /* 0, -1, +1, -2, +2, ... steps: up first, then down. */
+        gdouble offset = ((k + 1)/2)*step*((k % 2) ? -1.0 : 1.0);
+        gdouble mid;
+
+        scan_line(scanner, x0, y0 + offset, TRUE);
+        if (find_chord_midpoint(scanner, 0.0, &mid)) {
+            *x_mid = x0 + mid;
+            *y_line = y0 + offset;
+            return TRUE;
+        }
+    }
+    return FALSE;
+}
+
+gdouble
+local_scan_particle(GwyDataField *field, const LocalScanParams *params,
+                    LocalScanProbe probe, gpointer probe_data,
+                    gdouble x_px, gdouble y_px, gdouble threshold,
+                    gdouble t_start, LocalScanParticle *result)
+{
+    gdouble dx = gwy_data_field_get_dx(field);
+    gdouble dy = gwy_data_field_get_dy(field);
+    gdouble xoff = gwy_data_field_get_xoffset(field);
+    gdouble yoff = gwy_data_field_get_yoffset(field);
+    gdouble x0 = xoff + (x_px + 0.5)*dx, y0 = yoff + (y_px + 0.5)*dy;
+    gdouble x_mid = 0.0, y_line = 0.0, y_mid = 0.0;
+    LineScanner scanner;
+
+    g_return_val_if_fail(params->points >= 3 && params->tip_speed > 0.0,
+                         t_start);
+    scanner.params = params;
+    scanner.probe = probe;
+    scanner.probe_data = probe_data;
+    scanner.threshold = threshold;
+    scanner.t = t_start;
+    scanner.lines = 0;
+    scanner.heights = g_new(gdouble, params->points);
+
+    result->found = FALSE;
+    result->x_disp = x_px;
+    result->y_disp = y_px;
+    result->x_act = result->y_act = result->dx = result->dy = NAN;
+    if (search_horizontal_chord(&scanner, x0, y0, &x_mid, &y_line)) {
+        scan_line(&scanner, x_mid, y0, FALSE);
+        if (find_chord_midpoint(&scanner, y_line - y0, &y_mid)) {
+            result->found = TRUE;
+            result->x_act = (x_mid - xoff)/dx - 0.5;
+            result->y_act = (y0 + y_mid - yoff)/dy - 0.5;
+            result->dx = x_px - result->x_act;
+            result->dy = y_px - result->y_act;
+        }
+    }
+    result->lines = scanner.lines;
+    result->t_start = t_start;
+    result->t_end = scanner.t;
+    result->t_local = 0.5*(t_start + scanner.t);
+    g_free(scanner.heights);
+    return scanner.t;
+}
+
+static void
+set_table_row(DriftTable *table, gint s, const LocalScanParticle *r)
+{
+    gboolean scanned = (r && r->lines > 0);
+    gboolean found = (scanned && r->found);
+
+    table->rows[s].stripe = s;
+    table->rows[s].has_drift = found;
+    table->rows[s].dx = found ? round(r->dx) : 0.0;
+    table->rows[s].dy = found ? round(r->dy) : 0.0;
+    /* Every stripe sets every column, so the columns always come in this
+     * order and blank stripes get blank cells. */
+    drift_table_set_extra(table, s, "dx_exact", found ? r->dx : NAN);
+    drift_table_set_extra(table, s, "dy_exact", found ? r->dy : NAN);
+    drift_table_set_extra(table, s, "t_image", scanned ? r->t_image : NAN);
+    drift_table_set_extra(table, s, "t_local", found ? r->t_local : NAN);
+    drift_table_set_extra(table, s, "x", scanned ? r->x_disp : NAN);
+    drift_table_set_extra(table, s, "y", scanned ? r->y_disp : NAN);
+    drift_table_set_extra(table, s, "lines", scanned ? r->lines : NAN);
+}
+
+DriftTable*
+local_scan_run(GwyDataField *field, const ScanTiming *timing,
+               const GArray *particles, gdouble substrate, gint n,
+               const LocalScanParams *params,
+               LocalScanProbe probe, gpointer probe_data,
+               gdouble t_start, LocalScanParticle *results, gdouble *t_end)
+{
+    gint xres = gwy_data_field_get_xres(field);
+    gint yres = gwy_data_field_get_yres(field);
+    LocalScanParticle *res;
+    DriftTable *table;
+    gint *chosen;
+    gdouble t = t_start;
+    gint s;
+
+    g_return_val_if_fail(n >= 1 && n <= yres, NULL);
+    chosen = g_new(gint, n);
+    particle_choose_for_stripes(particles, n, xres, yres, chosen);
+    res = results ? results : g_new(LocalScanParticle, n);
+    table = drift_table_new(n, DRIFT_UNIT_PX);
+    for (s = 0; s < n; s++) {
+        const DetectedParticle *p;
+        gdouble threshold;
+
+        if (chosen[s] < 0) {
+            memset(res + s, 0, sizeof(LocalScanParticle));
+            set_table_row(table, s, NULL);
+            continue;
+        }
+        p = &g_array_index(particles, DetectedParticle, chosen[s]);
+        threshold = substrate + params->threshold_fraction*(p->peak - substrate);
+        t = local_scan_particle(field, params, probe, probe_data,
+                                p->x, p->y, threshold, t, res + s);
+        res[s].t_image = scan_timing_pixel_time(timing, p->y, p->x);
+        set_table_row(table, s, res + s);
+    }
+    if (res != results)
+        g_free(res);
+    g_free(chosen);
+    if (t_end)
+        *t_end = t;
+    return table;
+}
