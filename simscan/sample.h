@@ -70,6 +70,14 @@ gdouble     sim_sample_height_tip        (const SimSample *sample,
                                           gdouble x_m,
                                           gdouble y_m);
 
+/* The same for n points at once (x[k], y[k]) -> z[k]: what a scan uses. */
+void        sim_sample_heights_tip       (const SimSample *sample,
+                                          gdouble tip_radius,
+                                          gint n,
+                                          const gdouble *x_m,
+                                          const gdouble *y_m,
+                                          gdouble *z);
+
 /* Synthetic particles; 0 for a measured sample. */
 gint        sim_sample_n_particles       (const SimSample *sample);
 /* Centre (x, y) and radius r of particle i, metres; any pointer may be NULL. */

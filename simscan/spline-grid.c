@@ -1,0 +1,98 @@
+/*
+ *  A smooth surface on a regular grid (cubic B-spline).
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <math.h>
+#include <libprocess/interpolation.h>
+#include "spline-grid.h"
+
+SplineGrid*
+spline_grid_new(gint nx, gint ny, gdouble x0, gdouble y0,
+                gdouble dx, gdouble dy, SplineGridBoundary boundary)
+{
+    SplineGrid *grid = g_new(SplineGrid, 1);
+
+    grid->nx = nx;
+    grid->ny = ny;
+    grid->x0 = x0;
+    grid->y0 = y0;
+    grid->dx = dx;
+    grid->dy = dy;
+    grid->boundary = boundary;
+    grid->coeff = g_new(gdouble, (gsize)nx*ny);
+    return grid;
+}
+
+/* Gwyddion's B-spline coefficients assume the half-sample mirror boundary,
+ * which is what spline_grid_eval applies to a mirror grid. */
+SplineGrid*
+spline_grid_new_interpolating(const gdouble *values, gint nx, gint ny,
+                              gdouble x0, gdouble y0, gdouble dx, gdouble dy)
+{
+    SplineGrid *grid = spline_grid_new(nx, ny, x0, y0, dx, dy,
+                                       SPLINE_GRID_MIRROR);
+
+    memcpy(grid->coeff, values, (gsize)nx*ny*sizeof(gdouble));
+    gwy_interpolation_resolve_coeffs_2d(nx, ny, nx, grid->coeff,
+                                        GWY_INTERPOLATION_BSPLINE);
+    return grid;
+}
+
+void
+spline_grid_free(SplineGrid *grid)
+{
+    if (!grid)
+        return;
+    g_free(grid->coeff);
+    g_free(grid);
+}
+
+static inline gint
+boundary_index(gint i, gint n, SplineGridBoundary boundary)
+{
+    if (boundary == SPLINE_GRID_PERIODIC) {
+        i %= n;
+        return i < 0 ? i + n : i;
+    }
+    /* Mirror, repeated for points far outside a tiny grid. */
+    i %= 2*n;
+    if (i < 0)
+        i += 2*n;
+    return i < n ? i : 2*n - 1 - i;
+}
+
+static inline void
+bspline_weights(gdouble t, gdouble *w)
+{
+    gdouble s = 1.0 - t, t2 = t*t, t3 = t2*t;
+
+    w[0] = s*s*s/6.0;
+    w[1] = (3.0*t3 - 6.0*t2 + 4.0)/6.0;
+    w[2] = (-3.0*t3 + 3.0*t2 + 3.0*t + 1.0)/6.0;
+    w[3] = t3/6.0;
+}
+
+gdouble
+spline_grid_eval(const SplineGrid *grid, gdouble x, gdouble y)
+{
+    gdouble u = (x - grid->x0)/grid->dx, v = (y - grid->y0)/grid->dy;
+    gdouble fu = floor(u), fv = floor(v), wx[4], wy[4], z = 0.0, zrow;
+    gint i = (gint)fv, j = (gint)fu, k, l, cols[4];
+    const gdouble *row;
+
+    bspline_weights(u - fu, wx);
+    bspline_weights(v - fv, wy);
+    for (l = 0; l < 4; l++)
+        cols[l] = boundary_index(j - 1 + l, grid->nx, grid->boundary);
+    for (k = 0; k < 4; k++) {
+        row = grid->coeff + (gsize)grid->nx*boundary_index(i - 1 + k, grid->ny,
+                                                           grid->boundary);
+        zrow = (wx[0]*row[cols[0]] + wx[1]*row[cols[1]]
+                + wx[2]*row[cols[2]] + wx[3]*row[cols[3]]);
+        z += wy[k]*zrow;
+    }
+    return z;
+}
