@@ -10,9 +10,20 @@
 #include <glib.h>
 #include <libprocess/gwyprocessenums.h>
 #include "drift-table.h"
+#include "drift-trajectory.h"
 #include "scan-timing.h"
 
 G_BEGIN_DECLS
+
+#define CONTINUOUS_COMPENSATE_ERROR continuous_compensate_error_quark()
+
+typedef enum {
+    CONTINUOUS_COMPENSATE_ERROR_TIMING,        /* timing not of this image */
+    CONTINUOUS_COMPENSATE_ERROR_INTERPOLATION, /* unsupported type */
+    CONTINUOUS_COMPENSATE_ERROR_TOO_FAST,      /* drift folds the image over */
+} ContinuousCompensateError;
+
+GQuark   continuous_compensate_error_quark(void);
 
 /* Compensates image a (yres rows of xres) continuously: the drift trajectory
  * is built from the table (times from its t_image/t_local columns when
@@ -20,7 +31,17 @@ G_BEGIN_DECLS
  * pixel is moved back by the drift at the moment it was scanned, with
  * sub-pixel interpolation.  Pixels with no source get fill_value and 1.0 in
  * mask (may be NULL).  The table's exact dx_exact/dy_exact columns are used in
- * preference to the rounded dx/dy when present. */
+ * preference to the rounded dx/dy when present.
+ *
+ * The result shows the sample as it was at the earliest local scan
+ * (drift_trajectory_reference_time()).  timing must describe this image
+ * (xres, yres); NULL means frame_start 0, line time 1 s, scanning down.
+ * Blank stripes are left out of the trajectory (no nearest-stripe rule).
+ * A pixel has a source when its source position lies within half a pixel
+ * of the image's pixel centres in y, and in x within the nearest source
+ * row; with whole-pixel drift this is exactly paper mode's rule.  result
+ * and mask must not alias a.  Returns FALSE with error set (result and mask
+ * untouched) on an unusable table, timing or interpolation type. */
 gboolean continuous_compensate_table(const gdouble *a,
                                      gint xres,
                                      gint yres,
@@ -33,6 +54,19 @@ gboolean continuous_compensate_table(const gdouble *a,
                                      gdouble *result,
                                      gdouble *mask,
                                      GError **error);
+
+/* The same with the trajectory given directly, D(t) in px (e.g. built
+ * with drift_trajectory_new() from a drift model sampled densely). */
+gboolean continuous_compensate_trajectory(const gdouble *a,
+                                          gint xres,
+                                          gint yres,
+                                          const DriftTrajectory *trajectory,
+                                          const ScanTiming *timing,
+                                          GwyInterpolationType interpolation,
+                                          gdouble fill_value,
+                                          gdouble *result,
+                                          gdouble *mask,
+                                          GError **error);
 
 G_END_DECLS
 

@@ -1,0 +1,731 @@
+/*
+ *  Continuous (line-by-line, sub-pixel) compensation driven by a drift
+ *  trajectory over scan time.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <math.h>
+#include <string.h>
+#include "continuous-compensate.h"
+
+/*
+ * The image is resampled in two separable passes.  First every scanned row
+ * is shifted in x by the x drift at each pixel's own scan time, which
+ * removes the shear within the line.  Then every output row is rebuilt
+ * from the x-corrected rows at its source row rho, the solution of
+ * rho - Dy(t(rho)) = r, which removes the stretch of the slow axis.  Within
+ * one row the x drift is taken as linear in the column (the trace takes
+ * half a line time, over which the curvature of any thermal drift is
+ * negligible), so the source column is affine in the output column; in y
+ * the whole row uses the drift at its centre pixel, ignoring the drift
+ * during the half line time of one trace (|vy| L/4 px at most).
+ *
+ * The kernels are Gwyddion's (same weights, and the same mirror extension
+ * with the border value repeated that gwy_interpolation_resolve_coeffs_1d()
+ * assumes for B-spline and o-MOMS), written out here so that the weights
+ * of a whole row are computed inline without per-pixel calls.
+ */
+
+#if defined(__GNUC__)
+#define KERNEL_INLINE static inline __attribute__((always_inline))
+#else
+#define KERNEL_INLINE static inline
+#endif
+
+enum { KERNEL_TAPS = 4 };
+
+/* The factored tridiagonal system of the B-spline/o-MOMS prefilter for one
+ * length: the same for every row (or column), so factored once. */
+typedef struct {
+    gint n;
+    gdouble side;       /* off-diagonal element of the filter */
+    gdouble *factor;    /* elimination factors, n */
+    gdouble *inv_diag;  /* inverse pivots, n */
+} Prefilter;
+
+/* Where each output row and each source row takes its data from. */
+typedef struct {
+    gdouble *x_start;   /* source column of output column 0, per source row */
+    gdouble *x_step;    /* source columns per output column, per source row */
+    gint *valid_first;  /* columns with an x source, per source row */
+    gint *valid_last;
+    gdouble *rho;       /* source row per output row; NaN = no source */
+} ResamplePlan;
+
+GQuark
+continuous_compensate_error_quark(void)
+{
+    return g_quark_from_static_string("continuous-compensate-error-quark");
+}
+
+static inline gdouble
+keys_inner(gdouble d)
+{
+    return (1.5*d - 2.5)*d*d + 1.0;
+}
+
+static inline gdouble
+keys_outer(gdouble d)
+{
+    return d*(-0.5 + d*(1.0 - 0.5*d));
+}
+
+static inline gdouble
+omoms_inner(gdouble d)
+{
+    return 13.0/21.0 + d*(1.0/14.0 + d*(-1.0 + 0.5*d));
+}
+
+static inline gdouble
+omoms_outer(gdouble d)
+{
+    return 4.0/21.0 + d*(-11.0/21.0 + d*(0.5 - d/6.0));
+}
+
+static inline gdouble
+nna_weight(gdouble d)
+{
+    d = 1.0/(d*d);
+    return d*d;
+}
+
+/* Weights of the taps at i-1, i, i+1, i+2 for the position i + x,
+ * 0 <= x < 1.  Two-point kernels leave the outer taps at zero. */
+KERNEL_INLINE void
+kernel_weights(GwyInterpolationType type, gdouble x, gdouble *w)
+{
+    gdouble y = 1.0 - x, s;
+
+    switch (type) {
+        case GWY_INTERPOLATION_ROUND:
+        w[0] = w[3] = 0.0;
+        w[1] = (x < 0.5) ? 1.0 : (x > 0.5 ? 0.0 : 0.5);
+        w[2] = 1.0 - w[1];
+        break;
+
+        case GWY_INTERPOLATION_LINEAR:
+        w[0] = w[3] = 0.0;
+        w[1] = y;
+        w[2] = x;
+        break;
+
+        case GWY_INTERPOLATION_KEY:
+        w[0] = keys_outer(x);
+        w[1] = keys_inner(x);
+        w[2] = keys_inner(y);
+        w[3] = keys_outer(y);
+        break;
+
+        case GWY_INTERPOLATION_SCHAUM:
+        /* Cubic Lagrange polynomials through the nodes -1, 0, 1, 2. */
+        w[0] = -x*y*(x - 2.0)/6.0;
+        w[1] = (x + 1.0)*y*(2.0 - x)/2.0;
+        w[2] = (x + 1.0)*x*(2.0 - x)/2.0;
+        w[3] = -(x + 1.0)*x*y/6.0;
+        break;
+
+        case GWY_INTERPOLATION_BSPLINE:
+        w[0] = y*y*y/6.0;
+        w[1] = 2.0/3.0 - x*x*(1.0 - 0.5*x);
+        w[2] = 2.0/3.0 - y*y*(1.0 - 0.5*y);
+        w[3] = x*x*x/6.0;
+        break;
+
+        case GWY_INTERPOLATION_OMOMS:
+        w[0] = omoms_outer(x);
+        w[1] = omoms_inner(x);
+        w[2] = omoms_inner(y);
+        w[3] = omoms_outer(y);
+        break;
+
+        case GWY_INTERPOLATION_NNA:
+        if (x == 0.0) {
+            w[0] = w[2] = w[3] = 0.0;
+            w[1] = 1.0;
+            break;
+        }
+        w[0] = nna_weight(1.0 + x);
+        w[1] = nna_weight(x);
+        w[2] = nna_weight(y);
+        w[3] = nna_weight(1.0 + y);
+        s = 1.0/(w[0] + w[1] + w[2] + w[3]);
+        w[0] *= s;
+        w[1] *= s;
+        w[2] *= s;
+        w[3] *= s;
+        break;
+
+        default:
+        g_assert_not_reached();
+        break;
+    }
+}
+
+/* Index into n values extended by mirroring with the border value
+ * repeated: -1 -> 0, -2 -> 1, n -> n-1. */
+static inline gint
+mirror_index(gint i, gint n)
+{
+    while (i < 0 || i >= n) {
+        if (i < 0)
+            i = -1 - i;
+        else
+            i = 2*n - 1 - i;
+    }
+    return i;
+}
+
+static gboolean
+kernel_needs_prefilter(GwyInterpolationType type, gdouble *centre,
+                       gdouble *side)
+{
+    if (type == GWY_INTERPOLATION_BSPLINE) {
+        *centre = 2.0/3.0;
+        *side = 1.0/6.0;
+        return TRUE;
+    }
+    if (type == GWY_INTERPOLATION_OMOMS) {
+        *centre = 13.0/21.0;
+        *side = 4.0/21.0;
+        return TRUE;
+    }
+    return FALSE;
+}
+
+/* Factors the symmetric tridiagonal system (side, centre, side) with the
+ * mirror extension, whose first and last pivots see centre + side. */
+static void
+prefilter_init(Prefilter *prefilter, gint n, gdouble centre, gdouble side)
+{
+    gdouble pivot, q;
+    gint i;
+
+    prefilter->n = n;
+    prefilter->side = side;
+    prefilter->factor = g_new(gdouble, 2*n);
+    prefilter->inv_diag = prefilter->factor + n;
+    prefilter->factor[0] = 0.0;
+    if (n == 1) {
+        prefilter->inv_diag[0] = 1.0/(centre + 2.0*side);
+        return;
+    }
+    pivot = centre + side;
+    prefilter->inv_diag[0] = 1.0/pivot;
+    for (i = 1; i < n; i++) {
+        q = side/pivot;
+        pivot = (i == n-1 ? centre + side : centre) - q*side;
+        prefilter->factor[i] = q;
+        prefilter->inv_diag[i] = 1.0/pivot;
+    }
+}
+
+static void
+prefilter_clear(Prefilter *prefilter)
+{
+    g_free(prefilter->factor);
+    prefilter->factor = prefilter->inv_diag = NULL;
+}
+
+/* Data values to interpolation coefficients along one row, in place. */
+static void
+prefilter_row(const Prefilter *prefilter, gdouble *data)
+{
+    const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
+    gdouble side = prefilter->side;
+    gint n = prefilter->n, i;
+
+    for (i = 1; i < n; i++)
+        data[i] -= factor[i]*data[i-1];
+    data[n-1] *= inv_diag[n-1];
+    for (i = n-2; i >= 0; i--)
+        data[i] = (data[i] - side*data[i+1])*inv_diag[i];
+}
+
+/* The same along the columns of a width-wide image, row by row so that
+ * memory is read in order. */
+static void
+prefilter_columns(const Prefilter *prefilter, gdouble *data, gint width)
+{
+    const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
+    gdouble side = prefilter->side, q, inv;
+    gdouble *row, *prev;
+    gint n = prefilter->n, i, j;
+
+    for (i = 1; i < n; i++) {
+        row = data + i*(gsize)width;
+        prev = row - width;
+        q = factor[i];
+        for (j = 0; j < width; j++)
+            row[j] -= q*prev[j];
+    }
+    row = data + (n-1)*(gsize)width;
+    inv = inv_diag[n-1];
+    for (j = 0; j < width; j++)
+        row[j] *= inv;
+    for (i = n-2; i >= 0; i--) {
+        row = data + i*(gsize)width;
+        prev = row + width;
+        inv = inv_diag[i];
+        for (j = 0; j < width; j++)
+            row[j] = (row[j] - side*prev[j])*inv;
+    }
+}
+
+/* Resamples one row: dest[c] = src at x_start + x_step*c, the position
+ * clamped to the image's extent (values beyond it only feed neighbours of
+ * filled pixels). */
+KERNEL_INLINE void
+resample_row_with(GwyInterpolationType type, const gdouble *src, gint n,
+                  gdouble x_start, gdouble x_step, gdouble *dest)
+{
+    gdouble lo = -0.5, hi = n - 0.5, x, w[KERNEL_TAPS];
+    gint c, i;
+
+    for (c = 0; c < n; c++) {
+        x = x_start + x_step*c;
+        x = CLAMP(x, lo, hi);
+        i = (gint)(x + 1.0) - 1;
+        kernel_weights(type, x - i, w);
+        if (G_LIKELY(i >= 1 && i + 2 < n)) {
+            dest[c] = (w[0]*src[i-1] + w[1]*src[i]
+                       + w[2]*src[i+1] + w[3]*src[i+2]);
+        }
+        else {
+            dest[c] = (w[0]*src[mirror_index(i-1, n)]
+                       + w[1]*src[mirror_index(i, n)]
+                       + w[2]*src[mirror_index(i+1, n)]
+                       + w[3]*src[mirror_index(i+2, n)]);
+        }
+    }
+}
+
+/* One specialised loop per kernel, so the weights are computed inline. */
+static void
+resample_row(GwyInterpolationType type, const gdouble *src, gint n,
+             gdouble x_start, gdouble x_step, gdouble *dest)
+{
+    switch (type) {
+        case GWY_INTERPOLATION_ROUND:
+        resample_row_with(GWY_INTERPOLATION_ROUND, src, n, x_start, x_step,
+                          dest);
+        break;
+
+        case GWY_INTERPOLATION_LINEAR:
+        resample_row_with(GWY_INTERPOLATION_LINEAR, src, n, x_start, x_step,
+                          dest);
+        break;
+
+        case GWY_INTERPOLATION_KEY:
+        resample_row_with(GWY_INTERPOLATION_KEY, src, n, x_start, x_step,
+                          dest);
+        break;
+
+        case GWY_INTERPOLATION_SCHAUM:
+        resample_row_with(GWY_INTERPOLATION_SCHAUM, src, n, x_start, x_step,
+                          dest);
+        break;
+
+        case GWY_INTERPOLATION_BSPLINE:
+        resample_row_with(GWY_INTERPOLATION_BSPLINE, src, n, x_start, x_step,
+                          dest);
+        break;
+
+        case GWY_INTERPOLATION_OMOMS:
+        resample_row_with(GWY_INTERPOLATION_OMOMS, src, n, x_start, x_step,
+                          dest);
+        break;
+
+        default:
+        resample_row_with(type, src, n, x_start, x_step, dest);
+        break;
+    }
+}
+
+/* dest = src shifted by a whole number of columns, edge values beyond. */
+static void
+shift_row_whole(const gdouble *src, gint n, gint shift, gdouble *dest)
+{
+    gint c, first = CLAMP(-shift, 0, n), end = CLAMP(n - shift, first, n);
+
+    for (c = 0; c < first; c++)
+        dest[c] = src[0];
+    if (end > first)
+        memcpy(dest + first, src + first + shift, (end - first)*sizeof(gdouble));
+    for (c = end; c < n; c++)
+        dest[c] = src[n-1];
+}
+
+/* Columns c whose source x_start + x_step*c lies within [-0.5, n-0.5];
+ * the same expression as in resample_row_with(), so the mask agrees with
+ * the clamping exactly. */
+static void
+row_valid_range(gdouble x_start, gdouble x_step, gint n,
+                gint *first, gint *last)
+{
+    gdouble lo = -0.5, hi = n - 0.5;
+    gdouble cf = ceil((lo - x_start)/x_step), cl = floor((hi - x_start)/x_step);
+    gint f, l;
+
+    cf = CLAMP(cf, -1.0, (gdouble)n);
+    cl = CLAMP(cl, -1.0, (gdouble)n);
+    f = (gint)cf;
+    l = (gint)cl;
+    while (f > 0 && x_start + x_step*(f - 1) >= lo)
+        f--;
+    while (f < n && !(x_start + x_step*f >= lo))
+        f++;
+    while (l < n-1 && x_start + x_step*(l + 1) <= hi)
+        l++;
+    while (l >= 0 && !(x_start + x_step*l <= hi))
+        l--;
+    *first = MAX(f, 0);
+    *last = MIN(l, n-1);
+}
+
+static gboolean
+check_inputs(gint xres, gint yres, const ScanTiming *timing,
+             GwyInterpolationType interpolation, GError **error)
+{
+    if (timing->xres != xres || timing->yres != yres
+        || !isfinite(timing->line_time) || timing->line_time <= 0.0
+        || !isfinite(timing->frame_start)) {
+        g_set_error(error, CONTINUOUS_COMPENSATE_ERROR,
+                    CONTINUOUS_COMPENSATE_ERROR_TIMING,
+                    "scan timing (%d x %d pixels, line time %g s) does not "
+                    "describe the %d x %d image",
+                    timing->xres, timing->yres, timing->line_time,
+                    xres, yres);
+        return FALSE;
+    }
+    if (interpolation <= GWY_INTERPOLATION_NONE
+        || interpolation > GWY_INTERPOLATION_SCHAUM) {
+        g_set_error(error, CONTINUOUS_COMPENSATE_ERROR,
+                    CONTINUOUS_COMPENSATE_ERROR_INTERPOLATION,
+                    "interpolation type %d cannot resample an image",
+                    (gint)interpolation);
+        return FALSE;
+    }
+    return TRUE;
+}
+
+/* Per source row: the drift at the row's centre pixel and its change along
+ * the row.  A feature truly at column c appears at x = c + f0 + f1 (x - xm),
+ * so x = (c + f0 - f1 xm)/(1 - f1). */
+static gboolean
+plan_columns(const DriftTrajectory *trajectory, const ScanTiming *timing,
+             ResamplePlan *plan, GError **error)
+{
+    gint xres = timing->xres, yres = timing->yres, i;
+    gdouble xm = 0.5*(xres - 1), dt_dcol = timing->line_time/(2.0*xres);
+    gdouble t, dx, dy, vx, vy, f1, step;
+
+    for (i = 0; i < yres; i++) {
+        t = scan_timing_pixel_time(timing, i, xm);
+        drift_trajectory_eval(trajectory, t, &dx, &dy);
+        drift_trajectory_velocity(trajectory, t, &vx, &vy);
+        f1 = vx*dt_dcol;
+        if (!(fabs(f1) < 0.5) || !isfinite(dx)) {
+            g_set_error(error, CONTINUOUS_COMPENSATE_ERROR,
+                        CONTINUOUS_COMPENSATE_ERROR_TOO_FAST,
+                        "x drift of %g px per pixel in row %d is too fast "
+                        "to compensate", f1, i);
+            return FALSE;
+        }
+        step = 1.0/(1.0 - f1);
+        plan->x_step[i] = step;
+        plan->x_start[i] = (dx - f1*xm)*step;
+        row_valid_range(plan->x_start[i], step, xres,
+                        plan->valid_first + i, plan->valid_last + i);
+    }
+    return TRUE;
+}
+
+/* The slow-axis map g(rho) = rho - Dy(t(rho)) sampled at the rows -1 .. yres
+ * (t at each row's centre pixel). */
+static gboolean
+sample_row_map(const DriftTrajectory *trajectory, const ScanTiming *timing,
+               gdouble *g, GError **error)
+{
+    gint yres = timing->yres, k;
+    gdouble xm = 0.5*(timing->xres - 1), dx, dy;
+
+    for (k = -1; k <= yres; k++) {
+        drift_trajectory_eval(trajectory,
+                              scan_timing_pixel_time(timing, k, xm), &dx, &dy);
+        g[k+1] = k - dy;
+        if (!isfinite(g[k+1]) || (k > -1 && !(g[k+1] > g[k]))) {
+            g_set_error(error, CONTINUOUS_COMPENSATE_ERROR,
+                        CONTINUOUS_COMPENSATE_ERROR_TOO_FAST,
+                        "y drift near row %d is a line or more per line, "
+                        "too fast to compensate", k);
+            return FALSE;
+        }
+    }
+    return TRUE;
+}
+
+/* Per output row r: the source row rho with g(rho) = r, inverted linearly
+ * between the sampled rows and polished with one Newton step on the
+ * trajectory itself (whole-pixel drift stays exact: the step is then 0). */
+static gboolean
+plan_rows(const DriftTrajectory *trajectory, const ScanTiming *timing,
+          ResamplePlan *plan, GError **error)
+{
+    gint yres = timing->yres, r, j = 0;
+    gdouble xm = 0.5*(timing->xres - 1), rho, t, dx, dy, vx, vy, slope;
+    gdouble dt_drow = (timing->direction == SCAN_DIRECTION_UP
+                       ? -timing->line_time : timing->line_time);
+    gdouble *g = g_new(gdouble, yres + 2);
+
+    if (!sample_row_map(trajectory, timing, g, error)) {
+        g_free(g);
+        return FALSE;
+    }
+    for (r = 0; r < yres; r++) {
+        plan->rho[r] = NAN;
+        if (r < g[0] || r > g[yres+1])
+            continue;
+        while (j < yres && g[j+1] < r)
+            j++;
+        rho = (j - 1) + (r - g[j])/(g[j+1] - g[j]);
+        t = scan_timing_pixel_time(timing, rho, xm);
+        drift_trajectory_eval(trajectory, t, &dx, &dy);
+        drift_trajectory_velocity(trajectory, t, &vx, &vy);
+        slope = 1.0 - vy*dt_drow;
+        if (slope > 0.0)
+            rho -= (rho - dy - r)/slope;
+        if (rho >= -0.5 && rho <= yres - 0.5)
+            plan->rho[r] = rho;
+    }
+    g_free(g);
+    return TRUE;
+}
+
+static void
+shift_rows_x(const gdouble *a, gint xres, gint yres,
+             const ResamplePlan *plan, GwyInterpolationType interpolation,
+             gdouble *shifted)
+{
+    Prefilter prefilter = { 0, 0.0, NULL, NULL };
+    gdouble centre, side, dx;
+    gdouble *coeffs = NULL;
+    const gdouble *src;
+    gboolean needs_prefilter;
+    gint i;
+
+    needs_prefilter = kernel_needs_prefilter(interpolation, &centre, &side);
+    if (needs_prefilter) {
+        prefilter_init(&prefilter, xres, centre, side);
+        coeffs = g_new(gdouble, xres);
+    }
+    for (i = 0; i < yres; i++) {
+        src = a + i*(gsize)xres;
+        dx = plan->x_start[i];
+        if (plan->x_step[i] == 1.0 && dx == floor(dx) && fabs(dx) <= xres) {
+            shift_row_whole(src, xres, (gint)dx, shifted + i*(gsize)xres);
+            continue;
+        }
+        if (needs_prefilter) {
+            memcpy(coeffs, src, xres*sizeof(gdouble));
+            prefilter_row(&prefilter, coeffs);
+            src = coeffs;
+        }
+        resample_row(interpolation, src, xres, plan->x_start[i],
+                     plan->x_step[i], shifted + i*(gsize)xres);
+    }
+    g_free(coeffs);
+    prefilter_clear(&prefilter);
+}
+
+static gboolean
+rows_need_interpolation(const ResamplePlan *plan, gint yres)
+{
+    gint r;
+
+    for (r = 0; r < yres; r++) {
+        if (!isnan(plan->rho[r]) && plan->rho[r] != floor(plan->rho[r]))
+            return TRUE;
+    }
+    return FALSE;
+}
+
+/* dest = sum of w[k] times the rows at the mirrored indices i-1 .. i+2. */
+static void
+combine_rows(const gdouble *shifted, gint xres, gint yres, gint i,
+             const gdouble *w, gdouble *dest)
+{
+    const gdouble *r0 = shifted + mirror_index(i-1, yres)*(gsize)xres;
+    const gdouble *r1 = shifted + mirror_index(i, yres)*(gsize)xres;
+    const gdouble *r2 = shifted + mirror_index(i+1, yres)*(gsize)xres;
+    const gdouble *r3 = shifted + mirror_index(i+2, yres)*(gsize)xres;
+    gdouble w0 = w[0], w1 = w[1], w2 = w[2], w3 = w[3];
+    gint c;
+
+    if (w0 == 0.0 && w3 == 0.0) {
+        for (c = 0; c < xres; c++)
+            dest[c] = w1*r1[c] + w2*r2[c];
+        return;
+    }
+    for (c = 0; c < xres; c++)
+        dest[c] = w0*r0[c] + w1*r1[c] + w2*r2[c] + w3*r3[c];
+}
+
+static void
+fill_row(gdouble *dest, gdouble *mask_row, gint first, gint end,
+         gdouble fill_value)
+{
+    gint c;
+
+    for (c = first; c < end; c++)
+        dest[c] = fill_value;
+    if (mask_row) {
+        for (c = first; c < end; c++)
+            mask_row[c] = 1.0;
+    }
+}
+
+/* Output row r from the x-corrected rows around rho[r]; the columns with a
+ * source are those of the nearest source row. */
+static void
+rebuild_rows_y(gdouble *shifted, gint xres, gint yres,
+               const ResamplePlan *plan, GwyInterpolationType interpolation,
+               gdouble fill_value, gdouble *result, gdouble *mask)
+{
+    Prefilter prefilter;
+    gdouble centre, side, rho, w[KERNEL_TAPS];
+    gdouble *dest, *mask_row;
+    gboolean prefiltered = FALSE;
+    gint r, i, nearest, first, last;
+
+    if (kernel_needs_prefilter(interpolation, &centre, &side)
+        && rows_need_interpolation(plan, yres)) {
+        prefilter_init(&prefilter, yres, centre, side);
+        prefilter_columns(&prefilter, shifted, xres);
+        prefilter_clear(&prefilter);
+        prefiltered = TRUE;
+    }
+    for (r = 0; r < yres; r++) {
+        dest = result + r*(gsize)xres;
+        mask_row = mask ? mask + r*(gsize)xres : NULL;
+        rho = plan->rho[r];
+        if (isnan(rho)) {
+            fill_row(dest, mask_row, 0, xres, fill_value);
+            continue;
+        }
+        i = (gint)(rho + 1.0) - 1;
+        nearest = CLAMP((gint)floor(rho + 0.5), 0, yres-1);
+        if (!prefiltered && rho == i)
+            memcpy(dest, shifted + i*(gsize)xres, xres*sizeof(gdouble));
+        else {
+            kernel_weights(interpolation, rho - i, w);
+            combine_rows(shifted, xres, yres, i, w, dest);
+        }
+        first = plan->valid_first[nearest];
+        last = plan->valid_last[nearest];
+        if (mask_row)
+            memset(mask_row, 0, xres*sizeof(gdouble));
+        if (first > last)
+            fill_row(dest, mask_row, 0, xres, fill_value);
+        else {
+            fill_row(dest, mask_row, 0, first, fill_value);
+            fill_row(dest, mask_row, last + 1, xres, fill_value);
+        }
+    }
+}
+
+static void
+resample_plan_init(ResamplePlan *plan, gint yres)
+{
+    plan->x_start = g_new(gdouble, 3*yres);
+    plan->x_step = plan->x_start + yres;
+    plan->rho = plan->x_step + yres;
+    plan->valid_first = g_new(gint, 2*yres);
+    plan->valid_last = plan->valid_first + yres;
+}
+
+static void
+resample_plan_clear(ResamplePlan *plan)
+{
+    g_free(plan->x_start);
+    g_free(plan->valid_first);
+}
+
+gboolean
+continuous_compensate_trajectory(const gdouble *a,
+                                 gint xres,
+                                 gint yres,
+                                 const DriftTrajectory *trajectory,
+                                 const ScanTiming *timing,
+                                 GwyInterpolationType interpolation,
+                                 gdouble fill_value,
+                                 gdouble *result,
+                                 gdouble *mask,
+                                 GError **error)
+{
+    ScanTiming default_timing;
+    ResamplePlan plan;
+    gdouble *shifted;
+    gboolean ok;
+
+    g_return_val_if_fail(a && result && trajectory, FALSE);
+    g_return_val_if_fail(xres >= 1 && yres >= 1, FALSE);
+    if (!timing) {
+        scan_timing_init(&default_timing, xres, yres, 0.0, 1.0,
+                         SCAN_DIRECTION_DOWN);
+        timing = &default_timing;
+    }
+    if (!check_inputs(xres, yres, timing, interpolation, error))
+        return FALSE;
+
+    resample_plan_init(&plan, yres);
+    ok = (plan_columns(trajectory, timing, &plan, error)
+          && plan_rows(trajectory, timing, &plan, error));
+    if (ok) {
+        shifted = g_new(gdouble, xres*(gsize)yres);
+        shift_rows_x(a, xres, yres, &plan, interpolation, shifted);
+        rebuild_rows_y(shifted, xres, yres, &plan, interpolation, fill_value,
+                       result, mask);
+        g_free(shifted);
+    }
+    resample_plan_clear(&plan);
+    return ok;
+}
+
+gboolean
+continuous_compensate_table(const gdouble *a,
+                            gint xres,
+                            gint yres,
+                            const DriftTable *table,
+                            gdouble x_pixel_size,
+                            gdouble y_pixel_size,
+                            const ScanTiming *timing,
+                            GwyInterpolationType interpolation,
+                            gdouble fill_value,
+                            gdouble *result,
+                            gdouble *mask,
+                            GError **error)
+{
+    ScanTiming default_timing;
+    DriftTrajectory *trajectory;
+    gboolean ok;
+
+    g_return_val_if_fail(a && result && table, FALSE);
+    g_return_val_if_fail(xres >= 1 && yres >= 1, FALSE);
+    if (!timing) {
+        scan_timing_init(&default_timing, xres, yres, 0.0, 1.0,
+                         SCAN_DIRECTION_DOWN);
+        timing = &default_timing;
+    }
+    if (!check_inputs(xres, yres, timing, interpolation, error))
+        return FALSE;
+    trajectory = drift_trajectory_new_from_table(table, x_pixel_size,
+                                                 y_pixel_size, timing, error);
+    if (!trajectory)
+        return FALSE;
+    ok = continuous_compensate_trajectory(a, xres, yres, trajectory, timing,
+                                          interpolation, fill_value,
+                                          result, mask, error);
+    drift_trajectory_free(trajectory);
+    return ok;
+}

@@ -1,0 +1,90 @@
+/*
+ *  The drift trajectory over scan time, built from per-stripe local-scan
+ *  measurements (shared/spec/interfaces.md sections 1 and 4).
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef LOCALSCAN_DRIFT_TRAJECTORY_H
+#define LOCALSCAN_DRIFT_TRAJECTORY_H
+
+#include <glib.h>
+#include "drift-table.h"
+#include "scan-timing.h"
+
+G_BEGIN_DECLS
+
+#define DRIFT_TRAJECTORY_ERROR drift_trajectory_error_quark()
+
+typedef enum {
+    DRIFT_TRAJECTORY_ERROR_EMPTY,     /* no stripe was measured */
+    DRIFT_TRAJECTORY_ERROR_VALUE,     /* NaN/inf time or drift */
+    DRIFT_TRAJECTORY_ERROR_TIMING,    /* timing unusable or not the image's */
+} DriftTrajectoryError;
+
+/* One local-scan measurement: the particle imaged at t_image (in the big
+ * frame) is found by the local scan at t_local displaced by (dx, dy) px, so
+ *     (dx, dy) = p(t_image) - p(t_local). */
+typedef struct {
+    gdouble t_image;
+    gdouble t_local;
+    gdouble dx;
+    gdouble dy;
+} DriftMeasurement;
+
+typedef struct _DriftTrajectory DriftTrajectory;
+
+GQuark            drift_trajectory_error_quark  (void);
+
+/* Builds the displacement D(t) = p(t) - p(t_ref), t_ref the earliest t_local
+ * of the measurements, from n measurements in any order. */
+DriftTrajectory*  drift_trajectory_new          (const DriftMeasurement *meas,
+                                                 gint n,
+                                                 GError **error);
+
+/* Measurements of a table for an image of timing->yres rows: stripes with a
+ * blank dx, dy are left out (no nearest-stripe filling); dx_exact, dy_exact
+ * (px) are preferred to dx, dy (table unit, converted with the pixel sizes);
+ * t_image defaults to the centre time of the stripe's pixels, t_local to the
+ * end of the frame.  Returns the number of measurements written into meas
+ * (room for table->n_stripes), or -1 with error set. */
+gint              drift_trajectory_measurements_from_table
+                                                (const DriftTable *table,
+                                                 gdouble x_pixel_size,
+                                                 gdouble y_pixel_size,
+                                                 const ScanTiming *timing,
+                                                 DriftMeasurement *meas,
+                                                 GError **error);
+
+/* drift_trajectory_measurements_from_table() then drift_trajectory_new(). */
+DriftTrajectory*  drift_trajectory_new_from_table
+                                                (const DriftTable *table,
+                                                 gdouble x_pixel_size,
+                                                 gdouble y_pixel_size,
+                                                 const ScanTiming *timing,
+                                                 GError **error);
+
+void              drift_trajectory_free         (DriftTrajectory *trajectory);
+
+/* D(t) in px: a feature truly at X (as it was at t_ref) appears at
+ * X + D(t) in a pixel scanned at t. */
+void              drift_trajectory_eval         (const DriftTrajectory *trajectory,
+                                                 gdouble t,
+                                                 gdouble *dx,
+                                                 gdouble *dy);
+/* dD/dt in px/s. */
+void              drift_trajectory_velocity     (const DriftTrajectory *trajectory,
+                                                 gdouble t,
+                                                 gdouble *vx,
+                                                 gdouble *vy);
+/* The moment the compensated image shows: the earliest local scan. */
+gdouble           drift_trajectory_reference_time(const DriftTrajectory *trajectory);
+/* The drift velocity assumed while the local scans ran (px/s). */
+void              drift_trajectory_local_velocity(const DriftTrajectory *trajectory,
+                                                  gdouble *vx,
+                                                  gdouble *vy);
+/* TRUE when D(t) is zero at every t. */
+gboolean          drift_trajectory_is_zero      (const DriftTrajectory *trajectory);
+
+G_END_DECLS
+
+#endif
