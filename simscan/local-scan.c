@@ -9,7 +9,8 @@
 #include "local-scan.h"
 
 /* The search moves L0 by this many particle radii: any particle whose centre
- * lies within 0.75 R of some line is cut above half its height. */
+ * lies within 0.75 R of some line is cut above 1.66 R, over the default
+ * threshold of 1.5 R. */
 #define SEARCH_STEP_RADII 1.5
 
 typedef struct {
@@ -30,7 +31,7 @@ local_scan_params_init(LocalScanParams *params)
     params->points = 64;
     params->tip_speed = 4e-6;
     params->line_overhead = 0.0;
-    params->threshold_fraction = 0.5;
+    params->threshold_fraction = 0.75;
 }
 
 gdouble
@@ -188,8 +189,9 @@ set_table_row(DriftTable *table, gint s, const LocalScanParticle *r)
 
     table->rows[s].stripe = s;
     table->rows[s].has_drift = found;
-    table->rows[s].dx = found ? round(r->dx) : 0.0;
-    table->rows[s].dy = found ? round(r->dy) : 0.0;
+    /* + 0.0 turns round()'s -0 into 0, which the table writes as "0". */
+    table->rows[s].dx = found ? round(r->dx) + 0.0 : 0.0;
+    table->rows[s].dy = found ? round(r->dy) + 0.0 : 0.0;
     /* Every stripe sets every column, so the columns always come in this
      * order and blank stripes get blank cells. */
     drift_table_set_extra(table, s, "dx_exact", found ? r->dx : NAN);

@@ -32,7 +32,8 @@ typedef struct {
     gdouble tip_speed;         /* m/s along a line (4 um/s) */
     gdouble line_overhead;     /* s per line: moving there, settling (0) */
     gdouble threshold_fraction;/* chord threshold, fraction of the particle's
-                                  height above the substrate (0.5) */
+                                  height above the substrate (0.75:
+                                  clear of a sphere's vertical equator) */
 } LocalScanParams;
 
 /* One particle's local scan.  Pixel coordinates as in particle-detect.h. */

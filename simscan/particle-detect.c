@@ -16,6 +16,7 @@ typedef struct {
     gint area;
     gdouble peak;
     gboolean on_edge;
+    gint row_min, row_max;
 } GrainSums;
 
 void
@@ -56,8 +57,12 @@ sum_grains(GwyDataField *field, const gint *grains, gdouble threshold,
             s->swx += w*j;
             s->swy += w*i;
             s->area++;
-            if (s->area == 1 || z > s->peak)
+            if (s->area == 1) {
                 s->peak = z;
+                s->row_min = i;
+            }
+            s->peak = fmax(s->peak, z);
+            s->row_max = i;
             if (i == 0 || j == 0 || i == yres-1 || j == xres-1)
                 s->on_edge = TRUE;
         }
@@ -108,6 +113,8 @@ particle_detect(GwyDataField *field, const ParticleDetectParams *params,
         p.area = sums[g].area;
         p.peak = sums[g].peak;
         p.on_edge = sums[g].on_edge;
+        p.row_min = sums[g].row_min;
+        p.row_max = sums[g].row_max;
         g_array_append_val(particles, p);
     }
 
@@ -126,10 +133,12 @@ particle_choose_for_stripes(const GArray *particles, gint n, gint xres,
                             gint yres, gint *chosen)
 {
     gdouble *best;
+    gboolean *inside;
     guint k;
     gint s;
 
     best = g_new(gdouble, n);
+    inside = g_new0(gboolean, n);
     for (s = 0; s < n; s++) {
         chosen[s] = -1;
         best[s] = G_MAXDOUBLE;
@@ -139,18 +148,25 @@ particle_choose_for_stripes(const GArray *particles, gint n, gint xres,
                                                    DetectedParticle, k);
         gint row = (gint)floor(p->y + 0.5);
         gdouble ex, ey, dist2;
+        gboolean is_inside;
 
         if (p->on_edge || row < 0 || row >= yres)
             continue;
         s = stripe_of_row(row, n, yres);
+        is_inside = (p->row_min >= stripe_first_row(s, n, yres)
+                     && p->row_max < stripe_end_row(s, n, yres));
+        if (inside[s] && !is_inside)
+            continue;
         ex = p->x - 0.5*(xres - 1);
         ey = p->y - stripe_centre_row(s, n, yres);
         dist2 = ex*ex + ey*ey;
         /* Strictly smaller: on a tie the earlier grain wins, deterministically. */
-        if (dist2 < best[s]) {
+        if (dist2 < best[s] || (is_inside && !inside[s])) {
             best[s] = dist2;
             chosen[s] = (gint)k;
+            inside[s] = is_inside;
         }
     }
+    g_free(inside);
     g_free(best);
 }

@@ -20,6 +20,8 @@ typedef struct {
     gint area;             /* pixels above the threshold */
     gdouble peak;          /* highest value in the grain, z units */
     gboolean on_edge;      /* the grain touches the image border */
+    gint row_min;          /* first and last row of the grain */
+    gint row_max;
 } DetectedParticle;
 
 typedef struct {
@@ -46,7 +48,9 @@ GArray*     particle_detect              (GwyDataField *field,
 /* The paper's choice: for each of the n stripes, the index of the particle
  * (not touching the border) whose centre row lies in the stripe and whose
  * centre is closest to the stripe centre ((xres-1)/2, (first+last)/2); -1 for
- * a stripe without one.  chosen gets n values. */
+ * a stripe without one.  Particles lying wholly inside the stripe's rows go
+ * first: one cut by a stripe boundary may be a sheared fragment whose centre
+ * is off by a pixel when the stripes' drifts differ.  chosen gets n values. */
 void        particle_choose_for_stripes  (const GArray *particles,
                                           gint n,
                                           gint xres,
