@@ -1,0 +1,274 @@
+/*
+ *  Local-scan compensation of one channel (a GwyDataField in a container).
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <math.h>
+#include <libgwyddion/gwymacros.h>
+#include <libgwyddion/gwysiunit.h>
+#include <libprocess/stats.h>
+#include "localscan-channel.h"
+#include "paper-compensate.h"
+#include "continuous-compensate.h"
+#include "stripe-geometry.h"
+
+GQuark
+localscan_channel_error_quark(void)
+{
+    return g_quark_from_static_string("localscan-channel-error-quark");
+}
+
+gchar*
+localscan_channel_result_title(const gchar *source_title)
+{
+    return g_strconcat(source_title, LOCALSCAN_TITLE_SUFFIX, NULL);
+}
+
+DriftTable*
+localscan_channel_stored_table(GwyContainer *data, gint id, GError **error)
+{
+    gchar *key = g_strdup_printf(DRIFT_TABLE_KEY_FORMAT, id);
+    const guchar *text = NULL;
+    DriftTable *table = NULL;
+
+    if (gwy_container_gis_string_by_name(data, key, &text))
+        table = drift_table_parse((const gchar*)text, -1, key, error);
+    else {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE,
+                    "The channel has no stored drift table (%s).", key);
+    }
+    g_free(key);
+    return table;
+}
+
+void
+localscan_channel_store_table(GwyContainer *data, gint id, const DriftTable *table)
+{
+    gchar *key = g_strdup_printf(DRIFT_TABLE_KEY_FORMAT, id);
+
+    gwy_container_set_string_by_name(data, key, (const guchar*)drift_table_to_string(table));
+    g_free(key);
+}
+
+/* A metadata value such as "2.325 Hz", "0.5 s" or "0.413": the number in
+ * base SI units of the given unit, or the bare number when no unit follows.
+ * FALSE when the text is no positive number or carries another unit. */
+static gboolean
+parse_meta_quantity(const gchar *text, const gchar *unit, gdouble *value)
+{
+    GwySIUnit *siunit;
+    gchar *end, *rest;
+    gint power10 = 0;
+    gboolean ok;
+    gdouble v;
+
+    v = g_ascii_strtod(text, &end);
+    if (end == text || !isfinite(v) || v <= 0.0)
+        return FALSE;
+    rest = g_strstrip(g_strdup(end));
+    if (!*rest) {
+        g_free(rest);
+        *value = v;
+        return TRUE;
+    }
+    siunit = gwy_si_unit_new_parse(rest, &power10);
+    ok = gwy_si_unit_equal_string(siunit, unit);
+    g_object_unref(siunit);
+    g_free(rest);
+    if (ok)
+        *value = v*pow(10.0, power10);
+    return ok;
+}
+
+static gboolean
+meta_quantity(GwyContainer *meta, const gchar *key, const gchar *unit, gdouble *value)
+{
+    const guchar *text;
+
+    if (!gwy_container_gis_string_by_name(meta, key, &text))
+        return FALSE;
+    return parse_meta_quantity((const gchar*)text, unit, value);
+}
+
+gdouble
+localscan_channel_line_time(GwyContainer *data, gint id, gboolean *from_metadata)
+{
+    GwyContainer *meta = NULL;
+    GwyDataField *field = NULL;
+    gchar key[48];
+    gdouble v, line_time = LOCALSCAN_DEFAULT_LINE_TIME;
+    gboolean found = FALSE;
+
+    g_snprintf(key, sizeof(key), "/%d/meta", id);
+    if (gwy_container_gis_object_by_name(data, key, &meta) && GWY_IS_CONTAINER(meta)) {
+        if (meta_quantity(meta, "Line time", "s", &v) || meta_quantity(meta, "Line Time", "s", &v)) {
+            line_time = v;
+            found = TRUE;
+        }
+        else if (meta_quantity(meta, "Scan rate", "Hz", &v) || meta_quantity(meta, "Scan Rate", "Hz", &v)) {
+            line_time = 1.0/v;
+            found = TRUE;
+        }
+        else if (meta_quantity(meta, "Frame time (s)", "s", &v)) {
+            g_snprintf(key, sizeof(key), "/%d/data", id);
+            if (gwy_container_gis_object_by_name(data, key, &field) && GWY_IS_DATA_FIELD(field)) {
+                line_time = v/gwy_data_field_get_yres(field);
+                found = TRUE;
+            }
+        }
+    }
+    if (from_metadata)
+        *from_metadata = found;
+    return line_time;
+}
+
+gdouble
+localscan_fill_value(GwyDataField *field, LocalscanFill fill)
+{
+    gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
+
+    if (fill == LOCALSCAN_FILL_ZERO)
+        return 0.0;
+    if (fill == LOCALSCAN_FILL_MINIMUM)
+        return gwy_data_field_get_min(field);
+    if (fill == LOCALSCAN_FILL_MAXIMUM)
+        return gwy_data_field_get_max(field);
+    return paper_image_mean(gwy_data_field_get_data_const(field), xres, yres);
+}
+
+gboolean
+localscan_table_to_field_pixels(const DriftTable *table, GwyDataField *field, gboolean whole_pixels,
+                                gdouble *dx_px, gdouble *dy_px, GError **error)
+{
+    GwySIUnit *xyunit = gwy_data_field_get_si_unit_xy(field);
+    gchar *unitstr;
+
+    if (table->unit != DRIFT_UNIT_PX && !gwy_si_unit_equal_string(xyunit, "m")) {
+        unitstr = gwy_si_unit_get_string(xyunit, GWY_SI_UNIT_FORMAT_PLAIN);
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_UNITS,
+                    "%s: the table is in %s but the image's lateral unit is '%s', not metres.",
+                    table->source_name, drift_unit_name(table->unit), unitstr);
+        g_free(unitstr);
+        return FALSE;
+    }
+    return drift_table_to_pixels(table, gwy_data_field_get_yres(field),
+                                 gwy_data_field_get_dx(field), gwy_data_field_get_dy(field),
+                                 whole_pixels, dx_px, dy_px, error);
+}
+
+static void
+paper_compensate_field(GwyDataField *field, const LocalscanApplied *applied, gdouble fill_value,
+                       GwyDataField *result, GwyDataField *mask)
+{
+    gint n = applied->n_stripes, s;
+    gint *dx = g_new(gint, n), *dy = g_new(gint, n);
+
+    for (s = 0; s < n; s++) {
+        dx[s] = (gint)floor(applied->dx_px[s] + 0.5);
+        dy[s] = (gint)floor(applied->dy_px[s] + 0.5);
+    }
+    paper_compensate(gwy_data_field_get_data_const(field),
+                     gwy_data_field_get_xres(field), gwy_data_field_get_yres(field),
+                     n, dx, dy, fill_value,
+                     gwy_data_field_get_data(result), gwy_data_field_get_data(mask));
+    g_free(dx);
+    g_free(dy);
+}
+
+static gboolean
+continuous_compensate_field(GwyDataField *field, const DriftTable *table, const LocalscanOptions *options,
+                            gdouble fill_value, GwyDataField *result, GwyDataField *mask, GError **error)
+{
+    gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
+    ScanTiming timing;
+
+    scan_timing_init(&timing, xres, yres, 0.0, options->line_time, options->direction);
+    return continuous_compensate_table(gwy_data_field_get_data_const(field), xres, yres, table,
+                                       gwy_data_field_get_dx(field), gwy_data_field_get_dy(field),
+                                       &timing, options->interpolation, fill_value,
+                                       gwy_data_field_get_data(result), gwy_data_field_get_data(mask),
+                                       error);
+}
+
+static gint
+count_filled(GwyDataField *mask)
+{
+    const gdouble *m = gwy_data_field_get_data_const(mask);
+    gint i, n = gwy_data_field_get_xres(mask)*gwy_data_field_get_yres(mask), count = 0;
+
+    for (i = 0; i < n; i++)
+        count += (m[i] > 0.5);
+    return count;
+}
+
+gboolean
+localscan_compensate_field(GwyDataField *field, const DriftTable *table, const LocalscanOptions *options,
+                           GwyDataField *result, GwyDataField *mask, LocalscanApplied *applied,
+                           GError **error)
+{
+    gboolean paper = (options->mode == LOCALSCAN_MODE_PAPER);
+    LocalscanApplied local;
+    GwyDataField *filled;
+    gdouble fill_value;
+    gboolean ok = TRUE;
+
+    local.n_stripes = table->n_stripes;
+    local.dx_px = g_new0(gdouble, table->n_stripes);
+    local.dy_px = g_new0(gdouble, table->n_stripes);
+    local.n_filled = 0;
+    if (!localscan_table_to_field_pixels(table, field, paper, local.dx_px, local.dy_px, error)) {
+        localscan_applied_clear(&local);
+        return FALSE;
+    }
+
+    /* Continuous compensation reads the table itself (exact columns, times);
+     * the conversion above still validates it and gives the applied drift. */
+    gwy_data_field_assign(result, field);
+    filled = mask ? g_object_ref(mask) : gwy_data_field_new_alike(field, FALSE);
+    gwy_data_field_assign(filled, field);
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(filled), NULL);
+    gwy_data_field_clear(filled);
+
+    fill_value = localscan_fill_value(field, options->fill);
+    if (paper)
+        paper_compensate_field(field, &local, fill_value, result, filled);
+    else
+        ok = continuous_compensate_field(field, table, options, fill_value, result, filled, error);
+
+    gwy_data_field_invalidate(result);
+    gwy_data_field_invalidate(filled);
+    local.n_filled = ok ? count_filled(filled) : 0;
+    g_object_unref(filled);
+
+    if (ok && applied)
+        *applied = local;
+    else
+        localscan_applied_clear(&local);
+    return ok;
+}
+
+void
+localscan_applied_clear(LocalscanApplied *applied)
+{
+    g_free(applied->dx_px);
+    g_free(applied->dy_px);
+    applied->dx_px = applied->dy_px = NULL;
+    applied->n_stripes = applied->n_filled = 0;
+}
+
+void
+localscan_applied_to_physical(const LocalscanApplied *applied, GwyDataField *field,
+                              gdouble *ypos, gdouble *dx, gdouble *dy)
+{
+    gint yres = gwy_data_field_get_yres(field), n = applied->n_stripes, s;
+    gdouble xstep = gwy_data_field_get_dx(field), ystep = gwy_data_field_get_dy(field);
+    gdouble yoff = gwy_data_field_get_yoffset(field);
+
+    for (s = 0; s < n; s++) {
+        ypos[s] = yoff + (stripe_centre_row(s, n, yres) + 0.5)*ystep;
+        dx[s] = applied->dx_px[s]*xstep;
+        dy[s] = applied->dy_px[s]*ystep;
+    }
+}

@@ -1,0 +1,126 @@
+/*
+ *  Local-scan compensation of one channel (a GwyDataField in a container):
+ *  the GTK-free part of the Gwyddion module, usable by the tools too.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef LOCALSCAN_CHANNEL_H
+#define LOCALSCAN_CHANNEL_H
+
+#include <glib.h>
+#include <libgwyddion/gwycontainer.h>
+#include <libprocess/datafield.h>
+#include "drift-table.h"
+#include "scan-timing.h"
+
+G_BEGIN_DECLS
+
+/* The new channel's title is the source title followed by this suffix.  It
+ * is part of the command-line interface (scripts find the channel by it), so
+ * it is never translated. */
+#define LOCALSCAN_TITLE_SUFFIX " (local-scan compensated)"
+
+/* Line time assumed when the channel's metadata does not give one. */
+#define LOCALSCAN_DEFAULT_LINE_TIME 1.0
+
+#define LOCALSCAN_CHANNEL_ERROR localscan_channel_error_quark()
+
+typedef enum {
+    LOCALSCAN_CHANNEL_ERROR_NO_TABLE,     /* no table stored with the channel */
+    LOCALSCAN_CHANNEL_ERROR_UNITS,        /* physical table, non-metre image */
+    LOCALSCAN_CHANNEL_ERROR_UNAVAILABLE,  /* option not built into this version */
+} LocalscanChannelError;
+
+/* The values are stored in the settings: never renumber them. */
+typedef enum {
+    LOCALSCAN_SOURCE_STORED    = 0,   /* DRIFT_TABLE_KEY_FORMAT of the channel */
+    LOCALSCAN_SOURCE_FILE      = 1,   /* a CSV file */
+    LOCALSCAN_SOURCE_REFERENCE = 2,   /* registration against a reference image */
+} LocalscanSource;
+
+typedef enum {
+    LOCALSCAN_MODE_PAPER      = 0,
+    LOCALSCAN_MODE_CONTINUOUS = 1,
+} LocalscanMode;
+
+typedef enum {
+    LOCALSCAN_FILL_MEAN    = 0,      /* the paper's d */
+    LOCALSCAN_FILL_ZERO    = 1,
+    LOCALSCAN_FILL_MINIMUM = 2,
+    LOCALSCAN_FILL_MAXIMUM = 3,
+} LocalscanFill;
+
+typedef struct {
+    LocalscanMode mode;
+    LocalscanFill fill;
+    GwyInterpolationType interpolation;   /* continuous mode only */
+    gdouble line_time;                    /* s, continuous mode only */
+    ScanDirection direction;              /* continuous mode only */
+} LocalscanOptions;
+
+/* What one compensation applied: the drift of every stripe in pixels after
+ * unit conversion and the nearest-stripe rule. */
+typedef struct {
+    gint n_stripes;
+    gdouble *dx_px;
+    gdouble *dy_px;
+    gint n_filled;
+} LocalscanApplied;
+
+GQuark       localscan_channel_error_quark   (void);
+
+gchar*       localscan_channel_result_title  (const gchar *source_title);
+
+/* The table stored with channel id (DRIFT_TABLE_KEY_FORMAT), parsed; the
+ * key is the source name in messages. */
+DriftTable*  localscan_channel_stored_table  (GwyContainer *data,
+                                              gint id,
+                                              GError **error);
+/* Stores the table's text with channel id. */
+void         localscan_channel_store_table   (GwyContainer *data,
+                                              gint id,
+                                              const DriftTable *table);
+
+/* Seconds per scan line from the channel's metadata ("Line time",
+ * "Scan rate"/"Scan Rate" in Hz, or "Frame time (s)" over the rows), else
+ * LOCALSCAN_DEFAULT_LINE_TIME. */
+gdouble      localscan_channel_line_time     (GwyContainer *data,
+                                              gint id,
+                                              gboolean *from_metadata);
+
+gdouble      localscan_fill_value            (GwyDataField *field,
+                                              LocalscanFill fill);
+
+/* Converts the table to pixels of field (its own x and y pixel sizes);
+ * physical tables need a field whose lateral unit is the metre. */
+gboolean     localscan_table_to_field_pixels (const DriftTable *table,
+                                              GwyDataField *field,
+                                              gboolean whole_pixels,
+                                              gdouble *dx_px,
+                                              gdouble *dy_px,
+                                              GError **error);
+
+/* Compensates field into result (resized and given field's geometry and
+ * units); mask (may be NULL) gets 1.0 at filled pixels, dimensionless.
+ * applied (may be NULL) is filled; free it with localscan_applied_clear().
+ * field is never changed.  On failure result and mask are unspecified. */
+gboolean     localscan_compensate_field      (GwyDataField *field,
+                                              const DriftTable *table,
+                                              const LocalscanOptions *options,
+                                              GwyDataField *result,
+                                              GwyDataField *mask,
+                                              LocalscanApplied *applied,
+                                              GError **error);
+void         localscan_applied_clear         (LocalscanApplied *applied);
+
+/* Stripe drift as curves in physical units: ypos[s] the stripe's centre
+ * (lateral unit, with the field's y offset), dx[s], dy[s] the drift. */
+void         localscan_applied_to_physical   (const LocalscanApplied *applied,
+                                              GwyDataField *field,
+                                              gdouble *ypos,
+                                              gdouble *dx,
+                                              gdouble *dy);
+
+G_END_DECLS
+
+#endif

@@ -1,0 +1,543 @@
+/*
+ *  Gwyddion process module "localscan_drift": removes thermal drift from an
+ *  image by the local-scan method, from a per-stripe drift table.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <libintl.h>
+#include <gtk/gtk.h>
+#include <libgwyddion/gwymacros.h>
+#include <libprocess/arithmetic.h>
+#include <libgwydgets/gwydgets.h>
+#include <libgwymodule/gwymodule-process.h>
+#include <app/gwyapp.h>
+#include <app/gwymoduleutils.h>
+#include "localscan-channel.h"
+
+/* Our strings live in our own domain, not in Gwyddion's. */
+#undef _
+#define _(s) dgettext(GETTEXT_PACKAGE, s)
+
+#define FUNC_NAME "localscan_drift"
+#define RUN_MODES (GWY_RUN_INTERACTIVE | GWY_RUN_IMMEDIATE)
+#define PREVIEW_SIZE 480
+
+enum {
+    PARAM_SOURCE,
+    PARAM_TABLE_FILE,
+    PARAM_REFERENCE,
+    PARAM_STRIPES,
+    PARAM_MODE,
+    PARAM_INTERPOLATION,
+    PARAM_DIRECTION,
+    PARAM_FILL,
+    PARAM_ADD_MASK,
+    PARAM_PLOT_DRIFT,
+    PARAM_MASK_COLOR,
+    WIDGET_TABLE_FILE,
+    MESSAGE_STATUS,
+};
+
+typedef struct {
+    GwyParams *params;
+    GwyContainer *data;
+    gint id;
+    GwyDataField *field;
+    GwyDataField *result;
+    GwyDataField *mask;
+    DriftTable *table;
+    LocalscanApplied applied;
+    gdouble line_time;
+    gboolean line_time_known;
+} ModuleArgs;
+
+typedef struct {
+    ModuleArgs *args;
+    GtkWidget *dialog;
+    GwyParamTable *table;
+    GtkWidget *file_button;
+    GwyContainer *data;
+} ModuleGUI;
+
+static gboolean         module_register     (void);
+static GwyParamDef*     define_module_params(void);
+static void             localscan_drift     (GwyContainer *data,
+                                             GwyRunType runtype,
+                                             const gchar *name);
+static gboolean         execute             (ModuleArgs *args,
+                                             GError **error);
+static void             create_outputs      (ModuleArgs *args);
+static void             add_drift_graph     (ModuleArgs *args);
+static void             report_error        (ModuleArgs *args,
+                                             const GError *error);
+static GwyDialogOutcome run_gui             (ModuleArgs *args);
+static GtkWidget*       create_file_chooser (gpointer user_data);
+static void             table_file_chosen   (ModuleGUI *gui);
+static gboolean         reference_filter    (GwyContainer *data,
+                                             gint id,
+                                             gpointer user_data);
+static void             param_changed       (ModuleGUI *gui,
+                                             gint id);
+static void             preview             (gpointer user_data);
+
+static GwyModuleInfo module_info = {
+    GWY_MODULE_ABI_VERSION,
+    &module_register,
+    N_("Compensates thermal drift by the local-scan method: shifts image stripes back by a measured "
+       "per-stripe drift table."),
+    "The gwy-localscan authors",
+    PACKAGE_VERSION,
+    "The gwy-localscan authors",
+    "2026",
+};
+
+GWY_MODULE_QUERY(module_info)
+
+static gboolean
+module_register(void)
+{
+    bindtextdomain(GETTEXT_PACKAGE, LOCALEDIR);
+    bind_textdomain_codeset(GETTEXT_PACKAGE, "UTF-8");
+    gwy_process_func_register(FUNC_NAME,
+                              &localscan_drift,
+                              N_("/_Distortion/_Local Scan Drift..."),
+                              NULL,
+                              RUN_MODES,
+                              GWY_MENU_FLAG_DATA,
+                              N_("Compensate drift by the local-scan method"));
+    return TRUE;
+}
+
+/* GwyParamTable translates enum labels in Gwyddion's domain, so the labels
+ * are translated here, in ours, once. */
+static const GwyEnum*
+translate_enum(const GwyEnum *values, gint n)
+{
+    GwyEnum *translated = g_new(GwyEnum, n);
+    gint i;
+
+    for (i = 0; i < n; i++) {
+        translated[i].name = _(values[i].name);
+        translated[i].value = values[i].value;
+    }
+    return translated;
+}
+
+static GwyParamDef*
+define_module_params(void)
+{
+    static const GwyEnum sources[] = {
+        { N_("Table stored with the image"), LOCALSCAN_SOURCE_STORED,    },
+        { N_("Table file (CSV)"),            LOCALSCAN_SOURCE_FILE,      },
+        { N_("Registration to a reference"), LOCALSCAN_SOURCE_REFERENCE, },
+    };
+    static const GwyEnum modes[] = {
+        { N_("Paper (whole-pixel stripes)"), LOCALSCAN_MODE_PAPER,      },
+        { N_("Continuous (line by line)"),   LOCALSCAN_MODE_CONTINUOUS, },
+    };
+    static const GwyEnum directions[] = {
+        { N_("Down"), SCAN_DIRECTION_DOWN, },
+        { N_("Up"),   SCAN_DIRECTION_UP,   },
+    };
+    static const GwyEnum fills[] = {
+        { N_("Image mean"), LOCALSCAN_FILL_MEAN,    },
+        { N_("Zero"),       LOCALSCAN_FILL_ZERO,    },
+        { N_("Minimum"),    LOCALSCAN_FILL_MINIMUM, },
+        { N_("Maximum"),    LOCALSCAN_FILL_MAXIMUM, },
+    };
+    static GwyParamDef *paramdef = NULL;
+
+    if (paramdef)
+        return paramdef;
+
+    paramdef = gwy_param_def_new();
+    gwy_param_def_set_function_name(paramdef, FUNC_NAME);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_SOURCE, "source", _("Drift source"),
+                              translate_enum(sources, G_N_ELEMENTS(sources)), G_N_ELEMENTS(sources),
+                              LOCALSCAN_SOURCE_STORED);
+    gwy_param_def_add_string(paramdef, PARAM_TABLE_FILE, "table-file", _("Table _file"),
+                             GWY_PARAM_STRING_NULL_IS_EMPTY, NULL, "");
+    gwy_param_def_add_image_id(paramdef, PARAM_REFERENCE, "reference", _("_Reference image"));
+    gwy_param_def_add_int(paramdef, PARAM_STRIPES, "stripes", _("_Stripes"), 1, 4096, 16);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_MODE, "mode", _("Mode"),
+                              translate_enum(modes, G_N_ELEMENTS(modes)), G_N_ELEMENTS(modes),
+                              LOCALSCAN_MODE_PAPER);
+    gwy_param_def_add_enum(paramdef, PARAM_INTERPOLATION, "interpolation", NULL, GWY_TYPE_INTERPOLATION_TYPE,
+                           GWY_INTERPOLATION_BSPLINE);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_DIRECTION, "direction", _("Slow scan _direction"),
+                              translate_enum(directions, G_N_ELEMENTS(directions)), G_N_ELEMENTS(directions),
+                              SCAN_DIRECTION_DOWN);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_FILL, "fill", _("_Fill value"),
+                              translate_enum(fills, G_N_ELEMENTS(fills)), G_N_ELEMENTS(fills),
+                              LOCALSCAN_FILL_MEAN);
+    gwy_param_def_add_boolean(paramdef, PARAM_ADD_MASK, "add-mask", _("_Mask filled pixels"), TRUE);
+    gwy_param_def_add_boolean(paramdef, PARAM_PLOT_DRIFT, "plot-drift", _("_Plot drift graph"), FALSE);
+    gwy_param_def_add_mask_color(paramdef, PARAM_MASK_COLOR, NULL, NULL);
+    return paramdef;
+}
+
+static void
+localscan_drift(GwyContainer *data, GwyRunType runtype, G_GNUC_UNUSED const gchar *name)
+{
+    GwyDialogOutcome outcome = GWY_DIALOG_PROCEED;
+    GError *error = NULL;
+    ModuleArgs args;
+
+    g_return_if_fail(runtype & RUN_MODES);
+    gwy_clear(&args, 1);
+    gwy_app_data_browser_get_current(GWY_APP_DATA_FIELD, &args.field,
+                                     GWY_APP_DATA_FIELD_ID, &args.id,
+                                     0);
+    g_return_if_fail(args.field);
+    args.data = data;
+    args.result = gwy_data_field_new_alike(args.field, TRUE);
+    args.mask = gwy_data_field_new_alike(args.field, TRUE);
+    args.params = gwy_params_new_from_settings(define_module_params());
+
+    if (runtype == GWY_RUN_INTERACTIVE) {
+        outcome = run_gui(&args);
+        gwy_params_save_to_settings(args.params);
+        if (outcome == GWY_DIALOG_CANCEL)
+            goto end;
+    }
+    /* Computed again even after a preview: it is cheap, and so the GUI and
+     * IMMEDIATE runs take exactly the same path to the result. */
+    if (execute(&args, &error))
+        create_outputs(&args);
+    else
+        report_error(&args, error);
+
+end:
+    g_clear_error(&error);
+    if (args.table)
+        drift_table_free(args.table);
+    localscan_applied_clear(&args.applied);
+    g_object_unref(args.mask);
+    g_object_unref(args.result);
+    g_object_unref(args.params);
+}
+
+static DriftTable*
+load_drift_table(ModuleArgs *args, GError **error)
+{
+    LocalscanSource source = gwy_params_get_enum(args->params, PARAM_SOURCE);
+    const gchar *filename;
+
+    if (source == LOCALSCAN_SOURCE_STORED)
+        return localscan_channel_stored_table(args->data, args->id, error);
+    if (source == LOCALSCAN_SOURCE_FILE) {
+        filename = gwy_params_get_string(args->params, PARAM_TABLE_FILE);
+        if (!filename || !*filename) {
+            g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE,
+                        "%s", _("No drift table file is chosen."));
+            return NULL;
+        }
+        return drift_table_load(filename, error);
+    }
+    /* LOCALSCAN_SOURCE_REFERENCE: stripe registration is not built in yet. */
+    g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_UNAVAILABLE,
+                "%s", _("Drift from registration to a reference image is not available in this version."));
+    return NULL;
+}
+
+static gboolean
+execute(ModuleArgs *args, GError **error)
+{
+    GwyParams *params = args->params;
+    LocalscanOptions options;
+
+    if (args->table)
+        drift_table_free(args->table);
+    localscan_applied_clear(&args->applied);
+    if (!(args->table = load_drift_table(args, error)))
+        return FALSE;
+
+    args->line_time = localscan_channel_line_time(args->data, args->id, &args->line_time_known);
+    options.mode = gwy_params_get_enum(params, PARAM_MODE);
+    options.fill = gwy_params_get_enum(params, PARAM_FILL);
+    options.interpolation = gwy_params_get_enum(params, PARAM_INTERPOLATION);
+    options.direction = gwy_params_get_enum(params, PARAM_DIRECTION);
+    options.line_time = args->line_time;
+    return localscan_compensate_field(args->field, args->table, &options, args->result, args->mask,
+                                      &args->applied, error);
+}
+
+/* The source channel is never touched: adding the new channel is the whole
+ * (undoable) change. */
+static void
+create_outputs(ModuleArgs *args)
+{
+    GwyContainer *data = args->data;
+    gint id = args->id, newid;
+    gchar *title, *newtitle;
+
+    newid = gwy_app_data_browser_add_data_field(args->result, data, TRUE);
+    title = gwy_app_get_data_field_title(data, id);
+    newtitle = localscan_channel_result_title(title);
+    gwy_container_set_string(data, gwy_app_get_data_title_key_for_id(newid), (const guchar*)newtitle);
+    g_free(title);
+    gwy_app_sync_data_items(data, data, id, newid, FALSE,
+                            GWY_DATA_ITEM_GRADIENT,
+                            GWY_DATA_ITEM_RANGE,
+                            GWY_DATA_ITEM_RANGE_TYPE,
+                            GWY_DATA_ITEM_MASK_COLOR,
+                            GWY_DATA_ITEM_META,
+                            GWY_DATA_ITEM_REAL_SQUARE,
+                            0);
+    if (gwy_params_get_boolean(args->params, PARAM_ADD_MASK) && args->applied.n_filled > 0)
+        gwy_container_set_object(data, gwy_app_get_mask_key_for_id(newid), args->mask);
+    /* The table as read, so the new channel can be compensated or inspected
+     * again; the applied per-stripe values follow from it and the image. */
+    localscan_channel_store_table(data, newid, args->table);
+    gwy_app_channel_log_add_proc(data, id, newid);
+
+    if (gwy_params_get_boolean(args->params, PARAM_PLOT_DRIFT))
+        add_drift_graph(args);
+}
+
+static void
+add_drift_graph(ModuleArgs *args)
+{
+    static const gchar *names[2] = { "dx", "dy" };
+    GwyAppDataId target = GWY_APP_DATA_ID_NONE;
+    gint n = args->applied.n_stripes, i;
+    GwyGraphCurveModel *gcmodel;
+    GwyGraphModel *gmodel;
+    GwySIUnit *unit;
+    gdouble *ypos = g_new(gdouble, n), *dx = g_new(gdouble, n), *dy = g_new(gdouble, n);
+    gdouble *curves[2] = { dx, dy };
+
+    localscan_applied_to_physical(&args->applied, args->field, ypos, dx, dy);
+    unit = gwy_data_field_get_si_unit_xy(args->field);
+    gmodel = gwy_graph_model_new();
+    g_object_set(gmodel,
+                 "title", _("Local-scan drift"),
+                 "axis-label-bottom", "y",
+                 "axis-label-left", _("drift"),
+                 "si-unit-x", unit,
+                 "si-unit-y", unit,
+                 NULL);
+    for (i = 0; i < 2; i++) {
+        gcmodel = gwy_graph_curve_model_new();
+        gwy_graph_curve_model_set_data(gcmodel, ypos, curves[i], n);
+        g_object_set(gcmodel,
+                     "description", names[i],
+                     "mode", GWY_GRAPH_CURVE_LINE_POINTS,
+                     "color", gwy_graph_get_preset_color(i),
+                     NULL);
+        gwy_graph_model_add_curve(gmodel, gcmodel);
+        g_object_unref(gcmodel);
+    }
+    gwy_app_add_graph_or_curves(gmodel, args->data, &target, 1);
+    g_object_unref(gmodel);
+    g_free(ypos);
+    g_free(dx);
+    g_free(dy);
+}
+
+/* Without a GUI (batch, pygwy, the command-line tool) the message is the
+ * one line on stderr that callers show; with a GUI, a message box. */
+static void
+report_error(ModuleArgs *args, const GError *error)
+{
+    GtkWidget *main_window = gwy_app_main_window_get(), *dialog;
+    GtkWindow *parent;
+
+    if (!main_window) {
+        g_printerr("%s: %s\n", FUNC_NAME, error->message);
+        return;
+    }
+    parent = gwy_app_find_window_for_channel(args->data, args->id);
+    dialog = gtk_message_dialog_new(parent ? parent : GTK_WINDOW(main_window),
+                                    GTK_DIALOG_DESTROY_WITH_PARENT, GTK_MESSAGE_ERROR, GTK_BUTTONS_OK,
+                                    "%s", _("Local-scan drift compensation failed."));
+    gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(dialog), "%s", error->message);
+    gtk_dialog_run(GTK_DIALOG(dialog));
+    gtk_widget_destroy(dialog);
+}
+
+static GwyDialogOutcome
+run_gui(ModuleArgs *args)
+{
+    GwyDialogOutcome outcome;
+    GwyParamTable *table;
+    GtkWidget *hbox, *dataview;
+    GwyDialog *dialog;
+    ModuleGUI gui;
+
+    gwy_clear(&gui, 1);
+    gui.args = args;
+    gui.data = gwy_container_new();
+    gwy_container_set_object_by_name(gui.data, "/0/data", args->result);
+    gwy_container_set_object_by_name(gui.data, "/0/mask", args->mask);
+    gwy_app_sync_data_items(args->data, gui.data, args->id, 0, FALSE,
+                            GWY_DATA_ITEM_GRADIENT,
+                            GWY_DATA_ITEM_RANGE_TYPE,
+                            GWY_DATA_ITEM_REAL_SQUARE,
+                            0);
+
+    gui.dialog = gwy_dialog_new(_("Local Scan Drift"));
+    dialog = GWY_DIALOG(gui.dialog);
+    gwy_dialog_add_buttons(dialog, GWY_RESPONSE_RESET, GTK_RESPONSE_CANCEL, GTK_RESPONSE_OK, 0);
+
+    dataview = gwy_create_preview(gui.data, 0, PREVIEW_SIZE, TRUE);
+    hbox = gwy_create_dialog_preview_hbox(GTK_DIALOG(dialog), GWY_DATA_VIEW(dataview), FALSE);
+
+    table = gui.table = gwy_param_table_new(args->params);
+    gwy_param_table_append_header(table, -1, _("Drift"));
+    gwy_param_table_append_radio(table, PARAM_SOURCE);
+    gwy_param_table_append_foreign(table, WIDGET_TABLE_FILE, create_file_chooser, &gui, NULL);
+    gwy_param_table_append_image_id(table, PARAM_REFERENCE);
+    gwy_param_table_data_id_set_filter(table, PARAM_REFERENCE, reference_filter, args, NULL);
+    gwy_param_table_append_slider(table, PARAM_STRIPES);
+    gwy_param_table_append_header(table, -1, _("Compensation"));
+    gwy_param_table_append_radio(table, PARAM_MODE);
+    gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
+    gwy_param_table_append_combo(table, PARAM_DIRECTION);
+    gwy_param_table_append_combo(table, PARAM_FILL);
+    gwy_param_table_append_header(table, -1, _("Output"));
+    gwy_param_table_append_checkbox(table, PARAM_ADD_MASK);
+    gwy_param_table_append_mask_color(table, PARAM_MASK_COLOR, gui.data, 0, args->data, args->id);
+    gwy_param_table_append_checkbox(table, PARAM_PLOT_DRIFT);
+    gwy_param_table_append_message(table, MESSAGE_STATUS, NULL);
+
+    gtk_box_pack_start(GTK_BOX(hbox), gwy_param_table_widget(table), TRUE, TRUE, 0);
+    gwy_dialog_add_param_table(dialog, table);
+
+    g_signal_connect_swapped(table, "param-changed", G_CALLBACK(param_changed), &gui);
+    gwy_dialog_set_preview_func(dialog, GWY_PREVIEW_IMMEDIATE, preview, &gui, NULL);
+
+    outcome = gwy_dialog_run(dialog);
+    g_object_unref(gui.data);
+
+    return outcome;
+}
+
+static GtkWidget*
+create_file_chooser(gpointer user_data)
+{
+    ModuleGUI *gui = (ModuleGUI*)user_data;
+    const gchar *filename = gwy_params_get_string(gui->args->params, PARAM_TABLE_FILE);
+    GtkFileFilter *filter;
+    GtkWidget *hbox, *label;
+
+    hbox = gtk_hbox_new(FALSE, 6);
+    label = gtk_label_new_with_mnemonic(_("Table _file:"));
+    gtk_box_pack_start(GTK_BOX(hbox), label, FALSE, FALSE, 0);
+
+    gui->file_button = gtk_file_chooser_button_new(_("Drift Table"), GTK_FILE_CHOOSER_ACTION_OPEN);
+    gtk_label_set_mnemonic_widget(GTK_LABEL(label), gui->file_button);
+    filter = gtk_file_filter_new();
+    gtk_file_filter_set_name(filter, _("Drift tables (*.csv)"));
+    gtk_file_filter_add_pattern(filter, "*.csv");
+    gtk_file_filter_add_pattern(filter, "*.CSV");
+    gtk_file_chooser_add_filter(GTK_FILE_CHOOSER(gui->file_button), filter);
+    filter = gtk_file_filter_new();
+    gtk_file_filter_set_name(filter, _("All files"));
+    gtk_file_filter_add_pattern(filter, "*");
+    gtk_file_chooser_add_filter(GTK_FILE_CHOOSER(gui->file_button), filter);
+    if (filename && *filename)
+        gtk_file_chooser_set_filename(GTK_FILE_CHOOSER(gui->file_button), filename);
+    gtk_box_pack_start(GTK_BOX(hbox), gui->file_button, TRUE, TRUE, 0);
+    g_signal_connect_swapped(gui->file_button, "file-set", G_CALLBACK(table_file_chosen), gui);
+
+    return hbox;
+}
+
+static void
+table_file_chosen(ModuleGUI *gui)
+{
+    gchar *filename = gtk_file_chooser_get_filename(GTK_FILE_CHOOSER(gui->file_button));
+
+    gwy_params_set_string(gui->args->params, PARAM_TABLE_FILE, filename ? filename : "");
+    g_free(filename);
+    gwy_param_table_param_changed(gui->table, PARAM_TABLE_FILE);
+}
+
+/* Registration compares the image with another scan of the same area, so
+ * only images of the same pixel and physical size qualify. */
+static gboolean
+reference_filter(GwyContainer *data, gint id, gpointer user_data)
+{
+    ModuleArgs *args = (ModuleArgs*)user_data;
+    GwyDataField *other;
+
+    if (data == args->data && id == args->id)
+        return FALSE;
+    if (!gwy_container_gis_object(data, gwy_app_get_data_key_for_id(id), &other))
+        return FALSE;
+    return !gwy_data_field_check_compatibility(args->field, other,
+                                               GWY_DATA_COMPATIBILITY_RES | GWY_DATA_COMPATIBILITY_REAL);
+}
+
+static void
+param_changed(ModuleGUI *gui, gint id)
+{
+    GwyParams *params = gui->args->params;
+    GwyParamTable *table = gui->table;
+    LocalscanSource source = gwy_params_get_enum(params, PARAM_SOURCE);
+    LocalscanMode mode = gwy_params_get_enum(params, PARAM_MODE);
+
+    if (id < 0 || id == PARAM_SOURCE) {
+        gwy_param_table_set_sensitive(table, WIDGET_TABLE_FILE, source == LOCALSCAN_SOURCE_FILE);
+        gwy_param_table_set_sensitive(table, PARAM_REFERENCE, source == LOCALSCAN_SOURCE_REFERENCE);
+        gwy_param_table_set_sensitive(table, PARAM_STRIPES, source == LOCALSCAN_SOURCE_REFERENCE);
+    }
+    if (id < 0 || id == PARAM_MODE) {
+        gwy_param_table_set_sensitive(table, PARAM_INTERPOLATION, mode == LOCALSCAN_MODE_CONTINUOUS);
+        gwy_param_table_set_sensitive(table, PARAM_DIRECTION, mode == LOCALSCAN_MODE_CONTINUOUS);
+    }
+    if (id != PARAM_ADD_MASK && id != PARAM_PLOT_DRIFT && id != PARAM_MASK_COLOR)
+        gwy_dialog_invalidate(GWY_DIALOG(gui->dialog));
+}
+
+static gchar*
+format_status(ModuleArgs *args)
+{
+    gboolean continuous = (gwy_params_get_enum(args->params, PARAM_MODE) == LOCALSCAN_MODE_CONTINUOUS);
+    gchar *stripes, *status;
+
+    stripes = g_strdup_printf(_("%d stripes, %d filled pixels."), args->applied.n_stripes, args->applied.n_filled);
+    if (!continuous)
+        return stripes;
+    if (args->line_time_known)
+        status = g_strdup_printf(_("%s Line time %g s (from metadata)."), stripes, args->line_time);
+    else
+        status = g_strdup_printf(_("%s Line time %g s (assumed: none in metadata)."), stripes, args->line_time);
+    g_free(stripes);
+    return status;
+}
+
+/* An unusable drift source leaves the source image in the preview, the
+ * parser's own message in the dialog and OK insensitive. */
+static void
+preview(gpointer user_data)
+{
+    ModuleGUI *gui = (ModuleGUI*)user_data;
+    ModuleArgs *args = gui->args;
+    GError *error = NULL;
+    gboolean ok;
+    gchar *text;
+
+    ok = execute(args, &error);
+    if (ok) {
+        text = format_status(args);
+        gwy_param_table_message_set_type(gui->table, MESSAGE_STATUS, GTK_MESSAGE_INFO);
+    }
+    else {
+        text = g_markup_escape_text(error->message, -1);
+        gwy_param_table_message_set_type(gui->table, MESSAGE_STATUS, GTK_MESSAGE_ERROR);
+        gwy_data_field_assign(args->result, args->field);
+        gwy_data_field_clear(args->mask);
+        g_clear_error(&error);
+    }
+    gwy_param_table_set_label(gui->table, MESSAGE_STATUS, text);
+    g_free(text);
+    gtk_dialog_set_response_sensitive(GTK_DIALOG(gui->dialog), GTK_RESPONSE_OK, ok);
+    gwy_data_field_data_changed(args->result);
+    gwy_data_field_data_changed(args->mask);
+    if (ok)
+        gwy_dialog_have_result(GWY_DIALOG(gui->dialog));
+}

@@ -1,0 +1,694 @@
+/*
+ *  Tests of the Gwyddion process function localscan_drift run the way batch
+ *  callers and pygwy run it: headless, GWY_RUN_IMMEDIATE, parameters from
+ *  the settings.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <check.h>
+#include <glib.h>
+#include <glib/gstdio.h>
+#include <libgwyddion/gwyddion.h>
+#include <libprocess/gwyprocess.h>
+#include <libgwydgets/gwydgets.h>
+#include <libgwymodule/gwymodule.h>
+#include <app/gwyapp.h>
+#include "paper-compensate.h"
+#include "localscan-channel.h"
+
+#define FUNC_NAME "localscan_drift"
+#define SETTINGS_PREFIX "/module/localscan_drift/"
+#define TITLE "Height"
+#define RESULT_TITLE "Height (local-scan compensated)"
+
+static guint32 test_seed;
+
+/* The worked example of shared/spec/paper-mode.md. */
+static const gchar worked_table[] =
+    "stripe,dx,dy\n"
+    "0,1,1\n"
+    "1,-1,0\n"
+    "2,0,-1\n";
+static const gdouble worked_c[6*4] = {
+    6.0,  7.0,  8.0,  12.5,
+    12.5, 9.0,  10.0, 11.0,
+    12.5, 9.0,  10.0, 11.0,
+    12.5, 13.0, 14.0, 15.0,
+    12.5, 13.0, 14.0, 15.0,
+    17.0, 18.0, 19.0, 20.0,
+};
+static const gdouble worked_mask[6*4] = {
+    0, 0, 0, 1,
+    1, 0, 0, 0,
+    1, 0, 0, 0,
+    1, 0, 0, 0,
+    1, 0, 0, 0,
+    0, 0, 0, 0,
+};
+
+typedef struct {
+    gint source;
+    const gchar *table_file;
+    gint mode;
+    gint fill;
+    gboolean add_mask;
+    gboolean plot_drift;
+} ModuleSettings;
+
+static const ModuleSettings default_settings = {
+    LOCALSCAN_SOURCE_STORED, "", LOCALSCAN_MODE_PAPER, LOCALSCAN_FILL_MEAN, TRUE, FALSE,
+};
+
+static void
+set_string(GwyContainer *container, const gchar *key, const gchar *text)
+{
+    gwy_container_set_const_string_by_name(container, key, (const guchar*)text);
+}
+
+/* The keys and values the command-line tool sets too. */
+static void
+set_module_settings(const ModuleSettings *ms)
+{
+    GwyContainer *settings = gwy_app_settings_get();
+
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "source", ms->source);
+    set_string(settings, SETTINGS_PREFIX "table-file", ms->table_file);
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "mode", ms->mode);
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "fill", ms->fill);
+    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "add-mask", ms->add_mask);
+    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "plot-drift", ms->plot_drift);
+}
+
+/* Pixel k*k blocks: image (xres*k) x (yres*k). */
+static GwyDataField*
+make_field(const gdouble *values, gint xres, gint yres, gint k, gdouble xstep, gdouble ystep,
+           const gchar *xyunit)
+{
+    GwyDataField *field = gwy_data_field_new(xres*k, yres*k, xres*k*xstep, yres*k*ystep, FALSE);
+    gdouble *d = gwy_data_field_get_data(field);
+    gint r, c;
+
+    for (r = 0; r < yres*k; r++) {
+        for (c = 0; c < xres*k; c++)
+            d[r*xres*k + c] = values[(r/k)*xres + c/k];
+    }
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), xyunit);
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(field), "m");
+    return field;
+}
+
+static GwyDataField*
+make_worked_example(gint k, gdouble xstep, gdouble ystep, const gchar *xyunit)
+{
+    gdouble a[6*4];
+    gint i;
+
+    for (i = 0; i < 6*4; i++)
+        a[i] = i + 1;
+    return make_field(a, 4, 6, k, xstep, ystep, xyunit);
+}
+
+static GwyContainer*
+make_container(GwyDataField *field, const gchar *table_text)
+{
+    GwyContainer *data = gwy_container_new();
+
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(0), field);
+    set_string(data, "/0/data/title", TITLE);
+    set_string(data, "/0/base/palette", "Gray");
+    if (table_text)
+        set_string(data, "/0/localscan/drift-table", table_text);
+    gwy_app_data_browser_add(data);
+    gwy_app_data_browser_select_data_field(data, 0);
+    return data;
+}
+
+static void
+drop_container(GwyContainer *data)
+{
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+}
+
+static gint
+count_ids(gint *ids)
+{
+    gint n = 0;
+
+    while (ids[n] != -1)
+        n++;
+    g_free(ids);
+    return n;
+}
+
+/* Runs the function; returns the id of the one new channel, or -1 when
+ * none was made.  What it printed on stderr goes to *message. */
+static gint
+run_module(GwyContainer *data, gchar **message)
+{
+    gint before = count_ids(gwy_app_data_browser_get_data_ids(data)), after, saved_fd, fd;
+    gchar *tmpname = NULL, *text = NULL;
+
+    fflush(stderr);
+    fd = g_file_open_tmp("localscan-stderr-XXXXXX", &tmpname, NULL);
+    ck_assert_int_ge(fd, 0);
+    saved_fd = dup(STDERR_FILENO);
+    dup2(fd, STDERR_FILENO);
+    gwy_process_func_run(FUNC_NAME, data, GWY_RUN_IMMEDIATE);
+    fflush(stderr);
+    dup2(saved_fd, STDERR_FILENO);
+    close(saved_fd);
+    close(fd);
+    g_file_get_contents(tmpname, &text, NULL, NULL);
+    g_unlink(tmpname);
+    g_free(tmpname);
+    if (message)
+        *message = text;
+    else
+        g_free(text);
+
+    after = count_ids(gwy_app_data_browser_get_data_ids(data));
+    ck_assert_int_le(after, before + 1);
+    return after > before ? before : -1;
+}
+
+static GwyDataField*
+get_field(GwyContainer *data, GQuark key)
+{
+    GwyDataField *field = NULL;
+
+    ck_assert(gwy_container_gis_object(data, key, &field));
+    ck_assert(GWY_IS_DATA_FIELD(field));
+    return field;
+}
+
+static void
+assert_field_values(GwyDataField *field, const gdouble *expected, gint xres, gint yres, gint k)
+{
+    const gdouble *d = gwy_data_field_get_data_const(field);
+    gint r, c;
+
+    ck_assert_int_eq(gwy_data_field_get_xres(field), xres*k);
+    ck_assert_int_eq(gwy_data_field_get_yres(field), yres*k);
+    for (r = 0; r < yres*k; r++) {
+        for (c = 0; c < xres*k; c++) {
+            ck_assert_msg(d[r*xres*k + c] == expected[(r/k)*xres + c/k],
+                          "pixel (%d,%d) is %g, expected %g", r, c, d[r*xres*k + c],
+                          expected[(r/k)*xres + c/k]);
+        }
+    }
+}
+
+static void
+assert_same_field_bits(GwyDataField *got, GwyDataField *expected)
+{
+    gint n = gwy_data_field_get_xres(expected)*gwy_data_field_get_yres(expected);
+
+    ck_assert_int_eq(gwy_data_field_get_xres(got), gwy_data_field_get_xres(expected));
+    ck_assert_int_eq(gwy_data_field_get_yres(got), gwy_data_field_get_yres(expected));
+    ck_assert(memcmp(gwy_data_field_get_data_const(got), gwy_data_field_get_data_const(expected),
+                     n*sizeof(gdouble)) == 0);
+}
+
+/* Geometry and lateral unit like the field; dimensionless values. */
+static void
+assert_mask_geometry(GwyDataField *mask, GwyDataField *field)
+{
+    ck_assert(!gwy_data_field_check_compatibility(mask, field,
+                                                  GWY_DATA_COMPATIBILITY_RES | GWY_DATA_COMPATIBILITY_REAL
+                                                  | GWY_DATA_COMPATIBILITY_LATERAL));
+    ck_assert(gwy_si_unit_equal_string(gwy_data_field_get_si_unit_z(mask), NULL));
+}
+
+static const gchar*
+get_string(GwyContainer *data, const gchar *key)
+{
+    const guchar *s = NULL;
+
+    if (!gwy_container_gis_string_by_name(data, key, &s))
+        return NULL;
+    return (const gchar*)s;
+}
+
+/* The worked example, pixels scaled k times, drift in px or nm (x and y
+ * pixel sizes differ, so a mix-up of the two would show). */
+static void
+check_worked_example(gint k, gboolean nm_table)
+{
+    const gdouble xstep = 2e-9, ystep = 5e-9;
+    GwyDataField *field = make_worked_example(k, xstep, ystep, "m"), *source_copy, *result, *mask;
+    GwyContainer *data;
+    GString *table = g_string_new(NULL);
+    gchar key[64];
+    gint newid, s;
+    static const gint dx[3] = { 1, -1, 0 }, dy[3] = { 1, 0, -1 };
+
+    if (nm_table)
+        g_string_append(table, "# units: nm\n");
+    g_string_append(table, "stripe,dx,dy\n");
+    for (s = 0; s < 3; s++) {
+        if (nm_table)
+            g_string_append_printf(table, "%d,%g,%g\n", s, k*dx[s]*xstep*1e9, k*dy[s]*ystep*1e9);
+        else
+            g_string_append_printf(table, "%d,%d,%d\n", s, k*dx[s], k*dy[s]);
+    }
+    data = make_container(field, table->str);
+    source_copy = gwy_data_field_duplicate(field);
+    set_module_settings(&default_settings);
+
+    newid = run_module(data, NULL);
+    ck_assert_int_eq(newid, 1);
+    result = get_field(data, gwy_app_get_data_key_for_id(newid));
+    assert_field_values(result, worked_c, 4, 6, k);
+    mask = get_field(data, gwy_app_get_mask_key_for_id(newid));
+    assert_field_values(mask, worked_mask, 4, 6, k);
+    assert_mask_geometry(mask, field);
+    ck_assert_str_eq(get_string(data, "/1/data/title"), RESULT_TITLE);
+    g_snprintf(key, sizeof(key), DRIFT_TABLE_KEY_FORMAT, newid);
+    ck_assert_str_eq(get_string(data, key), table->str);
+    assert_same_field_bits(get_field(data, gwy_app_get_data_key_for_id(0)), source_copy);
+
+    g_object_unref(source_copy);
+    g_object_unref(field);
+    g_string_free(table, TRUE);
+    drop_container(data);
+}
+
+START_TEST(test_worked_example_exact)
+{
+    check_worked_example(1, FALSE);
+}
+END_TEST
+
+START_TEST(test_worked_example_scaled)
+{
+    check_worked_example(3, FALSE);
+}
+END_TEST
+
+START_TEST(test_worked_example_nm_table)
+{
+    check_worked_example(3, TRUE);
+}
+END_TEST
+
+/* The library itself agrees with the spec's numbers, so comparing the module
+ * with paper_compensate() below compares it with the spec. */
+START_TEST(test_paper_compensate_matches_spec)
+{
+    GwyDataField *field = make_worked_example(1, 1.0, 1.0, "m");
+    static const gint dx[3] = { 1, -1, 0 }, dy[3] = { 1, 0, -1 };
+    gdouble result[24], mask[24];
+    gdouble d = paper_image_mean(gwy_data_field_get_data_const(field), 4, 6);
+    gint i;
+
+    ck_assert(d == 12.5);
+    paper_compensate(gwy_data_field_get_data_const(field), 4, 6, 3, dx, dy, d, result, mask);
+    for (i = 0; i < 24; i++) {
+        ck_assert(result[i] == worked_c[i]);
+        ck_assert(mask[i] == worked_mask[i]);
+    }
+    g_object_unref(field);
+}
+END_TEST
+
+/* Independent of the library's stripe_drift_fill_missing(). */
+static void
+fill_missing_nearest(gint n, const gboolean *has, gint *dx, gint *dy)
+{
+    gint s, dist, t;
+
+    for (s = 0; s < n; s++) {
+        if (has[s])
+            continue;
+        for (dist = 1; dist < n; dist++) {
+            t = (s - dist >= 0 && has[s - dist]) ? s - dist : ((s + dist < n && has[s + dist]) ? s + dist : -1);
+            if (t >= 0) {
+                dx[s] = dx[t];
+                dy[s] = dy[t];
+                break;
+            }
+        }
+    }
+}
+
+START_TEST(test_random_table_matches_paper_compensate)
+{
+    GRand *rng = g_rand_new_with_seed(test_seed + 7919*_i);
+    gint xres = g_rand_int_range(rng, 8, 61), yres = g_rand_int_range(rng, 4, 49);
+    gint n = g_rand_int_range(rng, 1, yres + 1), s, i, newid, anchor = g_rand_int_range(rng, 0, n);
+    GwyDataField *field = gwy_data_field_new(xres, yres, 1e-6, 2e-6, FALSE), *expected, *expected_mask;
+    GwyContainer *data;
+    GString *table = g_string_new("stripe,dx,dy,score\n");
+    gboolean *has = g_new(gboolean, n);
+    gint *dx = g_new0(gint, n), *dy = g_new0(gint, n);
+    gdouble *d = gwy_data_field_get_data(field);
+
+    for (i = 0; i < xres*yres; i++)
+        d[i] = g_rand_double_range(rng, -1e-8, 1e-8);
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+    for (s = 0; s < n; s++) {
+        has[s] = (s == anchor || g_rand_double(rng) < 0.7);
+        if (has[s]) {
+            dx[s] = g_rand_int_range(rng, -6, 7);
+            dy[s] = g_rand_int_range(rng, -6, 7);
+            g_string_append_printf(table, "%d,%d,%d,0.5\n", s, dx[s], dy[s]);
+        }
+        else
+            g_string_append_printf(table, "%d,,,\n", s);
+    }
+    fill_missing_nearest(n, has, dx, dy);
+
+    expected = gwy_data_field_new_alike(field, FALSE);
+    expected_mask = gwy_data_field_new_alike(field, FALSE);
+    paper_compensate(d, xres, yres, n, dx, dy, paper_image_mean(d, xres, yres),
+                     gwy_data_field_get_data(expected), gwy_data_field_get_data(expected_mask));
+
+    data = make_container(field, table->str);
+    set_module_settings(&default_settings);
+    newid = run_module(data, NULL);
+    ck_assert_msg(newid == 1, "seed %u, %dx%d, %d stripes: no new channel", test_seed, xres, yres, n);
+    assert_same_field_bits(get_field(data, gwy_app_get_data_key_for_id(newid)), expected);
+    if (gwy_data_field_get_max(expected_mask) > 0.0)
+        assert_same_field_bits(get_field(data, gwy_app_get_mask_key_for_id(newid)), expected_mask);
+    else
+        ck_assert(!gwy_container_contains(data, gwy_app_get_mask_key_for_id(newid)));
+
+    g_free(has);
+    g_free(dx);
+    g_free(dy);
+    g_string_free(table, TRUE);
+    g_object_unref(expected);
+    g_object_unref(expected_mask);
+    g_object_unref(field);
+    drop_container(data);
+    g_rand_free(rng);
+}
+END_TEST
+
+START_TEST(test_result_channel_items)
+{
+    GwyDataField *field = make_worked_example(1, 1e-9, 1e-9, "m");
+    GwyContainer *data = make_container(field, worked_table), *meta = gwy_container_new();
+    GwyStringList *log = NULL;
+    const gchar *last;
+    gint newid;
+
+    set_string(meta, "Scan rate", "2 Hz");
+    gwy_container_set_object_by_name(data, "/0/meta", meta);
+    g_object_unref(meta);
+    set_module_settings(&default_settings);
+
+    newid = run_module(data, NULL);
+    ck_assert_int_eq(newid, 1);
+    ck_assert_str_eq(get_string(data, "/1/base/palette"), "Gray");
+    ck_assert(gwy_container_gis_object_by_name(data, "/1/meta", &meta));
+    ck_assert_str_eq(get_string(meta, "Scan rate"), "2 Hz");
+    ck_assert(gwy_container_gis_object_by_name(data, "/1/data/log", &log));
+    ck_assert_int_ge(gwy_string_list_get_length(log), 1);
+    last = gwy_string_list_get(log, gwy_string_list_get_length(log) - 1);
+    ck_assert_msg(strstr(last, FUNC_NAME) != NULL, "log entry '%s'", last);
+    /* Nothing was added to the source channel. */
+    ck_assert(!gwy_container_contains(data, gwy_app_get_mask_key_for_id(0)));
+    ck_assert(!gwy_container_contains_by_name(data, "/0/data/log"));
+    ck_assert_int_eq(count_ids(gwy_app_data_browser_get_graph_ids(data)), 0);
+
+    g_object_unref(field);
+    drop_container(data);
+}
+END_TEST
+
+START_TEST(test_csv_file_source)
+{
+    GwyDataField *field = make_worked_example(2, 1e-9, 1e-9, "m");
+    GwyContainer *data = make_container(field, NULL);
+    ModuleSettings ms = default_settings;
+    gchar *filename = g_build_filename(g_get_home_dir(), "worked-k2.csv", NULL);
+    gint newid;
+
+    ck_assert(g_file_set_contents(filename, "# the worked example, pixels doubled\n"
+                                  "stripe,dx,dy\n0,2,2\n1,-2,0\n2,0,-2\n", -1, NULL));
+    ms.source = LOCALSCAN_SOURCE_FILE;
+    ms.table_file = filename;
+    set_module_settings(&ms);
+    newid = run_module(data, NULL);
+    ck_assert_int_eq(newid, 1);
+    assert_field_values(get_field(data, gwy_app_get_data_key_for_id(newid)), worked_c, 4, 6, 2);
+    assert_field_values(get_field(data, gwy_app_get_mask_key_for_id(newid)), worked_mask, 4, 6, 2);
+    ck_assert_str_eq(get_string(data, "/1/localscan/drift-table"), "stripe,dx,dy\n0,2,2\n1,-2,0\n2,0,-2\n");
+
+    g_unlink(filename);
+    g_free(filename);
+    g_object_unref(field);
+    drop_container(data);
+}
+END_TEST
+
+START_TEST(test_fill_values)
+{
+    static const gint fills[3] = { LOCALSCAN_FILL_ZERO, LOCALSCAN_FILL_MINIMUM, LOCALSCAN_FILL_MAXIMUM };
+    static const gdouble values[3] = { 0.0, 1.0, 24.0 };
+    GwyDataField *field = make_worked_example(1, 1e-9, 1e-9, "m");
+    ModuleSettings ms = default_settings;
+    gdouble expected[24];
+    GwyContainer *data;
+    gint i, f;
+
+    for (f = 0; f < 3; f++) {
+        for (i = 0; i < 24; i++)
+            expected[i] = worked_mask[i] ? values[f] : worked_c[i];
+        data = make_container(field, worked_table);
+        ms.fill = fills[f];
+        set_module_settings(&ms);
+        ck_assert_int_eq(run_module(data, NULL), 1);
+        assert_field_values(get_field(data, gwy_app_get_data_key_for_id(1)), expected, 4, 6, 1);
+        drop_container(data);
+    }
+    g_object_unref(field);
+}
+END_TEST
+
+START_TEST(test_mask_only_when_wanted)
+{
+    GwyDataField *field = make_worked_example(1, 1e-9, 1e-9, "m");
+    ModuleSettings ms = default_settings;
+    GwyContainer *data;
+
+    data = make_container(field, worked_table);
+    ms.add_mask = FALSE;
+    set_module_settings(&ms);
+    ck_assert_int_eq(run_module(data, NULL), 1);
+    ck_assert(!gwy_container_contains(data, gwy_app_get_mask_key_for_id(1)));
+    drop_container(data);
+
+    /* Zero drift fills nothing: no empty mask either. */
+    data = make_container(field, "stripe,dx,dy\n0,0,0\n");
+    set_module_settings(&default_settings);
+    ck_assert_int_eq(run_module(data, NULL), 1);
+    ck_assert(!gwy_container_contains(data, gwy_app_get_mask_key_for_id(1)));
+    assert_same_field_bits(get_field(data, gwy_app_get_data_key_for_id(1)), field);
+    drop_container(data);
+    g_object_unref(field);
+}
+END_TEST
+
+START_TEST(test_drift_graph)
+{
+    const gdouble xstep = 2e-9, ystep = 5e-9, yoff = 1e-6;
+    GwyDataField *field = make_worked_example(3, xstep, ystep, "m");
+    ModuleSettings ms = default_settings;
+    static const gdouble centre_row[3] = { 2.5, 8.5, 14.5 };
+    static const gint dx[3] = { 3, -3, 0 }, dy[3] = { 3, 0, -3 };
+    GwyGraphCurveModel *gcmodel;
+    GwyGraphModel *gmodel;
+    GwySIUnit *unit;
+    GwyContainer *data;
+    const gdouble *x, *y;
+    gchar *description;
+    gint *ids, c, s;
+
+    gwy_data_field_set_yoffset(field, yoff);
+    data = make_container(field, "stripe,dx,dy\n0,3,3\n1,-3,0\n2,0,-3\n");
+    ms.plot_drift = TRUE;
+    set_module_settings(&ms);
+    ck_assert_int_eq(run_module(data, NULL), 1);
+
+    ids = gwy_app_data_browser_get_graph_ids(data);
+    ck_assert_int_ne(ids[0], -1);
+    ck_assert_int_eq(ids[1], -1);
+    ck_assert(gwy_container_gis_object(data, gwy_app_get_graph_key_for_id(ids[0]), &gmodel));
+    g_free(ids);
+    ck_assert_int_eq(gwy_graph_model_get_n_curves(gmodel), 2);
+    g_object_get(gmodel, "si-unit-x", &unit, NULL);
+    ck_assert(gwy_si_unit_equal_string(unit, "m"));
+    g_object_unref(unit);
+    g_object_get(gmodel, "si-unit-y", &unit, NULL);
+    ck_assert(gwy_si_unit_equal_string(unit, "m"));
+    g_object_unref(unit);
+    for (c = 0; c < 2; c++) {
+        gcmodel = gwy_graph_model_get_curve(gmodel, c);
+        g_object_get(gcmodel, "description", &description, NULL);
+        ck_assert_str_eq(description, c ? "dy" : "dx");
+        g_free(description);
+        ck_assert_int_eq(gwy_graph_curve_model_get_ndata(gcmodel), 3);
+        x = gwy_graph_curve_model_get_xdata(gcmodel);
+        y = gwy_graph_curve_model_get_ydata(gcmodel);
+        for (s = 0; s < 3; s++) {
+            ck_assert_double_eq_tol(x[s], yoff + (centre_row[s] + 0.5)*ystep, 1e-18);
+            ck_assert_double_eq_tol(y[s], c ? dy[s]*ystep : dx[s]*xstep, 1e-18);
+        }
+    }
+    g_object_unref(field);
+    drop_container(data);
+}
+END_TEST
+
+/* Each bad source: no new channel, the source untouched, one line on stderr
+ * that names the problem. */
+static void
+check_refused(GwyDataField *field, const gchar *stored_table, const ModuleSettings *ms,
+              const gchar *expected_part)
+{
+    GwyContainer *data = make_container(field, stored_table);
+    GwyDataField *source_copy = gwy_data_field_duplicate(field);
+    gchar *message = NULL, *newline;
+
+    set_module_settings(ms);
+    ck_assert_int_eq(run_module(data, &message), -1);
+    ck_assert_msg(g_str_has_prefix(message, FUNC_NAME ": "), "message '%s'", message);
+    ck_assert_msg(strstr(message, expected_part) != NULL, "message '%s' lacks '%s'", message, expected_part);
+    newline = strchr(message, '\n');
+    ck_assert_msg(newline && newline[1] == '\0', "message '%s' is not one line", message);
+    assert_same_field_bits(get_field(data, gwy_app_get_data_key_for_id(0)), source_copy);
+    ck_assert(!gwy_container_contains(data, gwy_app_get_mask_key_for_id(0)));
+    ck_assert_int_eq(count_ids(gwy_app_data_browser_get_graph_ids(data)), 0);
+    g_free(message);
+    g_object_unref(source_copy);
+    drop_container(data);
+}
+
+START_TEST(test_bad_sources_refused)
+{
+    GwyDataField *field = make_worked_example(1, 1e-9, 1e-9, "m");
+    GwyDataField *pixel_field = make_worked_example(1, 1.0, 1.0, "");
+    ModuleSettings ms = default_settings;
+    gchar *missing = g_build_filename(g_get_home_dir(), "no-such-table.csv", NULL);
+
+    ms.plot_drift = TRUE;
+    check_refused(field, NULL, &ms, "/0/localscan/drift-table");
+    check_refused(field, "stripe,dx,dy\n0,abc,1\n", &ms, "/0/localscan/drift-table:2");
+    check_refused(field, "stripe,dx,dy\n0,0.5,0\n", &ms, "/0/localscan/drift-table:2");
+    check_refused(field, "stripe,dx,dy\n0,0,0\n1,0,0\n2,0,0\n3,0,0\n4,0,0\n5,0,0\n6,0,0\n", &ms,
+                  "/0/localscan/drift-table");
+    check_refused(pixel_field, "# units: nm\nstripe,dx,dy\n0,1,1\n", &ms, "metres");
+
+    ms.source = LOCALSCAN_SOURCE_FILE;
+    ms.table_file = missing;
+    check_refused(field, worked_table, &ms, "no-such-table.csv");
+    ms.table_file = "";
+    check_refused(field, worked_table, &ms, "file");
+
+    ms.source = LOCALSCAN_SOURCE_REFERENCE;
+    check_refused(field, worked_table, &ms, "reference");
+
+    g_free(missing);
+    g_object_unref(pixel_field);
+    g_object_unref(field);
+}
+END_TEST
+
+START_TEST(test_line_time_from_metadata)
+{
+    GwyDataField *field = make_worked_example(1, 1.0, 1.0, "m");
+    GwyContainer *data = gwy_container_new(), *meta = gwy_container_new();
+    gboolean known = TRUE;
+
+    gwy_container_set_object_by_name(data, "/0/data", field);
+    ck_assert(localscan_channel_line_time(data, 0, &known) == LOCALSCAN_DEFAULT_LINE_TIME);
+    ck_assert(!known);
+    gwy_container_set_object_by_name(data, "/0/meta", meta);
+    set_string(meta, "Frame time (s)", "0.413");
+    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, &known), 0.413/6, 1e-15);
+    ck_assert(known);
+    set_string(meta, "Scan Rate", "2.325");
+    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, NULL), 1.0/2.325, 1e-15);
+    set_string(meta, "Scan Rate", "2.5 kHz");
+    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, NULL), 1.0/2500.0, 1e-15);
+    set_string(meta, "Line time", "500 ms");
+    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, NULL), 0.5, 1e-15);
+    set_string(meta, "Line time", "fast");
+    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, NULL), 1.0/2500.0, 1e-15);
+    g_object_unref(meta);
+    g_object_unref(data);
+    g_object_unref(field);
+}
+END_TEST
+
+static guint32
+choose_seed(void)
+{
+    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
+    guint32 seed = env ? (guint32)g_ascii_strtoull(env, NULL, 10) : g_random_int();
+
+    printf("test-module-immediate: seed %u (set LOCALSCAN_TEST_SEED to repeat)\n", seed);
+    fflush(stdout);
+    return seed;
+}
+
+static gboolean
+load_module(void)
+{
+    const gchar *path = g_getenv("LOCALSCAN_MODULE");
+    GError *error = NULL;
+
+    if (!path) {
+        fprintf(stderr, "test-module-immediate: LOCALSCAN_MODULE is not set.\n");
+        return FALSE;
+    }
+    gwy_app_init_nongui("enable-threads", FALSE, NULL);
+    if (!gwy_module_register_module(path, &error)) {
+        fprintf(stderr, "test-module-immediate: cannot load %s: %s\n", path, error->message);
+        g_clear_error(&error);
+        return FALSE;
+    }
+    return gwy_process_func_exists(FUNC_NAME);
+}
+
+int
+main(void)
+{
+    Suite *suite = suite_create("module-immediate");
+    TCase *tc = tcase_create("immediate");
+    SRunner *sr;
+    gint failed;
+
+    test_seed = choose_seed();
+    if (!load_module())
+        return 1;
+
+    tcase_add_test(tc, test_paper_compensate_matches_spec);
+    tcase_add_test(tc, test_worked_example_exact);
+    tcase_add_test(tc, test_worked_example_scaled);
+    tcase_add_test(tc, test_worked_example_nm_table);
+    tcase_add_loop_test(tc, test_random_table_matches_paper_compensate, 0, 8);
+    tcase_add_test(tc, test_result_channel_items);
+    tcase_add_test(tc, test_csv_file_source);
+    tcase_add_test(tc, test_fill_values);
+    tcase_add_test(tc, test_mask_only_when_wanted);
+    tcase_add_test(tc, test_drift_graph);
+    tcase_add_test(tc, test_bad_sources_refused);
+    tcase_add_test(tc, test_line_time_from_metadata);
+    suite_add_tcase(suite, tc);
+
+    sr = srunner_create(suite);
+    srunner_run_all(sr, CK_NORMAL);
+    failed = srunner_ntests_failed(sr);
+    srunner_free(sr);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
