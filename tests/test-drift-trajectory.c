@@ -1,0 +1,558 @@
+/*
+ *  Tests of the drift trajectory built from per-stripe measurements.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <check.h>
+#include <glib.h>
+#include "drift-trajectory.h"
+#include "stripe-geometry.h"
+
+/* The paper's timing: 256 lines in 300 s. */
+#define LINE_TIME (300.0/256.0)
+
+static guint32 test_seed;
+
+/* p(t) = p0 + v t + u tau (1 - exp(-t/tau)): constant velocity plus
+ * settling (interfaces.md section 4), px and s. */
+typedef struct {
+    gdouble p0[2];
+    gdouble v[2];
+    gdouble u[2];
+    gdouble tau;
+} Motion;
+
+static void
+motion_eval(const Motion *motion, gdouble t, gdouble *p)
+{
+    gint k;
+
+    for (k = 0; k < 2; k++) {
+        p[k] = motion->p0[k] + motion->v[k]*t;
+        if (motion->tau > 0.0)
+            p[k] += motion->u[k]*motion->tau*(1.0 - exp(-t/motion->tau));
+    }
+}
+
+static GRand*
+test_rand(guint32 salt)
+{
+    return g_rand_new_with_seed(test_seed ^ (salt*2654435761u));
+}
+
+/* The paper's local-scan procedure: stripe s imaged at its centre time and
+ * scanned locally at frame end + gap + s*step. */
+static void
+measure_stripes(const Motion *motion, const ScanTiming *timing, gint n,
+                gdouble gap, gdouble step, DriftMeasurement *meas)
+{
+    gdouble pi[2], pl[2];
+    gint s;
+
+    for (s = 0; s < n; s++) {
+        meas[s].t_image = scan_timing_rows_time(timing,
+                                                stripe_first_row(s, n, timing->yres),
+                                                stripe_end_row(s, n, timing->yres));
+        meas[s].t_local = scan_timing_frame_end(timing) + gap + s*step;
+        motion_eval(motion, meas[s].t_image, pi);
+        motion_eval(motion, meas[s].t_local, pl);
+        meas[s].dx = pi[0] - pl[0];
+        meas[s].dy = pi[1] - pl[1];
+    }
+}
+
+/* Largest error of D(t) against p(t) - p(t_ref) over [t0, t1]. */
+static gdouble
+max_trajectory_error_between(const DriftTrajectory *trajectory,
+                             const Motion *motion, gdouble t0, gdouble t1)
+{
+    gdouble pref[2], p[2], d[2], err = 0.0, t;
+    gint k, nt = 3000;
+
+    motion_eval(motion, drift_trajectory_reference_time(trajectory), pref);
+    for (k = 0; k <= nt; k++) {
+        t = t0 + (t1 - t0)*k/nt;
+        motion_eval(motion, t, p);
+        drift_trajectory_eval(trajectory, t, d, d + 1);
+        err = MAX(err, fabs(d[0] - (p[0] - pref[0])));
+        err = MAX(err, fabs(d[1] - (p[1] - pref[1])));
+    }
+    return err;
+}
+
+/* The same over the whole frame. */
+static gdouble
+max_trajectory_error(const DriftTrajectory *trajectory, const Motion *motion,
+                     const ScanTiming *timing)
+{
+    return max_trajectory_error_between(trajectory, motion,
+                                        timing->frame_start,
+                                        scan_timing_frame_end(timing));
+}
+
+START_TEST(test_constant_velocity_exact)
+{
+    GRand *rng = test_rand(1);
+    ScanTiming timing;
+    DriftMeasurement meas[16];
+    DriftTrajectory *trajectory;
+    Motion motion = { { 0, 0 }, { 0, 0 }, { 0, 0 }, 0.0 };
+    gdouble gap = g_rand_double_range(rng, 0.0, 5.0);
+    gdouble step = g_rand_double_range(rng, 0.05, 0.5), vx, vy, err;
+
+    motion.p0[0] = g_rand_double_range(rng, -5.0, 5.0);
+    motion.p0[1] = g_rand_double_range(rng, -5.0, 5.0);
+    motion.v[0] = g_rand_double_range(rng, -0.05, 0.05);
+    motion.v[1] = g_rand_double_range(rng, -0.05, 0.05);
+    scan_timing_init(&timing, 256, 256, 0.0, LINE_TIME,
+                     _i ? SCAN_DIRECTION_UP : SCAN_DIRECTION_DOWN);
+    measure_stripes(&motion, &timing, 16, gap, step, meas);
+    trajectory = drift_trajectory_new(meas, 16, NULL);
+    ck_assert(trajectory);
+    ck_assert_double_eq_tol(drift_trajectory_reference_time(trajectory),
+                            scan_timing_frame_end(&timing) + gap, 1e-12);
+    drift_trajectory_local_velocity(trajectory, &vx, &vy);
+    ck_assert_double_eq_tol(vx, motion.v[0], 1e-12);
+    ck_assert_double_eq_tol(vy, motion.v[1], 1e-12);
+    /* Without the drift between local scans this would be |v| 15 step. */
+    err = max_trajectory_error(trajectory, &motion, &timing);
+    ck_assert_msg(err < 1e-9, "constant velocity error %g px", err);
+    drift_trajectory_free(trajectory);
+    g_rand_free(rng);
+}
+END_TEST
+
+START_TEST(test_knots_interpolated)
+{
+    GRand *rng = test_rand(2);
+    DriftMeasurement meas[9];
+    DriftTrajectory *trajectory;
+    gdouble dx, dy, t = 0.0;
+    gint s;
+
+    /* Given in shuffled time order. */
+    for (s = 0; s < 9; s++) {
+        t += g_rand_double_range(rng, 1.0, 20.0);
+        meas[(s*4) % 9].t_image = t;
+        meas[(s*4) % 9].t_local = 400.0;
+        meas[(s*4) % 9].dx = g_rand_double_range(rng, -10.0, 10.0);
+        meas[(s*4) % 9].dy = g_rand_double_range(rng, -10.0, 10.0);
+    }
+    trajectory = drift_trajectory_new(meas, 9, NULL);
+    for (s = 0; s < 9; s++) {
+        drift_trajectory_eval(trajectory, meas[s].t_image, &dx, &dy);
+        ck_assert_double_eq_tol(dx, meas[s].dx, 1e-12);
+        ck_assert_double_eq_tol(dy, meas[s].dy, 1e-12);
+    }
+    drift_trajectory_free(trajectory);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* The not-a-knot spline reproduces any cubic between the first and last
+ * knot (a natural spline would not: it forces p'' = 0 at the ends). */
+START_TEST(test_cubic_reproduced)
+{
+    GRand *rng = test_rand(3);
+    DriftMeasurement meas[7];
+    DriftTrajectory *trajectory;
+    gdouble c[4], dx, dy, t, expected, t_local = 200.0, pl;
+    gint s, k;
+
+    for (k = 0; k < 4; k++)
+        c[k] = g_rand_double_range(rng, -1.0, 1.0)*pow(0.1, k);
+    pl = c[0] + t_local*(c[1] + t_local*(c[2] + t_local*c[3]));
+    t = 0.0;
+    for (s = 0; s < 7; s++) {
+        t += g_rand_double_range(rng, 2.0, 15.0);
+        meas[s].t_image = t;
+        meas[s].t_local = t_local;
+        meas[s].dx = c[0] + t*(c[1] + t*(c[2] + t*c[3])) - pl;
+        meas[s].dy = -meas[s].dx;
+    }
+    trajectory = drift_trajectory_new(meas, 7, NULL);
+    for (k = 0; k <= 200; k++) {
+        t = meas[0].t_image + (meas[6].t_image - meas[0].t_image)*k/200.0;
+        expected = c[0] + t*(c[1] + t*(c[2] + t*c[3])) - pl;
+        drift_trajectory_eval(trajectory, t, &dx, &dy);
+        ck_assert_double_eq_tol(dx, expected, 1e-9*(1.0 + fabs(expected)));
+        ck_assert_double_eq_tol(dy, -expected, 1e-9*(1.0 + fabs(expected)));
+    }
+    drift_trajectory_free(trajectory);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* Beyond the first and last knots the end cubic continues for half the
+ * end interval (C2 there), then the trajectory goes on linearly with the
+ * slope reached. */
+START_TEST(test_end_continuation)
+{
+    GRand *rng = test_rand(4);
+    DriftMeasurement meas[6];
+    DriftTrajectory *trajectory;
+    gdouble t_lin[2], d0[2], v0[2], d[2], v[2], dl[2], vl[2], a, eps = 1e-6;
+    gint s, side, k;
+
+    for (s = 0; s < 6; s++) {
+        meas[s].t_image = 10.0*s + g_rand_double_range(rng, 0.0, 5.0);
+        meas[s].t_local = 100.0;
+        meas[s].dx = g_rand_double_range(rng, -3.0, 3.0);
+        meas[s].dy = g_rand_double_range(rng, -3.0, 3.0);
+    }
+    trajectory = drift_trajectory_new(meas, 6, NULL);
+    t_lin[0] = meas[0].t_image - 0.5*(meas[1].t_image - meas[0].t_image);
+    t_lin[1] = meas[5].t_image + 0.5*(meas[5].t_image - meas[4].t_image);
+    for (side = 0; side < 2; side++) {
+        drift_trajectory_eval(trajectory, t_lin[side], d0, d0 + 1);
+        drift_trajectory_velocity(trajectory, t_lin[side], v0, v0 + 1);
+        for (k = 1; k <= 5; k++) {
+            a = (side ? 1.0 : -1.0)*3.7*k;
+            drift_trajectory_eval(trajectory, t_lin[side] + a, d, d + 1);
+            drift_trajectory_velocity(trajectory, t_lin[side] + a, v, v + 1);
+            ck_assert_double_eq_tol(d[0], d0[0] + a*v0[0], 1e-11);
+            ck_assert_double_eq_tol(d[1], d0[1] + a*v0[1], 1e-11);
+            ck_assert_double_eq_tol(v[0], v0[0], 1e-12);
+            ck_assert_double_eq_tol(v[1], v0[1], 1e-12);
+        }
+        /* Continuous value and slope where the linear part starts. */
+        a = side ? -eps : eps;
+        drift_trajectory_eval(trajectory, t_lin[side] + a, dl, dl + 1);
+        drift_trajectory_velocity(trajectory, t_lin[side] + a, vl, vl + 1);
+        ck_assert_double_eq_tol(dl[0], d0[0] + a*v0[0], 1e-9);
+        ck_assert_double_eq_tol(vl[0], v0[0], 1e-5*(1.0 + fabs(v0[0])));
+    }
+    /* Between the end knot and that point the curve still bends (the data
+     * are random, so the end cubic is not a line). */
+    drift_trajectory_velocity(trajectory, meas[5].t_image, v, v + 1);
+    drift_trajectory_velocity(trajectory, t_lin[1], v0, v0 + 1);
+    ck_assert(fabs(v[0] - v0[0]) > 1e-6);
+    drift_trajectory_free(trajectory);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* Linear interpolation between the same knots, for comparison. */
+static gdouble
+max_linear_interpolation_error(const DriftMeasurement *meas, gint n,
+                               const Motion *motion, gdouble t_ref)
+{
+    gdouble pref[2], p[2], err = 0.0, t, w, d;
+    gint s, k;
+
+    motion_eval(motion, t_ref, pref);
+    for (s = 0; s + 1 < n; s++) {
+        for (k = 0; k <= 50; k++) {
+            w = k/50.0;
+            t = (1.0 - w)*meas[s].t_image + w*meas[s+1].t_image;
+            motion_eval(motion, t, p);
+            d = (1.0 - w)*meas[s].dx + w*meas[s+1].dx;
+            err = MAX(err, fabs(d - (p[0] - pref[0])));
+        }
+    }
+    return err;
+}
+
+/* Settling drift (interfaces.md section 4) with an excess drift of 5-15 px
+ * relaxing with tau of 1/8 to 1/2 of the frame: the spline through 16 exact
+ * stripe measurements follows it within 0.02 px between the first and last
+ * stripe centre and 0.1 px over the whole frame (the top half stripe is
+ * extrapolated where the curvature is largest), several times closer than
+ * straight lines between the stripes; the local-scan velocity is the
+ * frame's end velocity. */
+START_TEST(test_settling_accuracy)
+{
+    GRand *rng = test_rand(5);
+    ScanTiming timing;
+    DriftMeasurement meas[16];
+    DriftTrajectory *trajectory;
+    Motion motion = { { 0, 0 }, { 0, 0 }, { 0, 0 }, 0.0 };
+    gdouble frame = 256*LINE_TIME, excess, err, end_err, lin_err, vx, vy;
+    gint k;
+
+    scan_timing_init(&timing, 256, 256, 0.0, LINE_TIME, SCAN_DIRECTION_DOWN);
+    motion.tau = frame*g_rand_double_range(rng, 0.125, 0.5);
+    for (k = 0; k < 2; k++) {
+        excess = g_rand_double_range(rng, 5.0, 15.0);
+        if (g_rand_boolean(rng))
+            excess = -excess;
+        motion.u[k] = excess/motion.tau;
+        motion.v[k] = g_rand_double_range(rng, -0.02, 0.02);
+    }
+    measure_stripes(&motion, &timing, 16, 1.0, 0.1, meas);
+    trajectory = drift_trajectory_new(meas, 16, NULL);
+    err = max_trajectory_error_between(trajectory, &motion, meas[0].t_image,
+                                       meas[15].t_image);
+    end_err = max_trajectory_error(trajectory, &motion, &timing);
+    lin_err = max_linear_interpolation_error(meas, 16, &motion,
+                                             drift_trajectory_reference_time(trajectory));
+    drift_trajectory_local_velocity(trajectory, &vx, &vy);
+    printf("settling tau %.1f s: spline error %.4f px (frame %.4f px), linear %.4f px, "
+           "local velocity %.5f px/s (true %.5f)\n",
+           motion.tau, err, end_err, lin_err, vx,
+           motion.v[0] + motion.u[0]*exp(-scan_timing_frame_end(&timing)
+                                         /motion.tau));
+    ck_assert_msg(err < 0.02, "settling error %g px", err);
+    ck_assert_msg(end_err < 0.1, "settling error %g px at the frame edges",
+                  end_err);
+    ck_assert_msg(err < 0.25*lin_err, "spline %g px, linear %g px",
+                  err, lin_err);
+    drift_trajectory_free(trajectory);
+    g_rand_free(rng);
+}
+END_TEST
+
+START_TEST(test_few_measurements)
+{
+    DriftMeasurement meas[2] = {
+        { 10.0, 50.0, 1.5, -2.0 },
+        { 30.0, 50.0, 3.5, 2.0 },
+    };
+    DriftTrajectory *trajectory;
+    gdouble dx, dy;
+
+    trajectory = drift_trajectory_new(meas, 1, NULL);
+    drift_trajectory_eval(trajectory, -100.0, &dx, &dy);
+    ck_assert(dx == 1.5 && dy == -2.0);
+    drift_trajectory_eval(trajectory, 1000.0, &dx, &dy);
+    ck_assert(dx == 1.5 && dy == -2.0);
+    ck_assert(!drift_trajectory_is_zero(trajectory));
+    drift_trajectory_free(trajectory);
+
+    trajectory = drift_trajectory_new(meas, 2, NULL);
+    drift_trajectory_eval(trajectory, 0.0, &dx, &dy);
+    ck_assert_double_eq_tol(dx, 0.5, 1e-12);
+    ck_assert_double_eq_tol(dy, -4.0, 1e-12);
+    drift_trajectory_eval(trajectory, 25.0, &dx, &dy);
+    ck_assert_double_eq_tol(dx, 3.0, 1e-12);
+    ck_assert_double_eq_tol(dy, 1.0, 1e-12);
+    drift_trajectory_free(trajectory);
+}
+END_TEST
+
+START_TEST(test_same_time_averaged)
+{
+    DriftMeasurement meas[3] = {
+        { 10.0, 50.0, 1.0, 0.0 },
+        { 10.0, 50.0, 2.0, 1.0 },
+        { 20.0, 50.0, 5.0, 5.0 },
+    };
+    DriftTrajectory *trajectory;
+    gdouble dx, dy;
+
+    trajectory = drift_trajectory_new(meas, 3, NULL);
+    drift_trajectory_eval(trajectory, 10.0, &dx, &dy);
+    ck_assert_double_eq_tol(dx, 1.5, 1e-12);
+    ck_assert_double_eq_tol(dy, 0.5, 1e-12);
+    drift_trajectory_free(trajectory);
+}
+END_TEST
+
+START_TEST(test_zero_and_constant_exact)
+{
+    DriftMeasurement meas[5];
+    DriftTrajectory *trajectory;
+    gdouble dx, dy;
+    gint s, k;
+
+    for (s = 0; s < 5; s++) {
+        meas[s].t_image = 3.0*s + 0.1*s*s;
+        meas[s].t_local = 40.0 + 0.3*s;
+        meas[s].dx = meas[s].dy = 0.0;
+    }
+    trajectory = drift_trajectory_new(meas, 5, NULL);
+    ck_assert(drift_trajectory_is_zero(trajectory));
+    drift_trajectory_free(trajectory);
+
+    /* Whole pixels with differing local-scan times stay exactly whole. */
+    for (s = 0; s < 5; s++) {
+        meas[s].dx = 3.0;
+        meas[s].dy = -7.0;
+    }
+    trajectory = drift_trajectory_new(meas, 5, NULL);
+    ck_assert(!drift_trajectory_is_zero(trajectory));
+    for (k = -10; k <= 60; k++) {
+        drift_trajectory_eval(trajectory, 0.7*k, &dx, &dy);
+        ck_assert(dx == 3.0 && dy == -7.0);
+    }
+    drift_trajectory_free(trajectory);
+}
+END_TEST
+
+START_TEST(test_bad_measurements)
+{
+    DriftMeasurement meas[2] = {
+        { 10.0, 50.0, 1.0, 0.0 },
+        { 20.0, 50.0, NAN, 1.0 },
+    };
+    GError *error = NULL;
+
+    ck_assert(!drift_trajectory_new(meas, 0, &error));
+    ck_assert(g_error_matches(error, DRIFT_TRAJECTORY_ERROR,
+                              DRIFT_TRAJECTORY_ERROR_EMPTY));
+    ck_assert_str_eq(error->message, "no stripe has a drift measurement");
+    g_clear_error(&error);
+    ck_assert(!drift_trajectory_new(meas, 2, &error));
+    ck_assert(g_error_matches(error, DRIFT_TRAJECTORY_ERROR,
+                              DRIFT_TRAJECTORY_ERROR_VALUE));
+    ck_assert_str_eq(error->message,
+                     "drift measurement 1 is not a finite number");
+    g_clear_error(&error);
+}
+END_TEST
+
+/* Without time columns: t_image at the stripe's centre pixel time, t_local
+ * at the end of the frame; blank stripes left out; exact columns preferred;
+ * physical units converted. */
+START_TEST(test_table_defaults)
+{
+    ScanTiming timing;
+    DriftTable *table = drift_table_new(5, DRIFT_UNIT_NM);
+    DriftMeasurement meas[5];
+    GError *error = NULL;
+    gint n, s;
+
+    scan_timing_init(&timing, 40, 23, 2.0, 0.5,
+                     _i ? SCAN_DIRECTION_UP : SCAN_DIRECTION_DOWN);
+    for (s = 0; s < 5; s++) {
+        table->rows[s].has_drift = (s != 1 && s != 2);
+        table->rows[s].dx = table->rows[s].has_drift ? 4.0*s : 0.0;
+        table->rows[s].dy = table->rows[s].has_drift ? -3.0*s : 0.0;
+    }
+    drift_table_set_extra(table, 4, "dx_exact", 7.25);
+    drift_table_set_extra(table, 4, "dy_exact", -1.5);
+    n = drift_trajectory_measurements_from_table(table, 2e-9, 3e-9, &timing,
+                                                 meas, &error);
+    ck_assert_msg(n == 3, "%d measurements (%s)", n,
+                  error ? error->message : "");
+    /* Stripes 0, 3, 4 of 23 rows: rows 0-3, 13-17, 18-22. */
+    ck_assert_double_eq_tol(meas[0].t_image,
+                            scan_timing_pixel_time(&timing, 1.5, 19.5), 1e-12);
+    ck_assert_double_eq_tol(meas[1].t_image,
+                            scan_timing_pixel_time(&timing, 15.0, 19.5), 1e-12);
+    ck_assert_double_eq_tol(meas[2].t_image,
+                            scan_timing_pixel_time(&timing, 20.0, 19.5), 1e-12);
+    for (s = 0; s < 3; s++)
+        ck_assert_double_eq_tol(meas[s].t_local, 2.0 + 23*0.5, 1e-12);
+    ck_assert_double_eq_tol(meas[1].dx, 6.0, 1e-12);
+    ck_assert_double_eq_tol(meas[1].dy, -3.0, 1e-12);
+    ck_assert_double_eq_tol(meas[2].dx, 7.25, 1e-12);
+    ck_assert_double_eq_tol(meas[2].dy, -1.5, 1e-12);
+    drift_table_free(table);
+}
+END_TEST
+
+/* A blank stripe is a missing measurement, interpolated between its
+ * neighbours, never a copy of the nearest stripe. */
+START_TEST(test_table_blank_not_filled)
+{
+    ScanTiming timing;
+    DriftTable *table = drift_table_new(8, DRIFT_UNIT_PX);
+    DriftTrajectory *trajectory;
+    gdouble dx, dy;
+    gint s;
+
+    scan_timing_init(&timing, 64, 64, 0.0, 1.0, SCAN_DIRECTION_DOWN);
+    for (s = 0; s < 8; s++) {
+        table->rows[s].has_drift = (s != 3 && s != 6);
+        table->rows[s].dx = table->rows[s].has_drift ? 2.0*s : 0.0;
+        table->rows[s].dy = table->rows[s].has_drift ? -1.0*s : 0.0;
+    }
+    trajectory = drift_trajectory_new_from_table(table, 1.0, 1.0, &timing,
+                                                 NULL);
+    ck_assert(trajectory);
+    drift_trajectory_eval(trajectory, scan_timing_rows_time(&timing, 24, 32),
+                          &dx, &dy);
+    ck_assert_double_eq_tol(dx, 6.0, 1e-9);
+    ck_assert_double_eq_tol(dy, -3.0, 1e-9);
+    drift_trajectory_eval(trajectory, scan_timing_rows_time(&timing, 48, 56),
+                          &dx, &dy);
+    ck_assert_double_eq_tol(dx, 12.0, 1e-9);
+    ck_assert_double_eq_tol(dy, -6.0, 1e-9);
+    drift_trajectory_free(trajectory);
+    drift_table_free(table);
+}
+END_TEST
+
+START_TEST(test_table_errors)
+{
+    static const gchar bad_time[] =
+        "stripe,dx,dy,t_local\n0,1,1,10\n1,2,2,soon\n";
+    static const gchar all_blank[] = "stripe,dx,dy\n0,,\n1,,\n";
+    ScanTiming timing;
+    DriftTable *table;
+    GError *error = NULL;
+
+    scan_timing_init(&timing, 16, 16, 0.0, 1.0, SCAN_DIRECTION_DOWN);
+    table = drift_table_parse(bad_time, -1, "drift.csv", &error);
+    ck_assert_msg(table, "%s", error ? error->message : "");
+    ck_assert(!drift_trajectory_new_from_table(table, 1.0, 1.0, &timing,
+                                               &error));
+    ck_assert(g_error_matches(error, DRIFT_TRAJECTORY_ERROR,
+                              DRIFT_TRAJECTORY_ERROR_VALUE));
+    ck_assert_str_eq(error->message,
+                     "drift.csv:3: t_local is not a finite number");
+    g_clear_error(&error);
+    drift_table_free(table);
+
+    table = drift_table_parse(all_blank, -1, "blank.csv", &error);
+    ck_assert(table);
+    ck_assert(!drift_trajectory_new_from_table(table, 1.0, 1.0, &timing,
+                                               &error));
+    ck_assert(error);
+    g_clear_error(&error);
+
+    timing.line_time = 0.0;
+    ck_assert(!drift_trajectory_new_from_table(table, 1.0, 1.0, &timing,
+                                               &error));
+    ck_assert(g_error_matches(error, DRIFT_TRAJECTORY_ERROR,
+                              DRIFT_TRAJECTORY_ERROR_TIMING));
+    g_clear_error(&error);
+    drift_table_free(table);
+}
+END_TEST
+
+static Suite*
+drift_trajectory_suite(void)
+{
+    Suite *suite = suite_create("drift-trajectory");
+    TCase *tc = tcase_create("core");
+
+    tcase_add_loop_test(tc, test_constant_velocity_exact, 0, 2);
+    tcase_add_test(tc, test_knots_interpolated);
+    tcase_add_test(tc, test_cubic_reproduced);
+    tcase_add_test(tc, test_end_continuation);
+    tcase_add_test(tc, test_settling_accuracy);
+    tcase_add_test(tc, test_few_measurements);
+    tcase_add_test(tc, test_same_time_averaged);
+    tcase_add_test(tc, test_zero_and_constant_exact);
+    tcase_add_test(tc, test_bad_measurements);
+    tcase_add_loop_test(tc, test_table_defaults, 0, 2);
+    tcase_add_test(tc, test_table_blank_not_filled);
+    tcase_add_test(tc, test_table_errors);
+    suite_add_tcase(suite, tc);
+    return suite;
+}
+
+int
+main(void)
+{
+    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
+    SRunner *runner;
+    gint failed;
+
+    test_seed = env ? (guint32)strtoul(env, NULL, 10) : (guint32)g_random_int();
+    printf("test-drift-trajectory: seed %u (set LOCALSCAN_TEST_SEED to "
+           "repeat)\n", test_seed);
+    fflush(stdout);
+    runner = srunner_create(drift_trajectory_suite());
+    srunner_run_all(runner, CK_NORMAL);
+    failed = srunner_ntests_failed(runner);
+    srunner_free(runner);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
