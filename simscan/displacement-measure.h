@@ -1,0 +1,61 @@
+/*
+ *  Displacement measurements of a frame series: blocks of rows of each
+ *  frame registered against the earlier frames, each tied to the scan times
+ *  of the rows involved (drift-fit.h's DriftMeasurement).
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef SIMSCAN_DISPLACEMENT_MEASURE_H
+#define SIMSCAN_DISPLACEMENT_MEASURE_H
+
+#include <glib.h>
+#include "frame-series.h"
+#include "drift-fit.h"
+
+G_BEGIN_DECLS
+
+typedef struct {
+    gint n_blocks;          /* blocks of rows per frame (default 16) */
+    gdouble max_shift;      /* fraction of the frame searched for the frame's
+                               overall shift (default 0.25) */
+    gdouble block_range;    /* fraction searched around it per block
+                               (default 0.08, at least 4 px) */
+    gdouble min_score;      /* blocks correlating worse are dropped (0.3) */
+    gboolean all_pairs;     /* every earlier frame as reference (default);
+                               else only the previous one */
+    gdouble smooth;         /* Gaussian blur before registration, fraction of
+                               the smaller physical side (default 0.01) */
+} DisplacementOptions;
+
+void               displacement_options_init (DisplacementOptions *options);
+
+/* Registers one image against a reference of the same size: n blocks of
+ * rows, each giving (dx, dy) px in the drift-table convention (content of the
+ * reference at (r, c) appears in the image at (r + dy, c + dx)) and a score
+ * (normalised correlation).  Frames are levelled line by line and blurred
+ * first; pixel_aspect is the physical dy/dx of a pixel.  The frame's overall
+ * shift is searched around guess (px, may be NULL: around 0, wider) and
+ * stored in global (dx, dy, score; may be NULL); the blocks are searched
+ * around it. */
+void               displacement_register_blocks(const gdouble *image,
+                                                const gdouble *reference,
+                                                gint xres,
+                                                gint yres,
+                                                gint n,
+                                                const DisplacementOptions *options,
+                                                gdouble pixel_aspect,
+                                                const gdouble *guess,
+                                                gdouble *dx,
+                                                gdouble *dy,
+                                                gdouble *score,
+                                                gdouble *global);
+
+/* All measurements of the series (metres, seconds); *n gets their count.
+ * Block b of frame k against frame j becomes one measurement of group b. */
+DriftMeasurement*  displacement_measure_series(const FrameSeries *series,
+                                               const DisplacementOptions *options,
+                                               gint *n);
+
+G_END_DECLS
+
+#endif

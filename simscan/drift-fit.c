@@ -1,0 +1,658 @@
+/*
+ *  Fitting drift trajectories to displacement measurements; model choice.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <math.h>
+#include "drift-fit.h"
+
+#define MAX_BASIS 4
+#define GOLDEN_STEPS 40
+#define MAX_GRID 6000
+
+/* Measurements in nm and s, weights normalised to mean 1 over those used. */
+typedef struct {
+    gint n;
+    gdouble *ta, *tb, *d[2], *w;
+    gint n_used;
+    gdouble t_max;         /* latest time */
+    gdouble t_resolution;  /* typical spacing of distinct times */
+} Prepared;
+
+static const DriftModelType candidate_types[] = {
+    DRIFT_MODEL_NONE, DRIFT_MODEL_SETTLING, DRIFT_MODEL_OSCILLATION,
+    DRIFT_MODEL_JUMP,
+};
+
+const DriftModelType*
+drift_fit_candidates(gint *n)
+{
+    *n = G_N_ELEMENTS(candidate_types);
+    return candidate_types;
+}
+
+void
+drift_fit_options_init(DriftFitOptions *options)
+{
+    memset(options, 0, sizeof(DriftFitOptions));
+    options->n_folds = 5;
+    options->bic_margin = 10.0;
+    options->outlier_sigmas = 5.0;
+}
+
+/* Basis functions of the trajectory at t for nonlinear parameter theta. */
+static gint
+model_basis(DriftModelType type, gdouble theta, gdouble t, gdouble *f)
+{
+    f[0] = t;
+    switch (type) {
+        case DRIFT_MODEL_SETTLING:
+        f[1] = -theta*expm1(-t/theta);
+        return 2;
+
+        case DRIFT_MODEL_OSCILLATION:
+        f[1] = sin(2.0*G_PI*t/theta);
+        f[2] = cos(2.0*G_PI*t/theta);
+        return 3;
+
+        case DRIFT_MODEL_JUMP:
+        f[1] = (t >= theta) ? 1.0 : 0.0;
+        return 2;
+
+        default:
+        return 1;
+    }
+}
+
+static gboolean
+model_has_nonlinear(DriftModelType type)
+{
+    return (type == DRIFT_MODEL_SETTLING || type == DRIFT_MODEL_OSCILLATION
+            || type == DRIFT_MODEL_JUMP);
+}
+
+static gint
+compare_doubles(gconstpointer a, gconstpointer b)
+{
+    gdouble x = *(const gdouble*)a, y = *(const gdouble*)b;
+
+    return (x < y) ? -1 : (x > y);
+}
+
+/* The sorted distinct times of the measurements; returns their count. */
+static gint
+distinct_times(const Prepared *pm, gdouble **times)
+{
+    gdouble *t = g_new(gdouble, 2*pm->n + 1);
+    gint i, m = 0, k;
+
+    for (i = 0; i < pm->n; i++) {
+        if (pm->w[i] <= 0.0)
+            continue;
+        t[m++] = pm->ta[i];
+        t[m++] = pm->tb[i];
+    }
+    qsort(t, m, sizeof(gdouble), compare_doubles);
+    for (i = k = 0; i < m; i++) {
+        if (!k || t[i] - t[k-1] > 1e-9*(1.0 + fabs(t[i])))
+            t[k++] = t[i];
+    }
+    *times = t;
+    return k;
+}
+
+static void
+prepared_free(Prepared *pm)
+{
+    g_free(pm->ta);
+    g_free(pm->tb);
+    g_free(pm->d[0]);
+    g_free(pm->d[1]);
+    g_free(pm->w);
+}
+
+/* mask: when not NULL, measurements with mask[i] FALSE are left out. */
+static void
+prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
+        Prepared *pm)
+{
+    gdouble wsum = 0.0, *times, *gaps;
+    gint i, nt;
+
+    pm->n = n;
+    pm->ta = g_new(gdouble, n);
+    pm->tb = g_new(gdouble, n);
+    pm->d[0] = g_new(gdouble, n);
+    pm->d[1] = g_new(gdouble, n);
+    pm->w = g_new(gdouble, n);
+    pm->n_used = 0;
+    pm->t_max = 0.0;
+    for (i = 0; i < n; i++) {
+        const DriftMeasurement *m = meas + i;
+        gboolean usable = (m->weight > 0.0 && isfinite(m->weight)
+                           && isfinite(m->dx) && isfinite(m->dy)
+                           && isfinite(m->t_a) && isfinite(m->t_b)
+                           && (!mask || mask[i]));
+
+        pm->ta[i] = m->t_a;
+        pm->tb[i] = m->t_b;
+        pm->d[0][i] = usable ? 1e9*m->dx : 0.0;
+        pm->d[1][i] = usable ? 1e9*m->dy : 0.0;
+        pm->w[i] = usable ? m->weight : 0.0;
+        if (usable) {
+            wsum += m->weight;
+            pm->n_used++;
+            pm->t_max = MAX(pm->t_max, MAX(m->t_a, m->t_b));
+        }
+    }
+    for (i = 0; i < n; i++)
+        pm->w[i] *= (wsum > 0.0) ? pm->n_used/wsum : 0.0;
+
+    nt = distinct_times(pm, &times);
+    pm->t_resolution = pm->t_max/MAX(nt, 1);
+    if (nt > 2) {
+        gaps = g_new(gdouble, nt - 1);
+        for (i = 0; i+1 < nt; i++)
+            gaps[i] = times[i+1] - times[i];
+        qsort(gaps, nt - 1, sizeof(gdouble), compare_doubles);
+        pm->t_resolution = MAX(gaps[(nt - 1)/2], 1e-9);
+        g_free(gaps);
+    }
+    g_free(times);
+}
+
+/* Solves the k x k system a x = b (a, b destroyed) by Gaussian elimination
+ * with partial pivoting; a vanishing pivot gives a zero coefficient. */
+static void
+solve_small(gdouble *a, gdouble *b, gint k, gdouble *x)
+{
+    gint i, j, r, p;
+    gdouble scale = 0.0;
+
+    for (i = 0; i < k; i++)
+        scale = MAX(scale, fabs(a[i*k + i]));
+    for (i = 0; i < k; i++) {
+        p = i;
+        for (r = i+1; r < k; r++) {
+            if (fabs(a[r*k + i]) > fabs(a[p*k + i]))
+                p = r;
+        }
+        if (p != i) {
+            for (j = 0; j < k; j++) {
+                gdouble tmp = a[i*k + j];
+                a[i*k + j] = a[p*k + j];
+                a[p*k + j] = tmp;
+            }
+            gdouble tmp = b[i];
+            b[i] = b[p];
+            b[p] = tmp;
+        }
+        if (fabs(a[i*k + i]) <= 1e-13*scale) {
+            a[i*k + i] = 1.0;
+            for (j = i+1; j < k; j++)
+                a[i*k + j] = 0.0;
+            b[i] = 0.0;
+        }
+        for (r = i+1; r < k; r++) {
+            gdouble f = a[r*k + i]/a[i*k + i];
+            for (j = i; j < k; j++)
+                a[r*k + j] -= f*a[i*k + j];
+            b[r] -= f*b[i];
+        }
+    }
+    for (i = k-1; i >= 0; i--) {
+        gdouble s = b[i];
+        for (j = i+1; j < k; j++)
+            s -= a[i*k + j]*x[j];
+        x[i] = s/a[i*k + i];
+    }
+}
+
+/* Weighted least squares for a fixed nonlinear parameter; returns the
+ * weighted residual sum of squares (nm^2) over both axes. */
+static gdouble
+solve_fixed(const Prepared *pm, DriftModelType type, gdouble theta,
+            gdouble coef[2][MAX_BASIS], gint *n_basis)
+{
+    gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], fa[MAX_BASIS],
+            fb[MAX_BASIS], row[MAX_BASIS], a[MAX_BASIS*MAX_BASIS];
+    gdouble rss = 0.0;
+    gint i, j, l, k = 1, ax;
+
+    memset(ata, 0, sizeof(ata));
+    memset(atb, 0, sizeof(atb));
+    for (i = 0; i < pm->n; i++) {
+        if (pm->w[i] <= 0.0)
+            continue;
+        k = model_basis(type, theta, pm->ta[i], fa);
+        model_basis(type, theta, pm->tb[i], fb);
+        for (j = 0; j < k; j++)
+            row[j] = fa[j] - fb[j];
+        for (j = 0; j < k; j++) {
+            for (l = 0; l < k; l++)
+                ata[j*k + l] += pm->w[i]*row[j]*row[l];
+            atb[0][j] += pm->w[i]*row[j]*pm->d[0][i];
+            atb[1][j] += pm->w[i]*row[j]*pm->d[1][i];
+        }
+    }
+    for (ax = 0; ax < 2; ax++) {
+        memcpy(a, ata, sizeof(a));
+        solve_small(a, atb[ax], k, coef[ax]);
+    }
+    for (i = 0; i < pm->n; i++) {
+        if (pm->w[i] <= 0.0)
+            continue;
+        model_basis(type, theta, pm->ta[i], fa);
+        model_basis(type, theta, pm->tb[i], fb);
+        for (ax = 0; ax < 2; ax++) {
+            gdouble r = pm->d[ax][i];
+            for (j = 0; j < k; j++)
+                r -= coef[ax][j]*(fa[j] - fb[j]);
+            rss += pm->w[i]*r*r;
+        }
+    }
+    *n_basis = k;
+    return rss;
+}
+
+/* Candidate values of the nonlinear parameter. */
+static gint
+parameter_grid(const Prepared *pm, DriftModelType type,
+               const DriftFitOptions *options, gdouble **grid)
+{
+    gdouble tmin = MAX(pm->t_resolution, options->min_period);
+    gdouble tmax = MAX(pm->t_max, 2.0*tmin), *g, *times;
+    gint i, m, nt;
+
+    if (type == DRIFT_MODEL_SETTLING) {
+        m = 80;
+        g = g_new(gdouble, m);
+        for (i = 0; i < m; i++)
+            g[i] = 0.5*tmin*pow(6.0*tmax/(0.5*tmin), i/(m - 1.0));
+    }
+    else if (type == DRIFT_MODEL_OSCILLATION) {
+        /* Uniform in frequency, fine enough that no alias is missed. */
+        gdouble fmin = 0.5/tmax, fmax = 0.5/tmin, df = 0.125/tmax;
+
+        m = CLAMP((gint)ceil((fmax - fmin)/df) + 1, 8, MAX_GRID);
+        g = g_new(gdouble, m);
+        for (i = 0; i < m; i++)
+            g[i] = 1.0/(fmin + (fmax - fmin)*i/(m - 1.0));
+    }
+    else {
+        /* A step between each pair of consecutive distinct times. */
+        nt = distinct_times(pm, &times);
+        m = MAX(nt - 1, 1);
+        g = g_new(gdouble, m);
+        for (i = 0; i+1 < nt; i++)
+            g[i] = 0.5*(times[i] + times[i+1]);
+        if (nt < 2)
+            g[0] = tmax;
+        g_free(times);
+    }
+    *grid = g;
+    return m;
+}
+
+static gdouble
+refine_golden(const Prepared *pm, DriftModelType type, gdouble lo, gdouble hi,
+              gdouble best_theta, gdouble best_rss, gdouble *theta)
+{
+    const gdouble r = 0.5*(sqrt(5.0) - 1.0);
+    gdouble coef[2][MAX_BASIS], a = lo, b = hi, x1, x2, f1, f2;
+    gint i, k;
+
+    x1 = b - r*(b - a);
+    x2 = a + r*(b - a);
+    f1 = solve_fixed(pm, type, x1, coef, &k);
+    f2 = solve_fixed(pm, type, x2, coef, &k);
+    for (i = 0; i < GOLDEN_STEPS; i++) {
+        if (f1 < f2) {
+            b = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = b - r*(b - a);
+            f1 = solve_fixed(pm, type, x1, coef, &k);
+        }
+        else {
+            a = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = a + r*(b - a);
+            f2 = solve_fixed(pm, type, x2, coef, &k);
+        }
+    }
+    if (MIN(f1, f2) < best_rss) {
+        *theta = (f1 < f2) ? x1 : x2;
+        return MIN(f1, f2);
+    }
+    *theta = best_theta;
+    return best_rss;
+}
+
+static gboolean
+fit_prepared(const Prepared *pm, DriftModelType type,
+             const DriftFitOptions *options, DriftFit *fit)
+{
+    gdouble coef[2][MAX_BASIS], *grid = NULL, theta = 0.0, rss, best;
+    gint i, m, k, ibest = 0, nn;
+
+    memset(fit, 0, sizeof(DriftFit));
+    fit->type = type;
+    fit->cv_rms_nm = NAN;
+    fit->bic = fit->rms_nm = NAN;
+    if (pm->n_used < 3)
+        return FALSE;
+
+    if (model_has_nonlinear(type)) {
+        m = parameter_grid(pm, type, options, &grid);
+        best = G_MAXDOUBLE;
+        for (i = 0; i < m; i++) {
+            rss = solve_fixed(pm, type, grid[i], coef, &k);
+            if (rss < best) {
+                best = rss;
+                ibest = i;
+            }
+        }
+        theta = grid[ibest];
+        if (type != DRIFT_MODEL_JUMP && m > 2)
+            best = refine_golden(pm, type, grid[MAX(ibest - 1, 0)],
+                                 grid[MIN(ibest + 1, m - 1)],
+                                 theta, best, &theta);
+        g_free(grid);
+    }
+    rss = solve_fixed(pm, type, theta, coef, &k);
+    fit->n_basis = k;
+    memcpy(fit->coef, coef, sizeof(coef));
+    fit->nonlinear = theta;
+    fit->n_params = 2*k + (model_has_nonlinear(type) ? 1 : 0);
+    nn = fit->n_used = 2*pm->n_used;
+    fit->rms_nm = sqrt(rss/nn);
+    fit->bic = nn*log(MAX(rss/nn, 1e-30)) + fit->n_params*log(nn);
+    fit->ok = (nn > fit->n_params);
+    return fit->ok;
+}
+
+gboolean
+drift_fit_model(const DriftMeasurement *meas, gint n, DriftModelType type,
+                const DriftFitOptions *options, DriftFit *fit)
+{
+    DriftFitOptions defaults;
+    Prepared pm;
+    gboolean ok;
+
+    if (!options) {
+        drift_fit_options_init(&defaults);
+        options = &defaults;
+    }
+    prepare(meas, n, NULL, &pm);
+    ok = fit_prepared(&pm, type, options, fit);
+    prepared_free(&pm);
+    return ok;
+}
+
+void
+drift_fit_eval(const DriftFit *fit, gdouble t, gdouble *px, gdouble *py)
+{
+    gdouble f[MAX_BASIS], p[2] = { 0.0, 0.0 };
+    gint j, k, ax;
+
+    k = model_basis(fit->type, fit->nonlinear, t, f);
+    for (ax = 0; ax < 2; ax++) {
+        for (j = 0; j < MIN(k, fit->n_basis); j++)
+            p[ax] += fit->coef[ax][j]*f[j];
+    }
+    *px = 1e-9*p[0];
+    *py = 1e-9*p[1];
+}
+
+void
+drift_fit_predict(const DriftFit *fit, const DriftMeasurement *m,
+                  gdouble *dx, gdouble *dy)
+{
+    gdouble ax, ay, bx, by;
+
+    drift_fit_eval(fit, m->t_a, &ax, &ay);
+    drift_fit_eval(fit, m->t_b, &bx, &by);
+    *dx = ax - bx;
+    *dy = ay - by;
+}
+
+static gdouble
+cross_validate_masked(const DriftMeasurement *meas, gint n,
+                      const gboolean *mask, DriftModelType type,
+                      const DriftFitOptions *options)
+{
+    gint folds = MAX(options->n_folds, 2), f, i, count = 0;
+    gboolean *train = g_new(gboolean, n);
+    gdouble sum = 0.0, wsum = 0.0;
+    DriftFit fit;
+    Prepared pm;
+
+    for (f = 0; f < folds; f++) {
+        gboolean any = FALSE;
+
+        for (i = 0; i < n; i++) {
+            gboolean held = ((meas[i].group % folds + folds) % folds == f);
+            train[i] = !held && (!mask || mask[i]);
+            any |= held;
+        }
+        if (!any)
+            continue;
+        prepare(meas, n, train, &pm);
+        if (fit_prepared(&pm, type, options, &fit)) {
+            for (i = 0; i < n; i++) {
+                gdouble dx, dy, rx, ry;
+
+                if (train[i] || (mask && !mask[i]) || !(meas[i].weight > 0.0))
+                    continue;
+                drift_fit_predict(&fit, meas + i, &dx, &dy);
+                rx = 1e9*(meas[i].dx - dx);
+                ry = 1e9*(meas[i].dy - dy);
+                sum += meas[i].weight*(rx*rx + ry*ry);
+                wsum += 2.0*meas[i].weight;
+                count++;
+            }
+        }
+        prepared_free(&pm);
+    }
+    g_free(train);
+    return count ? sqrt(sum/wsum) : NAN;
+}
+
+gdouble
+drift_fit_cross_validate(const DriftMeasurement *meas, gint n,
+                         DriftModelType type, const DriftFitOptions *options)
+{
+    DriftFitOptions defaults;
+
+    if (!options) {
+        drift_fit_options_init(&defaults);
+        options = &defaults;
+    }
+    return cross_validate_masked(meas, n, NULL, type, options);
+}
+
+static gint
+lowest_bic(const DriftFit *fits, gint n_types)
+{
+    gint i, best = -1;
+
+    for (i = 0; i < n_types; i++) {
+        if (fits[i].ok && (best < 0 || fits[i].bic < fits[best].bic))
+            best = i;
+    }
+    return best;
+}
+
+/* Marks measurements whose residual under fit is a gross outlier (a failed
+ * registration), by a robust (median absolute) scale. */
+static void
+mark_outliers(const DriftMeasurement *meas, gint n, const DriftFit *fit,
+              gdouble sigmas, gboolean *mask)
+{
+    gdouble *r = g_new(gdouble, n), *sorted = g_new(gdouble, n), scale;
+    gint i, m = 0;
+
+    for (i = 0; i < n; i++) {
+        gdouble dx, dy;
+
+        drift_fit_predict(fit, meas + i, &dx, &dy);
+        r[i] = 1e9*sqrt(0.5*((meas[i].dx - dx)*(meas[i].dx - dx)
+                             + (meas[i].dy - dy)*(meas[i].dy - dy)));
+        if (meas[i].weight > 0.0 && isfinite(r[i]))
+            sorted[m++] = r[i];
+    }
+    if (m) {
+        qsort(sorted, m, sizeof(gdouble), compare_doubles);
+        /* The median of a 2-D radial residual is about 1.18 sigma. */
+        scale = sorted[m/2]/1.1774;
+        for (i = 0; i < n; i++)
+            mask[i] = !(r[i] > sigmas*MAX(scale, 1e-6));
+    }
+    g_free(r);
+    g_free(sorted);
+}
+
+gint
+drift_fit_select(const DriftMeasurement *meas, gint n,
+                 const DriftFitOptions *options, DriftFit *fits)
+{
+    DriftFitOptions defaults;
+    gint n_types, i, best, chosen, inone = -1;
+    const DriftModelType *types = drift_fit_candidates(&n_types);
+    gboolean *mask = g_new(gboolean, n);
+    Prepared pm;
+
+    if (!options) {
+        drift_fit_options_init(&defaults);
+        options = &defaults;
+    }
+    prepare(meas, n, NULL, &pm);
+    for (i = 0; i < n_types; i++)
+        fit_prepared(&pm, types[i], options, fits + i);
+    prepared_free(&pm);
+    if ((best = lowest_bic(fits, n_types)) < 0) {
+        g_free(mask);
+        return -1;
+    }
+    for (i = 0; i < n; i++)
+        mask[i] = TRUE;
+    if (options->outlier_sigmas > 0.0)
+        mark_outliers(meas, n, fits + best, options->outlier_sigmas, mask);
+
+    prepare(meas, n, mask, &pm);
+    for (i = 0; i < n_types; i++) {
+        fit_prepared(&pm, types[i], options, fits + i);
+        if (fits[i].ok)
+            fits[i].cv_rms_nm = cross_validate_masked(meas, n, mask, types[i],
+                                                      options);
+        if (types[i] == DRIFT_MODEL_NONE)
+            inone = i;
+    }
+    prepared_free(&pm);
+    g_free(mask);
+
+    chosen = inone;
+    for (i = 0; i < n_types; i++) {
+        if (i == inone || !fits[i].ok)
+            continue;
+        if (inone >= 0 && fits[inone].ok
+            && (fits[inone].bic - fits[i].bic < options->bic_margin
+                || !(fits[i].cv_rms_nm < fits[inone].cv_rms_nm)))
+            continue;
+        if (chosen == inone || fits[i].bic < fits[chosen].bic)
+            chosen = i;
+    }
+    if (chosen < 0 || !fits[chosen].ok)
+        chosen = lowest_bic(fits, n_types);
+    return chosen;
+}
+
+/* Amplitude and phase of A sin + B cos as R sin(. + phase). */
+static void
+oscillation_polar(const DriftFit *fit, gdouble *amp, gdouble *phase)
+{
+    gdouble r0 = hypot(fit->coef[0][1], fit->coef[0][2]);
+    gdouble r1 = hypot(fit->coef[1][1], fit->coef[1][2]);
+    gint big = (r1 > r0) ? 1 : 0, ax;
+
+    *phase = atan2(fit->coef[big][2], fit->coef[big][1]);
+    for (ax = 0; ax < 2; ax++)
+        amp[ax] = (fit->coef[ax][1]*cos(*phase)
+                   + fit->coef[ax][2]*sin(*phase));
+}
+
+void
+drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
+{
+    gint ax;
+
+    params->tau_s = params->period_s = params->phase_rad = NAN;
+    params->t_s = NAN;
+    for (ax = 0; ax < 2; ax++) {
+        params->velocity_nm_per_s[ax] = fit->coef[ax][0];
+        params->u_nm_per_s[ax] = params->amplitude_nm[ax] = NAN;
+        params->step_nm[ax] = params->accel_nm_per_s2[ax] = NAN;
+    }
+    switch (fit->type) {
+        case DRIFT_MODEL_SETTLING:
+        params->tau_s = fit->nonlinear;
+        params->u_nm_per_s[0] = fit->coef[0][1];
+        params->u_nm_per_s[1] = fit->coef[1][1];
+        break;
+
+        case DRIFT_MODEL_OSCILLATION:
+        params->period_s = fit->nonlinear;
+        oscillation_polar(fit, params->amplitude_nm, &params->phase_rad);
+        break;
+
+        case DRIFT_MODEL_JUMP:
+        params->t_s = fit->nonlinear;
+        params->step_nm[0] = fit->coef[0][1];
+        params->step_nm[1] = fit->coef[1][1];
+        break;
+
+        default:
+        break;
+    }
+}
+
+void
+drift_fit_to_model(const DriftFit *fit, DriftModel *model)
+{
+    DriftFitParameters params;
+    gint ax;
+
+    memset(model, 0, sizeof(DriftModel));
+    model->type = fit->type;
+    model->tau = model->period = model->walk_dt = 1.0;
+    drift_fit_parameters(fit, &params);
+    for (ax = 0; ax < 2; ax++)
+        model->v[ax] = 1e-9*params.velocity_nm_per_s[ax];
+    switch (fit->type) {
+        case DRIFT_MODEL_SETTLING:
+        model->tau = params.tau_s;
+        model->u[0] = 1e-9*params.u_nm_per_s[0];
+        model->u[1] = 1e-9*params.u_nm_per_s[1];
+        break;
+
+        case DRIFT_MODEL_OSCILLATION:
+        model->period = params.period_s;
+        model->phase = params.phase_rad;
+        model->a[0] = 1e-9*params.amplitude_nm[0];
+        model->a[1] = 1e-9*params.amplitude_nm[1];
+        break;
+
+        case DRIFT_MODEL_JUMP:
+        model->t_jump = params.t_s;
+        model->step[0] = 1e-9*params.step_nm[0];
+        model->step[1] = 1e-9*params.step_nm[1];
+        break;
+
+        default:
+        break;
+    }
+}

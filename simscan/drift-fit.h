@@ -1,0 +1,122 @@
+/*
+ *  Fitting drift trajectories (drift-model.h) to displacement measurements
+ *  between frames, and choosing between the models without rewarding extra
+ *  parameters for free.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef SIMSCAN_DRIFT_FIT_H
+#define SIMSCAN_DRIFT_FIT_H
+
+#include <glib.h>
+#include "drift-model.h"
+
+G_BEGIN_DECLS
+
+/*
+ * One measurement: content scanned at time t_b (earlier frame) was seen
+ * displaced by (dx, dy) when scanned again at time t_a, so
+ *     (dx, dy) = p(t_a) - p(t_b)
+ * for the trajectory p of interfaces.md section 4.  The constant p0 cancels.
+ */
+typedef struct {
+    gdouble t_a, t_b;      /* s */
+    gdouble dx, dy;        /* m */
+    gdouble weight;        /* >= 0, relative confidence (0 = ignore) */
+    gint group;            /* unit held out together in cross-validation */
+    gint frame_a, frame_b; /* frames the times belong to (informative) */
+} DriftMeasurement;
+
+/* A fitted trajectory: p(t) = sum_j coef[axis][j] basis_j(t; nonlinear),
+ * with basis_0(t) = t (the constant velocity) and p(0) = 0. */
+typedef struct {
+    DriftModelType type;
+    gboolean ok;
+    gint n_basis;          /* basis functions per axis */
+    gdouble coef[2][4];    /* nm and s based: nm/s for the velocity */
+    gdouble nonlinear;     /* tau, period or t_jump (s); 0 for none */
+    gint n_params;         /* free parameters counted by the criterion */
+    gint n_used;           /* scalar measurements used (2 per measurement) */
+    gdouble rms_nm;        /* weighted RMS residual of the fit */
+    gdouble cv_rms_nm;     /* cross-validated RMS prediction error, NaN if
+                              not computed */
+    gdouble bic;           /* Bayesian information criterion (lower better) */
+} DriftFit;
+
+typedef struct {
+    gint n_folds;           /* cross-validation folds over groups (default 5) */
+    gdouble bic_margin;     /* an effect must beat "none" by this (default 10) */
+    gdouble outlier_sigmas; /* residuals beyond this many robust sigmas are
+                               dropped before the final fits (default 5) */
+    gdouble min_period;     /* s, shortest period/tau searched; <= 0: from the
+                               measurement times */
+    gboolean no_jump_at_frame_gap; /* unused, reserved */
+} DriftFitOptions;
+
+void           drift_fit_options_init (DriftFitOptions *options);
+
+/* The model types drift_fit_select tries, in order; n gets their count. */
+const DriftModelType* drift_fit_candidates(gint *n);
+
+/* Fits one model type to n measurements (weighted least squares, the
+ * nonlinear parameter by a grid search refined by golden section).  FALSE
+ * (fit->ok FALSE) when there are too few usable measurements. */
+gboolean       drift_fit_model        (const DriftMeasurement *meas,
+                                       gint n,
+                                       DriftModelType type,
+                                       const DriftFitOptions *options,
+                                       DriftFit *fit);
+
+/* Cross-validated RMS prediction error (nm): groups split into folds, each
+ * fold predicted by the model fitted to the others. */
+gdouble        drift_fit_cross_validate(const DriftMeasurement *meas,
+                                        gint n,
+                                        DriftModelType type,
+                                        const DriftFitOptions *options);
+
+/* Fits every candidate (fits gets drift_fit_candidates' count of entries),
+ * drops gross outliers (weights set to 0 in a private copy) and returns the
+ * index into fits of the chosen model: the lowest BIC, but an effect only
+ * when it beats "none" by bic_margin and also predicts held-out groups
+ * better.  Returns -1 when nothing could be fitted. */
+gint           drift_fit_select       (const DriftMeasurement *meas,
+                                       gint n,
+                                       const DriftFitOptions *options,
+                                       DriftFit *fits);
+
+/* p(t) of a fit, metres (p(0) = 0). */
+void           drift_fit_eval         (const DriftFit *fit,
+                                       gdouble t,
+                                       gdouble *px,
+                                       gdouble *py);
+/* Predicted p(t_a) - p(t_b) of a measurement, metres. */
+void           drift_fit_predict      (const DriftFit *fit,
+                                       const DriftMeasurement *m,
+                                       gdouble *dx,
+                                       gdouble *dy);
+/* The fit as a simulator drift model (p0 = 0).  An oscillation fitted with
+ * independent phases per axis gets the phase of its larger axis and the
+ * other axis' signed projection on it. */
+void           drift_fit_to_model     (const DriftFit *fit,
+                                       DriftModel *model);
+
+/* The reported effect parameters, physical units: tau_s; period_s,
+ * amplitude_nm[2], phase_rad; t_s, step_nm[2].  Unused fields are NaN. */
+typedef struct {
+    gdouble velocity_nm_per_s[2];
+    gdouble tau_s;
+    gdouble u_nm_per_s[2];
+    gdouble period_s;
+    gdouble amplitude_nm[2];
+    gdouble phase_rad;
+    gdouble t_s;
+    gdouble step_nm[2];
+    gdouble accel_nm_per_s2[2];
+} DriftFitParameters;
+
+void           drift_fit_parameters   (const DriftFit *fit,
+                                       DriftFitParameters *params);
+
+G_END_DECLS
+
+#endif

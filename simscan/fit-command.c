@@ -1,0 +1,401 @@
+/*
+ *  `simscan fit`: drift models fitted to a time series of frames.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <stdlib.h>
+#include <math.h>
+#include <json-glib/json-glib.h>
+#include <libgwyddion/gwyddion.h>
+#include <libgwymodule/gwymodule.h>
+#include <app/gwyapp.h>
+#include "fit-command.h"
+
+#undef _
+#define _(s) dgettext(GETTEXT_PACKAGE, s)
+
+gboolean
+fit_report_compute(const FrameSeries *series,
+                   const DisplacementOptions *doptions,
+                   const DriftFitOptions *foptions, FitReport *report)
+{
+    memset(report, 0, sizeof(FitReport));
+    report->meas = displacement_measure_series(series, doptions,
+                                               &report->n_meas);
+    drift_fit_candidates(&report->n_fits);
+    report->chosen = drift_fit_select(report->meas, report->n_meas, foptions,
+                                      report->fits);
+    return report->chosen >= 0;
+}
+
+void
+fit_report_clear(FitReport *report)
+{
+    g_free(report->meas);
+    report->meas = NULL;
+    report->n_meas = 0;
+}
+
+static void
+add_pair(JsonBuilder *b, const gchar *name, const gdouble *v)
+{
+    json_builder_set_member_name(b, name);
+    json_builder_begin_array(b);
+    json_builder_add_double_value(b, v[0]);
+    json_builder_add_double_value(b, v[1]);
+    json_builder_end_array(b);
+}
+
+static void
+add_double(JsonBuilder *b, const gchar *name, gdouble v)
+{
+    json_builder_set_member_name(b, name);
+    if (isfinite(v))
+        json_builder_add_double_value(b, v);
+    else
+        json_builder_add_null_value(b);
+}
+
+static void
+add_parameters(JsonBuilder *b, const DriftFit *fit)
+{
+    DriftFitParameters p;
+
+    drift_fit_parameters(fit, &p);
+    json_builder_set_member_name(b, "parameters");
+    json_builder_begin_object(b);
+    switch (fit->type) {
+        case DRIFT_MODEL_SETTLING:
+        add_double(b, "tau_s", p.tau_s);
+        add_pair(b, "u_nm_per_s", p.u_nm_per_s);
+        break;
+
+        case DRIFT_MODEL_OSCILLATION:
+        add_double(b, "period_s", p.period_s);
+        add_pair(b, "amplitude_nm", p.amplitude_nm);
+        add_double(b, "phase_rad", p.phase_rad);
+        break;
+
+        case DRIFT_MODEL_JUMP:
+        add_double(b, "t_s", p.t_s);
+        add_pair(b, "step_nm", p.step_nm);
+        break;
+
+        default:
+        break;
+    }
+    json_builder_end_object(b);
+    add_pair(b, "velocity_nm_per_s", p.velocity_nm_per_s);
+}
+
+static void
+add_models(JsonBuilder *b, const FitReport *report)
+{
+    gint i;
+
+    json_builder_set_member_name(b, "models");
+    json_builder_begin_array(b);
+    for (i = 0; i < report->n_fits; i++) {
+        const DriftFit *fit = report->fits + i;
+
+        json_builder_begin_object(b);
+        json_builder_set_member_name(b, "name");
+        json_builder_add_string_value(b, drift_model_type_name(fit->type));
+        add_double(b, "rms_nm", fit->rms_nm);
+        /* The score is the Bayesian information criterion: lower is
+         * better, and each parameter costs log(n). */
+        add_double(b, "score", fit->bic);
+        add_double(b, "cv_rms_nm", fit->cv_rms_nm);
+        json_builder_set_member_name(b, "n_params");
+        json_builder_add_int_value(b, fit->n_params);
+        add_parameters(b, fit);
+        json_builder_end_object(b);
+    }
+    json_builder_end_array(b);
+}
+
+static void
+add_frames(JsonBuilder *b, const FrameSeries *series)
+{
+    gint i;
+
+    json_builder_set_member_name(b, "frames");
+    json_builder_begin_array(b);
+    for (i = 0; i < series->n_frames; i++) {
+        const SeriesFrame *f = series->frames + i;
+
+        json_builder_begin_object(b);
+        json_builder_set_member_name(b, "label");
+        json_builder_add_string_value(b, f->label);
+        add_double(b, "start_s", f->timing.frame_start);
+        add_double(b, "line_time_s", f->timing.line_time);
+        json_builder_set_member_name(b, "direction");
+        json_builder_add_string_value(b, f->timing.direction
+                                         == SCAN_DIRECTION_UP ? "up" : "down");
+        json_builder_end_object(b);
+    }
+    json_builder_end_array(b);
+    json_builder_set_member_name(b, "notes");
+    json_builder_begin_array(b);
+    for (i = 0; i < (gint)series->notes->len; i++)
+        json_builder_add_string_value(b, g_ptr_array_index(series->notes, i));
+    json_builder_end_array(b);
+}
+
+gchar*
+fit_report_to_json(const FitReport *report, const FrameSeries *series)
+{
+    JsonBuilder *b = json_builder_new();
+    JsonGenerator *gen = json_generator_new();
+    JsonNode *root;
+    gchar *text;
+    gint i, used = 0;
+
+    json_builder_begin_object(b);
+    json_builder_set_member_name(b, "effect");
+    json_builder_add_string_value(b, report->chosen >= 0
+                                  ? drift_model_type_name(report->fits[report->chosen].type)
+                                  : "none");
+    if (report->chosen >= 0)
+        add_parameters(b, report->fits + report->chosen);
+    add_models(b, report);
+    for (i = 0; i < report->n_meas; i++)
+        used += (report->meas[i].weight > 0.0);
+    json_builder_set_member_name(b, "n_measurements");
+    json_builder_add_int_value(b, report->n_meas);
+    json_builder_set_member_name(b, "n_measurements_used");
+    json_builder_add_int_value(b, used);
+    if (series)
+        add_frames(b, series);
+    json_builder_end_object(b);
+
+    root = json_builder_get_root(b);
+    json_generator_set_root(gen, root);
+    json_generator_set_pretty(gen, TRUE);
+    text = json_generator_to_data(gen, NULL);
+    json_node_unref(root);
+    g_object_unref(gen);
+    g_object_unref(b);
+    return text;
+}
+
+/* Options of the command line. */
+typedef struct {
+    gchar *json;
+    gdouble line_time;
+    gchar *frame_times;
+    gchar *direction;
+    gchar *channel;
+    gchar *channels;
+    gint blocks;
+    gboolean keep_duplicates;
+    gdouble bic_margin;
+} FitArgs;
+
+static gboolean
+parse_frame_times(const gchar *text, FrameSeriesOptions *options,
+                  GError **error)
+{
+    gchar **parts = g_strsplit(text, ",", -1);
+    gint i, n = g_strv_length(parts);
+
+    options->frame_times = g_new(gdouble, MAX(n, 1));
+    options->n_frame_times = n;
+    for (i = 0; i < n; i++) {
+        gchar *end;
+
+        options->frame_times[i] = g_ascii_strtod(parts[i], &end);
+        if (end == parts[i] || *end || !isfinite(options->frame_times[i])) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                        _("--frame-times: '%s' is not a number"), parts[i]);
+            g_strfreev(parts);
+            return FALSE;
+        }
+    }
+    g_strfreev(parts);
+    return TRUE;
+}
+
+static gboolean
+parse_channel_range(const gchar *text, FrameSeriesOptions *options,
+                    GError **error)
+{
+    gchar *end;
+
+    options->first_id = strtol(text, &end, 10);
+    if (end != text && *end == '-')
+        options->last_id = strtol(end + 1, &end, 10);
+    else
+        options->last_id = options->first_id;
+    if (*end || options->first_id < 0 || options->last_id < options->first_id) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("--channels: '%s' is not a range FIRST-LAST of "
+                      "channel ids"), text);
+        return FALSE;
+    }
+    return TRUE;
+}
+
+static gboolean
+args_to_options(const FitArgs *args, FrameSeriesOptions *options,
+                GError **error)
+{
+    frame_series_options_init(options);
+    if (args->line_time != 0.0) {
+        if (!(args->line_time > 0.0) || !isfinite(args->line_time)) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                        _("--line-time must be a positive number of "
+                          "seconds"));
+            return FALSE;
+        }
+        options->line_time = args->line_time;
+    }
+    if (args->direction) {
+        if (g_ascii_strcasecmp(args->direction, "down") == 0)
+            options->direction = SCAN_DIRECTION_DOWN;
+        else if (g_ascii_strcasecmp(args->direction, "up") == 0)
+            options->direction = SCAN_DIRECTION_UP;
+        else {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                        _("--direction must be down or up, not '%s'"),
+                        args->direction);
+            return FALSE;
+        }
+    }
+    options->channel = args->channel;
+    options->keep_duplicates = args->keep_duplicates;
+    if (args->channels && !parse_channel_range(args->channels, options, error))
+        return FALSE;
+    if (args->frame_times && !parse_frame_times(args->frame_times, options,
+                                                error))
+        return FALSE;
+    return TRUE;
+}
+
+static gboolean
+write_output(const gchar *filename, const gchar *text, GError **error)
+{
+    if (!filename || strcmp(filename, "-") == 0) {
+        fputs(text, stdout);
+        fputc('\n', stdout);
+        return TRUE;
+    }
+    /* g_file_set_contents writes a temporary file and renames it. */
+    return g_file_set_contents(filename, text, -1, error);
+}
+
+static gboolean
+run_fit(const FitArgs *args, gchar **files, gint n_files, GError **error)
+{
+    FrameSeriesOptions soptions;
+    DisplacementOptions doptions;
+    DriftFitOptions foptions;
+    FrameSeries *series = NULL;
+    FitReport report;
+    gboolean ok = FALSE;
+    gchar *text;
+
+    memset(&report, 0, sizeof(report));
+    if (!args_to_options(args, &soptions, error))
+        goto end;
+    if (!(series = frame_series_load(files, n_files, &soptions, error)))
+        goto end;
+    displacement_options_init(&doptions);
+    if (args->blocks)
+        doptions.n_blocks = CLAMP(args->blocks, 1,
+                                  series->frames[0].timing.yres/4);
+    drift_fit_options_init(&foptions);
+    if (args->bic_margin >= 0.0)
+        foptions.bic_margin = args->bic_margin;
+    if (!fit_report_compute(series, &doptions, &foptions, &report)) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("too few frames could be registered to fit a drift "
+                      "model"));
+        goto end;
+    }
+    text = fit_report_to_json(&report, series);
+    ok = write_output(args->json, text, error);
+    g_free(text);
+
+end:
+    fit_report_clear(&report);
+    frame_series_free(series);
+    g_free(soptions.frame_times);
+    return ok;
+}
+
+static void
+ensure_gwyddion(void)
+{
+    static gboolean initialised = FALSE;
+
+    /* The file loaders live in Gwyddion's modules. */
+    if (!initialised && !gwy_module_lookup("gwyfile"))
+        gwy_app_init_nongui("enable-threads", FALSE, NULL);
+    initialised = TRUE;
+}
+
+int
+simscan_fit_main(int argc, char **argv)
+{
+    FitArgs args = { NULL, 0.0, NULL, NULL, NULL, NULL, 0, FALSE, -1.0 };
+    gchar **files = NULL;
+    GOptionEntry entries[] = {
+        { "json", 0, 0, G_OPTION_ARG_FILENAME, &args.json,
+          N_("Write the JSON to FILE (default: standard output)"), N_("FILE") },
+        { "line-time", 0, 0, G_OPTION_ARG_DOUBLE, &args.line_time,
+          N_("Seconds per scan line, trace and retrace together"), N_("S") },
+        { "frame-times", 0, 0, G_OPTION_ARG_STRING, &args.frame_times,
+          N_("Start time of each frame, seconds"), N_("T0,T1,...") },
+        { "direction", 0, 0, G_OPTION_ARG_STRING, &args.direction,
+          N_("Slow-scan direction"), N_("down|up") },
+        { "channel", 0, 0, G_OPTION_ARG_STRING, &args.channel,
+          N_("Channel title (a one-file series: the title followed by a "
+             "number matches too)"), N_("TITLE") },
+        { "channels", 0, 0, G_OPTION_ARG_STRING, &args.channels,
+          N_("Channel ids of a one-file series"), N_("FIRST-LAST") },
+        { "blocks", 0, 0, G_OPTION_ARG_INT, &args.blocks,
+          N_("Blocks of lines registered per frame (default 16)"), N_("N") },
+        { "keep-duplicates", 0, 0, G_OPTION_ARG_NONE, &args.keep_duplicates,
+          N_("Keep frames whose data are identical"), NULL },
+        { "bic-margin", 0, 0, G_OPTION_ARG_DOUBLE, &args.bic_margin,
+          N_("BIC gain an effect needs over constant drift (default 10)"),
+          N_("X") },
+        { G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &files,
+          NULL, N_("FRAME...") },
+        { NULL, 0, 0, 0, NULL, NULL, NULL },
+    };
+    GOptionContext *context;
+    GError *error = NULL;
+    gint status = 1;
+
+    context = g_option_context_new(_("FRAME... - fit drift models to a time "
+                                     "series of frames"));
+    g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
+    if (!g_option_context_parse(context, &argc, &argv, &error))
+        goto end;
+    if (!files || !files[0]) {
+        g_set_error(&error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("no frames given (several files, or one file with a "
+                      "channel per frame)"));
+        goto end;
+    }
+    ensure_gwyddion();
+    if (run_fit(&args, files, g_strv_length(files), &error))
+        status = 0;
+
+end:
+    if (error)
+        g_printerr("simscan fit: %s\n", error->message);
+    g_clear_error(&error);
+    g_option_context_free(context);
+    g_strfreev(files);
+    g_free(args.json);
+    g_free(args.frame_times);
+    g_free(args.direction);
+    g_free(args.channel);
+    g_free(args.channels);
+    return status;
+}

@@ -1,0 +1,608 @@
+/*
+ *  A time series of frames of one area, with scan timing from metadata or
+ *  options.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <stdlib.h>
+#include <math.h>
+#include <libgwyddion/gwyddion.h>
+#include <libprocess/gwyprocess.h>
+#include <libgwymodule/gwymodule.h>
+#include <app/gwyapp.h>
+#include "frame-series.h"
+
+#undef _
+#define _(s) dgettext(GETTEXT_PACKAGE, s)
+
+/* Timing facts read from one channel's metadata; NaN/-1 when absent. */
+typedef struct {
+    gdouble line_time;
+    gdouble start;
+    gint direction;
+    gboolean start_is_end;   /* the stamp marks the end of the frame */
+} MetaTiming;
+
+GQuark
+frame_series_error_quark(void)
+{
+    return g_quark_from_static_string("frame-series-error-quark");
+}
+
+void
+frame_series_options_init(FrameSeriesOptions *options)
+{
+    memset(options, 0, sizeof(FrameSeriesOptions));
+    options->line_time = -1.0;
+    options->direction = -1;
+    options->first_id = options->last_id = -1;
+}
+
+FrameSeries*
+frame_series_new(void)
+{
+    FrameSeries *series = g_new0(FrameSeries, 1);
+
+    series->notes = g_ptr_array_new_with_free_func(g_free);
+    return series;
+}
+
+void
+frame_series_append(FrameSeries *series, GwyDataField *field,
+                    const gchar *label, const ScanTiming *timing)
+{
+    SeriesFrame *frame;
+
+    series->frames = g_renew(SeriesFrame, series->frames, series->n_frames + 1);
+    frame = series->frames + series->n_frames;
+    memset(frame, 0, sizeof(SeriesFrame));
+    frame->field = g_object_ref(field);
+    frame->label = g_strdup(label);
+    frame->channel_id = -1;
+    frame->absolute_start = NAN;
+    if (timing) {
+        frame->timing = *timing;
+        frame->start_source = frame->line_time_source = FRAME_TIME_OPTION;
+        frame->direction_source = FRAME_TIME_OPTION;
+    }
+    else
+        scan_timing_init(&frame->timing, gwy_data_field_get_xres(field),
+                         gwy_data_field_get_yres(field), NAN, -1.0,
+                         SCAN_DIRECTION_DOWN);
+    series->n_frames++;
+}
+
+void
+frame_series_free(FrameSeries *series)
+{
+    gint i;
+
+    if (!series)
+        return;
+    for (i = 0; i < series->n_frames; i++) {
+        g_object_unref(series->frames[i].field);
+        g_free(series->frames[i].label);
+    }
+    g_free(series->frames);
+    g_ptr_array_free(series->notes, TRUE);
+    g_free(series);
+}
+
+gdouble
+frame_series_dx(const FrameSeries *series)
+{
+    return gwy_data_field_get_dx(series->frames[0].field);
+}
+
+gdouble
+frame_series_dy(const FrameSeries *series)
+{
+    return gwy_data_field_get_dy(series->frames[0].field);
+}
+
+static const gchar*
+meta_string(GwyContainer *meta, const gchar *key)
+{
+    const guchar *s = NULL;
+
+    if (meta && gwy_container_gis_string_by_name(meta, key, &s))
+        return (const gchar*)s;
+    return NULL;
+}
+
+/* A number at the start of a metadata value ("2.32515", "0.25 Hz"). */
+static gboolean
+meta_number(GwyContainer *meta, const gchar *key, gdouble *value)
+{
+    const gchar *s = meta_string(meta, key);
+    gchar *end;
+    gdouble v;
+
+    if (!s)
+        return FALSE;
+    v = g_ascii_strtod(s, &end);
+    if (end == s || !isfinite(v))
+        return FALSE;
+    *value = v;
+    return TRUE;
+}
+
+/* Nanoscope "Date": "04:06:25 PM Thu Sep 26 2019", seconds of the day plus
+ * days; only differences matter. */
+static gboolean
+parse_nanoscope_date(const gchar *s, gdouble *t)
+{
+    static const gchar months[] = "JanFebMarAprMayJunJulAugSepOctNovDec";
+    gint h, m, sec, day, year;
+    gchar ampm[4], wday[4], mon[4];
+    const gchar *p;
+    GDateTime *dt;
+
+    if (sscanf(s, "%d:%d:%d %2s %3s %3s %d %d",
+               &h, &m, &sec, ampm, wday, mon, &day, &year) != 8)
+        return FALSE;
+    if (!(p = strstr(months, mon)))
+        return FALSE;
+    h %= 12;
+    if (g_ascii_toupper(ampm[0]) == 'P')
+        h += 12;
+    dt = g_date_time_new_utc(year, (p - months)/3 + 1, day, h, m, sec);
+    if (!dt)
+        return FALSE;
+    *t = (gdouble)g_date_time_to_unix(dt);
+    g_date_time_unref(dt);
+    return TRUE;
+}
+
+static gboolean
+parse_iso_time(const gchar *s, gdouble *t)
+{
+    GDateTime *dt = g_date_time_new_from_iso8601(s, NULL);
+
+    if (!dt)
+        return FALSE;
+    *t = g_date_time_to_unix(dt) + 1e-6*g_date_time_get_microsecond(dt);
+    g_date_time_unref(dt);
+    return TRUE;
+}
+
+static void
+read_meta_timing(GwyContainer *meta, gint yres, MetaTiming *mt)
+{
+    const gchar *s;
+    gdouble v;
+
+    mt->line_time = mt->start = NAN;
+    mt->direction = -1;
+    mt->start_is_end = FALSE;
+    if (!meta)
+        return;
+
+    /* Bruker Nanoscope. */
+    if (meta_number(meta, "Scan Rate", &v) && v > 0.0)
+        mt->line_time = 1.0/v;
+    if ((s = meta_string(meta, "Frame direction"))) {
+        if (g_ascii_strncasecmp(s, "Down", 4) == 0)
+            mt->direction = SCAN_DIRECTION_DOWN;
+        else if (g_ascii_strncasecmp(s, "Up", 2) == 0)
+            mt->direction = SCAN_DIRECTION_UP;
+    }
+    if (!meta_number(meta, "Relative frame time", &mt->start)
+        && (s = meta_string(meta, "Date")))
+        parse_nanoscope_date(s, &mt->start);
+
+    /* HS-AFM movies converted to .gwy. */
+    if (meta_number(meta, "Frame time (s)", &v) && v > 0.0)
+        mt->line_time = v/yres;
+    if (meta_number(meta, "Time since first kept frame (s)", &v))
+        mt->start = v;
+
+    /* Anasys nanoIR: the stamp is taken when the image is stored, that is
+     * when its last line has been scanned. */
+    if (meta_number(meta, "ScanRate", &v) && v > 0.0)
+        mt->line_time = 1.0/v;
+    if ((s = meta_string(meta, "TimeStamp")) && parse_iso_time(s, &v)) {
+        mt->start = v;
+        mt->start_is_end = TRUE;
+    }
+}
+
+static gboolean
+title_matches(const gchar *title, const gchar *wanted)
+{
+    gsize len = strlen(wanted);
+    const gchar *p;
+
+    if (!title)
+        return FALSE;
+    if (strcmp(title, wanted) == 0)
+        return TRUE;
+    if (strncmp(title, wanted, len) != 0 || title[len] != ' ' || !title[len+1])
+        return FALSE;
+    for (p = title + len + 1; *p; p++) {
+        if (!g_ascii_isdigit(*p))
+            return FALSE;
+    }
+    return TRUE;
+}
+
+static const gchar*
+channel_title(GwyContainer *data, gint id)
+{
+    const guchar *title = NULL;
+    gchar key[40];
+
+    g_snprintf(key, sizeof(key), "/%d/data/title", id);
+    gwy_container_gis_string_by_name(data, key, &title);
+    return (const gchar*)title;
+}
+
+static GwyContainer*
+channel_meta(GwyContainer *data, gint id)
+{
+    GwyContainer *meta = NULL;
+    gchar key[40];
+
+    g_snprintf(key, sizeof(key), "/%d/meta", id);
+    gwy_container_gis_object_by_name(data, key, &meta);
+    return meta;
+}
+
+static GwyDataField*
+channel_field(GwyContainer *data, gint id)
+{
+    return gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
+}
+
+static gboolean
+fields_alike(GwyDataField *a, GwyDataField *b)
+{
+    if (gwy_data_field_get_xres(a) != gwy_data_field_get_xres(b)
+        || gwy_data_field_get_yres(a) != gwy_data_field_get_yres(b))
+        return FALSE;
+    if (fabs(gwy_data_field_get_dx(a)/gwy_data_field_get_dx(b) - 1.0) > 1e-6
+        || fabs(gwy_data_field_get_dy(a)/gwy_data_field_get_dy(b) - 1.0) > 1e-6)
+        return FALSE;
+    return gwy_si_unit_equal(gwy_data_field_get_si_unit_z(a),
+                             gwy_data_field_get_si_unit_z(b));
+}
+
+static gboolean
+fields_identical(GwyDataField *a, GwyDataField *b)
+{
+    gint n = gwy_data_field_get_xres(a)*gwy_data_field_get_yres(a);
+
+    if (!fields_alike(a, b))
+        return FALSE;
+    return memcmp(gwy_data_field_get_data_const(a),
+                  gwy_data_field_get_data_const(b), n*sizeof(gdouble)) == 0;
+}
+
+/* Appends one channel as a frame, with its metadata timing. */
+static void
+append_channel(FrameSeries *series, GwyContainer *data, gint id,
+               const gchar *filename, gboolean with_title, MetaTiming *mts)
+{
+    GwyDataField *field = channel_field(data, id);
+    gchar *base = g_path_get_basename(filename);
+    const gchar *title = channel_title(data, id);
+    gchar *label;
+    MetaTiming *mt = mts + series->n_frames;
+
+    label = with_title ? g_strdup_printf("%s:%s", base, title ? title : "?")
+                       : g_strdup(base);
+    frame_series_append(series, field, label, NULL);
+    series->frames[series->n_frames-1].channel_id = id;
+    read_meta_timing(channel_meta(data, id), gwy_data_field_get_yres(field), mt);
+    g_free(label);
+    g_free(base);
+}
+
+static gint
+first_channel_id(GwyContainer *data, const gchar *wanted)
+{
+    gint *ids = gwy_app_data_browser_get_data_ids(data);
+    gint i, found = -1;
+
+    for (i = 0; ids[i] >= 0; i++) {
+        if ((!wanted || title_matches(channel_title(data, ids[i]), wanted))
+            && (found < 0 || ids[i] < found))
+            found = ids[i];
+    }
+    g_free(ids);
+    return found;
+}
+
+static gint
+compare_ints(gconstpointer a, gconstpointer b)
+{
+    return *(const gint*)a - *(const gint*)b;
+}
+
+static gboolean
+load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
+                          const gchar *filename,
+                          const FrameSeriesOptions *options,
+                          MetaTiming **mts, GError **error)
+{
+    gint *ids = gwy_app_data_browser_get_data_ids(data);
+    GwyDataField *first = NULL;
+    gint i, n;
+
+    for (n = 0; ids[n] >= 0; n++)
+        ;
+    qsort(ids, n, sizeof(gint), compare_ints);
+    *mts = g_new0(MetaTiming, n + 1);
+    for (i = 0; i < n; i++) {
+        GwyDataField *field = channel_field(data, ids[i]);
+
+        if (options->first_id >= 0 && ids[i] < options->first_id)
+            continue;
+        if (options->last_id >= 0 && ids[i] > options->last_id)
+            continue;
+        if (options->channel
+            && !title_matches(channel_title(data, ids[i]), options->channel))
+            continue;
+        if (!first)
+            first = field;
+        else if (!fields_alike(first, field)) {
+            if (!options->channel)
+                continue;
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
+                        _("%s: channel %d (%s) differs in size or pixel size "
+                          "from the first frame"),
+                        filename, ids[i], channel_title(data, ids[i]));
+            g_free(ids);
+            return FALSE;
+        }
+        append_channel(series, data, ids[i], filename, TRUE, *mts);
+    }
+    g_free(ids);
+    return TRUE;
+}
+
+static gboolean
+load_one_channel_per_file(FrameSeries *series, gchar **filenames, gint n_files,
+                          GwyContainer **datas,
+                          const FrameSeriesOptions *options,
+                          MetaTiming **mts, GError **error)
+{
+    gint k, id;
+
+    *mts = g_new0(MetaTiming, MAX(n_files, 1));
+    for (k = 0; k < n_files; k++) {
+        id = first_channel_id(datas[k], options->channel);
+        if (id < 0) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                        _("%s: no channel %s"), filenames[k],
+                        options->channel ? options->channel : "at all");
+            return FALSE;
+        }
+        if (k && !fields_alike(series->frames[0].field,
+                               channel_field(datas[k], id))) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
+                        _("%s: the frame differs in size, pixel size or unit "
+                          "from %s"), filenames[k], filenames[0]);
+            return FALSE;
+        }
+        append_channel(series, datas[k], id, filenames[k], FALSE, *mts);
+    }
+    return TRUE;
+}
+
+/* Removes frame i, keeping the metadata timings in step. */
+static void
+remove_frame(FrameSeries *series, MetaTiming *mts, gint i)
+{
+    g_object_unref(series->frames[i].field);
+    g_free(series->frames[i].label);
+    memmove(series->frames + i, series->frames + i+1,
+            (series->n_frames - i-1)*sizeof(SeriesFrame));
+    memmove(mts + i, mts + i+1, (series->n_frames - i-1)*sizeof(MetaTiming));
+    series->n_frames--;
+}
+
+static void
+drop_duplicates(FrameSeries *series, MetaTiming *mts)
+{
+    gint i, j;
+
+    for (i = 1; i < series->n_frames; i++) {
+        for (j = 0; j < i; j++) {
+            if (fields_identical(series->frames[j].field,
+                                 series->frames[i].field))
+                break;
+        }
+        if (j < i) {
+            g_ptr_array_add(series->notes,
+                            g_strdup_printf(_("dropped %s: identical to %s"),
+                                            series->frames[i].label,
+                                            series->frames[j].label));
+            remove_frame(series, mts, i);
+            i--;
+        }
+    }
+}
+
+static gboolean
+assign_line_times(FrameSeries *series, const MetaTiming *mts,
+                  const FrameSeriesOptions *options, GError **error)
+{
+    gint i;
+
+    for (i = 0; i < series->n_frames; i++) {
+        SeriesFrame *frame = series->frames + i;
+
+        if (options->line_time > 0.0) {
+            frame->timing.line_time = options->line_time;
+            frame->line_time_source = FRAME_TIME_OPTION;
+        }
+        else if (isfinite(mts[i].line_time)) {
+            frame->timing.line_time = mts[i].line_time;
+            frame->line_time_source = FRAME_TIME_METADATA;
+        }
+        else {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                        _("%s: the line time is not in the metadata; "
+                          "give --line-time"), frame->label);
+            return FALSE;
+        }
+        if (options->direction >= 0) {
+            frame->timing.direction = options->direction;
+            frame->direction_source = FRAME_TIME_OPTION;
+        }
+        else if (mts[i].direction >= 0) {
+            frame->timing.direction = mts[i].direction;
+            frame->direction_source = FRAME_TIME_METADATA;
+        }
+        else
+            frame->timing.direction = SCAN_DIRECTION_DOWN;
+    }
+    return TRUE;
+}
+
+static gboolean
+assign_start_times(FrameSeries *series, const MetaTiming *mts,
+                   const FrameSeriesOptions *options, GError **error)
+{
+    gint i, n = series->n_frames;
+    gdouble t0 = NAN;
+
+    if (options->frame_times) {
+        if (options->n_frame_times != n) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                        _("--frame-times gives %d times for %d frames"),
+                        options->n_frame_times, n);
+            return FALSE;
+        }
+        for (i = 0; i < n; i++) {
+            series->frames[i].timing.frame_start = options->frame_times[i];
+            series->frames[i].start_source = FRAME_TIME_OPTION;
+        }
+    }
+    else {
+        for (i = 0; i < n; i++) {
+            SeriesFrame *frame = series->frames + i;
+            gdouble t = mts[i].start;
+
+            if (!isfinite(t)) {
+                g_set_error(error, FRAME_SERIES_ERROR,
+                            FRAME_SERIES_ERROR_TIMING,
+                            _("%s: the frame's start time is not in the "
+                              "metadata; give --frame-times"), frame->label);
+                return FALSE;
+            }
+            if (mts[i].start_is_end)
+                t -= frame->timing.yres*frame->timing.line_time;
+            frame->absolute_start = t;
+            frame->start_source = FRAME_TIME_METADATA;
+            if (!isfinite(t0) || t < t0)
+                t0 = t;
+        }
+        for (i = 0; i < n; i++)
+            series->frames[i].timing.frame_start
+                = series->frames[i].absolute_start - t0;
+        if (mts[0].start_is_end)
+            g_ptr_array_add(series->notes,
+                            g_strdup(_("time stamps taken as the end of each "
+                                       "frame")));
+    }
+    for (i = 1; i < n; i++) {
+        const SeriesFrame *prev = series->frames + i-1;
+        const SeriesFrame *frame = series->frames + i;
+        gdouble overlap = (scan_timing_frame_end(&prev->timing)
+                           - frame->timing.frame_start);
+
+        if (frame->timing.frame_start <= prev->timing.frame_start) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                        _("%s starts at %g s, not after %s (%g s): frames "
+                          "must be in time order"),
+                        frame->label, frame->timing.frame_start,
+                        prev->label, prev->timing.frame_start);
+            return FALSE;
+        }
+        /* Time stamps rounded or taken a little early: tolerated, said. */
+        if (overlap > 1e-3*prev->timing.line_time)
+            g_ptr_array_add(series->notes,
+                            g_strdup_printf(_("%s starts %.3g s before %s "
+                                              "ends"), frame->label, overlap,
+                                            prev->label));
+    }
+    return TRUE;
+}
+
+static void
+free_datas(GwyContainer **datas, gint n)
+{
+    gint k;
+
+    for (k = 0; k < n; k++) {
+        if (datas[k])
+            g_object_unref(datas[k]);
+    }
+    g_free(datas);
+}
+
+FrameSeries*
+frame_series_load(gchar **filenames, gint n_files,
+                  const FrameSeriesOptions *options, GError **error)
+{
+    FrameSeriesOptions defaults;
+    FrameSeries *series = frame_series_new();
+    GwyContainer **datas = g_new0(GwyContainer*, MAX(n_files, 1));
+    MetaTiming *mts = NULL;
+    GError *err = NULL;
+    gboolean ok;
+    gint k;
+
+    if (!options) {
+        frame_series_options_init(&defaults);
+        options = &defaults;
+    }
+    if (n_files < 1) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("no frames given"));
+        goto fail;
+    }
+    for (k = 0; k < n_files; k++) {
+        if (!(datas[k] = gwy_file_load(filenames[k], GWY_RUN_NONINTERACTIVE,
+                                       &err))) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_LOAD,
+                        _("%s: cannot load: %s"), filenames[k],
+                        err ? err->message : _("unknown format"));
+            g_clear_error(&err);
+            goto fail;
+        }
+    }
+    if (n_files == 1)
+        ok = load_channels_of_one_file(series, datas[0], filenames[0],
+                                       options, &mts, error);
+    else
+        ok = load_one_channel_per_file(series, filenames, n_files, datas,
+                                       options, &mts, error);
+    if (!ok)
+        goto fail;
+    if (!options->keep_duplicates)
+        drop_duplicates(series, mts);
+    if (series->n_frames < 2) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("%s: a series needs at least two distinct frames, "
+                      "found %d"), n_files ? filenames[0] : "",
+                    series->n_frames);
+        goto fail;
+    }
+    if (!assign_line_times(series, mts, options, error)
+        || !assign_start_times(series, mts, options, error))
+        goto fail;
+    g_free(mts);
+    free_datas(datas, n_files);
+    return series;
+
+fail:
+    g_free(mts);
+    free_datas(datas, n_files);
+    frame_series_free(series);
+    return NULL;
+}

@@ -1,0 +1,98 @@
+/*
+ *  A time series of frames of one area: loaded from several files or from
+ *  the channels of one file, with each frame's scan timing (interfaces.md
+ *  section 4) taken from the file metadata or from options.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef SIMSCAN_FRAME_SERIES_H
+#define SIMSCAN_FRAME_SERIES_H
+
+#include <glib.h>
+#include <libprocess/datafield.h>
+#include "scan-timing.h"
+
+G_BEGIN_DECLS
+
+#define FRAME_SERIES_ERROR frame_series_error_quark()
+
+typedef enum {
+    FRAME_SERIES_ERROR_LOAD,      /* a file Gwyddion cannot read */
+    FRAME_SERIES_ERROR_CHANNEL,   /* no such channel, or too few frames */
+    FRAME_SERIES_ERROR_MISMATCH,  /* frames of different size or pixels */
+    FRAME_SERIES_ERROR_TIMING,    /* timing unknown or inconsistent */
+} FrameSeriesError;
+
+/* Where a frame's timing came from. */
+typedef enum {
+    FRAME_TIME_UNKNOWN = 0,
+    FRAME_TIME_METADATA,
+    FRAME_TIME_OPTION,
+} FrameTimeSource;
+
+typedef struct {
+    GwyDataField *field;          /* a reference is held */
+    gchar *label;                 /* "file" or "file:channel title" */
+    gint channel_id;
+    ScanTiming timing;            /* frame_start relative to the first frame */
+    gdouble absolute_start;       /* s, metadata clock (NaN when unknown) */
+    FrameTimeSource start_source;
+    FrameTimeSource line_time_source;
+    FrameTimeSource direction_source;
+} SeriesFrame;
+
+typedef struct {
+    gint n_frames;
+    SeriesFrame *frames;          /* in time order */
+    GPtrArray *notes;             /* human-readable remarks (dropped duplicates,
+                                     assumptions made), strings */
+} FrameSeries;
+
+/* Options: anything given here overrides the metadata. */
+typedef struct {
+    gdouble line_time;            /* s; <= 0: metadata */
+    gdouble *frame_times;         /* s, one per kept frame; NULL: metadata */
+    gint n_frame_times;
+    gint direction;               /* -1: metadata (else down), or ScanDirection */
+    const gchar *channel;         /* title (exact, or prefix followed by a space
+                                     and digits); NULL: see frame_series_load */
+    gint first_id, last_id;       /* channel id range in a one-file series;
+                                     -1: no limit */
+    gboolean keep_duplicates;     /* keep frames with bit-identical data */
+} FrameSeriesOptions;
+
+GQuark        frame_series_error_quark  (void);
+void          frame_series_options_init (FrameSeriesOptions *options);
+
+/* Loads the frames.  With several files, each file gives one frame: the
+ * channel named by options->channel, else its first channel.  With one file,
+ * its channels are the frames: those named by options->channel (titles equal
+ * to it or to it followed by " <number>") within the id range, else every
+ * channel with the same size, pixel size and value unit as the first.  Frames
+ * with bit-identical data are dropped (a note says which).  Timing comes from
+ * the metadata Gwyddion exposes (Nanoscope "Scan Rate", "Frame direction",
+ * "Relative frame time"/"Date"; HS-AFM "Frame time (s)" and "Time since first
+ * kept frame (s)"; Anasys "ScanRate" and "TimeStamp") unless options give it.
+ * Refuses series of fewer than two frames, frames of different size and
+ * series whose timing stays unknown. */
+FrameSeries*  frame_series_load         (gchar **filenames,
+                                         gint n_files,
+                                         const FrameSeriesOptions *options,
+                                         GError **error);
+
+/* An empty series, for callers (tests) that build frames themselves. */
+FrameSeries*  frame_series_new          (void);
+/* Appends a frame (a reference to field is taken). */
+void          frame_series_append       (FrameSeries *series,
+                                         GwyDataField *field,
+                                         const gchar *label,
+                                         const ScanTiming *timing);
+void          frame_series_free         (FrameSeries *series);
+
+/* The pixel sizes (m) of the series, all frames being alike. */
+gdouble       frame_series_dx           (const FrameSeries *series);
+gdouble       frame_series_dy           (const FrameSeries *series);
+
+G_END_DECLS
+
+#endif
