@@ -20,6 +20,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "paper-compensate.h"
+#include "continuous-compensate.h"
 #include "localscan-channel.h"
 
 #define FUNC_NAME "localscan_drift"
@@ -59,10 +60,13 @@ typedef struct {
     gint fill;
     gboolean add_mask;
     gboolean plot_drift;
+    gint interpolation;
+    gint direction;
 } ModuleSettings;
 
 static const ModuleSettings default_settings = {
     LOCALSCAN_SOURCE_STORED, "", LOCALSCAN_MODE_PAPER, LOCALSCAN_FILL_MEAN, TRUE, FALSE,
+    GWY_INTERPOLATION_BSPLINE, SCAN_DIRECTION_DOWN,
 };
 
 static void
@@ -83,6 +87,8 @@ set_module_settings(const ModuleSettings *ms)
     gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "fill", ms->fill);
     gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "add-mask", ms->add_mask);
     gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "plot-drift", ms->plot_drift);
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "interpolation", ms->interpolation);
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "direction", ms->direction);
 }
 
 /* Pixel k*k blocks: image (xres*k) x (yres*k). */
@@ -549,6 +555,60 @@ START_TEST(test_drift_graph)
 }
 END_TEST
 
+/* Continuous mode passes the table, the pixel sizes, the line time from the
+ * metadata (2 Hz: 0.5 s; it matters because the table gives absolute stripe
+ * times), the direction and the interpolation through unchanged: the result
+ * is continuous_compensate_table()'s to the bit. */
+START_TEST(test_continuous_mode_passes_timing)
+{
+    static const gint directions[2] = { SCAN_DIRECTION_DOWN, SCAN_DIRECTION_UP };
+    static const gchar table_text[] = "stripe,dx,dy,t_image\n0,0,0,1.5\n1,1.5,-0.5,4.5\n2,3,-1,7.5\n"
+                                      "3,4.5,-1.5,10.5\n";
+    GRand *rng = g_rand_new_with_seed(test_seed);
+    GwyDataField *field = gwy_data_field_new(32, 24, 32e-9, 48e-9, FALSE), *expected, *expected_mask;
+    GwyContainer *data, *meta;
+    ModuleSettings ms = default_settings;
+    DriftTable *table = drift_table_parse(table_text, -1, "test", NULL);
+    gdouble *d = gwy_data_field_get_data(field);
+    ScanTiming timing;
+    gint i, k;
+
+    ck_assert(table);
+    for (i = 0; i < 32*24; i++)
+        d[i] = g_rand_double_range(rng, 0.0, 1e-9);
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+    expected = gwy_data_field_new_alike(field, FALSE);
+    expected_mask = gwy_data_field_new_alike(field, FALSE);
+    for (k = 0; k < 2; k++) {
+        scan_timing_init(&timing, 32, 24, 0.0, 0.5, directions[k]);
+        ck_assert(continuous_compensate_table(d, 32, 24, table, 1e-9, 2e-9, &timing, GWY_INTERPOLATION_OMOMS,
+                                              paper_image_mean(d, 32, 24),
+                                              gwy_data_field_get_data(expected),
+                                              gwy_data_field_get_data(expected_mask), NULL));
+        data = make_container(field, table_text);
+        meta = gwy_container_new();
+        set_string(meta, "Scan rate", "2 Hz");
+        gwy_container_set_object_by_name(data, "/0/meta", meta);
+        g_object_unref(meta);
+        ms.mode = LOCALSCAN_MODE_CONTINUOUS;
+        ms.interpolation = GWY_INTERPOLATION_OMOMS;
+        ms.direction = directions[k];
+        set_module_settings(&ms);
+        ck_assert_int_eq(run_module(data, NULL), 1);
+        assert_same_field_bits(get_field(data, gwy_app_get_data_key_for_id(1)), expected);
+        if (gwy_data_field_get_max(expected_mask) > 0.0)
+            assert_same_field_bits(get_field(data, gwy_app_get_mask_key_for_id(1)), expected_mask);
+        ck_assert_str_eq(get_string(data, "/1/data/title"), RESULT_TITLE);
+        drop_container(data);
+    }
+    drift_table_free(table);
+    g_object_unref(expected);
+    g_object_unref(expected_mask);
+    g_object_unref(field);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* Each bad source: no new channel, the source untouched, one line on stderr
  * that names the problem. */
 static void
@@ -682,6 +742,7 @@ main(void)
     tcase_add_test(tc, test_fill_values);
     tcase_add_test(tc, test_mask_only_when_wanted);
     tcase_add_test(tc, test_drift_graph);
+    tcase_add_test(tc, test_continuous_mode_passes_timing);
     tcase_add_test(tc, test_bad_sources_refused);
     tcase_add_test(tc, test_line_time_from_metadata);
     suite_add_tcase(suite, tc);
