@@ -49,6 +49,14 @@ sim_scan_params_timing(const SimScanParams *params, ScanTiming *timing)
                      params->line_time, params->direction);
 }
 
+void
+sim_scan_pixel_position(const SimScanParams *params, gdouble row, gdouble col,
+                        gdouble *x_m, gdouble *y_m)
+{
+    *x_m = params->xoff + (col + 0.5)*(params->xreal/params->xres);
+    *y_m = params->yoff + (row + 0.5)*(params->yreal/params->yres);
+}
+
 static gboolean
 scan_params_are_valid(const SimScanParams *params, gboolean need_timing)
 {
@@ -134,16 +142,16 @@ scan_with_displacement(const SimSample *sample, const SimScanParams *params,
 {
     GwyDataField *field = scan_field_new(params);
     gint xres = params->xres, r, c;
-    gdouble w = params->xreal/xres, h = params->yreal/params->yres, y;
+    gdouble x, y;
     gdouble *data = gwy_data_field_get_data(field);
     gdouble *dx = g_new(gdouble, 4*xres), *dy = dx + xres;
     gdouble *xs = dy + xres, *ys = xs + xres;
 
     for (r = 0; r < params->yres; r++) {
         displacement(user_data, r, xres, dx, dy);
-        y = params->yoff + (r + 0.5)*h;
         for (c = 0; c < xres; c++) {
-            xs[c] = params->xoff + (c + 0.5)*w - dx[c];
+            sim_scan_pixel_position(params, r, c, &x, &y);
+            xs[c] = x - dx[c];
             ys[c] = y - dy[c];
         }
         sim_sample_heights_tip(sample, params->tip_radius, xres, xs, ys,

@@ -20,6 +20,7 @@ G_BEGIN_DECLS
  * [yoff, yoff + yreal] of the sample (sample coordinates, metres).  Pixel
  * (row r, col c) is commanded to the nominal position
  *     X = (xoff + (c + 0.5) xreal/xres,  yoff + (r + 0.5) yreal/yres)
+ * (sim_scan_pixel_position)
  * at t = scan_timing_pixel_time(r, c) (frame_start, line_time, direction),
  * and records the sample at X - p(t): a feature truly at X appears at X + p(t).
  */
@@ -46,6 +47,14 @@ void           sim_scan_params_init    (SimScanParams *params,
 /* ScanTiming of the frame described by params. */
 void           sim_scan_params_timing  (const SimScanParams *params,
                                         ScanTiming *timing);
+
+/* Nominal position of pixel (row, col), metres, computed exactly as the
+ * scans do: xoff + (col + 0.5)*(xreal/xres), likewise for y. */
+void           sim_scan_pixel_position (const SimScanParams *params,
+                                        gdouble row,
+                                        gdouble col,
+                                        gdouble *x_m,
+                                        gdouble *y_m);
 
 /* The drift-contaminated frame, noise included.  drift may be NULL (no
  * drift); a random-walk model must have been prepared over the frame's time.
