@@ -8,16 +8,37 @@
 #define LOCALSCAN_STRIPE_REGISTRATION_H
 
 #include <glib.h>
+#include <libprocess/datafield.h>
 #include "drift-table.h"
 
 G_BEGIN_DECLS
+
+#define STRIPE_REGISTRATION_ERROR stripe_registration_error_quark()
+
+typedef enum {
+    STRIPE_REGISTRATION_ERROR_SIZE,     /* image and reference differ, or too small */
+    STRIPE_REGISTRATION_ERROR_STRIPES,  /* n outside 1..yres */
+    STRIPE_REGISTRATION_ERROR_VALUE,    /* NaN or infinity in the data */
+} StripeRegistrationError;
+
+/* A min_score that rejects featureless and ambiguous (periodic) stripes but
+ * keeps every well-textured one; what the tools use unless told otherwise. */
+#define STRIPE_REGISTRATION_DEFAULT_MIN_SCORE 0.25
 
 typedef struct {
     gdouble dx;        /* px: content of the reference at (r, c) appears in */
     gdouble dy;        /* the image at (r + dy, c + dx), the table convention */
     gdouble score;     /* confidence in [0, 1] */
     gboolean accepted; /* score >= min_score and consistent */
+    /* Diagnostics. */
+    gdouble peak;      /* normalised cross-correlation at the chosen peak */
+    gdouble rival;     /* the highest competing peak (in the window used) */
+    gboolean resolved; /* the stripe's own best peak disagreed with its
+                          neighbours and was replaced by the best one near
+                          their prediction */
 } StripeShift;
+
+GQuark       stripe_registration_error_quark(void);
 
 /* Measures n stripes of image against reference (same xres, yres).
  * max_shift_px limits the search (<= 0: a quarter of the smaller side). */
@@ -31,10 +52,24 @@ gboolean     stripe_registration_measure (const gdouble *image,
                                           StripeShift *shifts,
                                           GError **error);
 
+/* The same for two channels; refuses (with a message giving both sizes)
+ * fields of different pixel dimensions. */
+gboolean     stripe_registration_measure_fields(GwyDataField *image,
+                                                GwyDataField *reference,
+                                                gint n,
+                                                gdouble max_shift_px,
+                                                gdouble min_score,
+                                                StripeShift *shifts,
+                                                GError **error);
+
 /* A px table of the shifts: rejected stripes are blank (nearest-stripe rule),
  * with dx_exact, dy_exact and score columns. */
 DriftTable*  stripe_registration_to_table(const StripeShift *shifts, gint n,
                                           gboolean whole_pixels);
+
+/* How many stripes were accepted. */
+gint         stripe_registration_count_accepted(const StripeShift *shifts,
+                                                gint n);
 
 G_END_DECLS
 

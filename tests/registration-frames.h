@@ -1,0 +1,59 @@
+/*
+ *  Synthetic frame pairs for the stripe registration: one analytic surface
+ *  sampled as a drift-free reference and as a drifting image.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef LOCALSCAN_REGISTRATION_FRAMES_H
+#define LOCALSCAN_REGISTRATION_FRAMES_H
+
+#include <glib.h>
+
+G_BEGIN_DECLS
+
+typedef struct {
+    gint xres;
+    gint yres;
+    gdouble noise;            /* white noise rms per frame (particle height ~1) */
+    gdouble particle_density; /* Gaussian bumps per px^2 */
+    gdouble roughness;        /* rms of the correlated roughness */
+    gdouble lattice;          /* amplitude of a periodic lattice, 0 for none */
+    gdouble lattice_period;   /* px */
+    gint flat_from;           /* rows [flat_from, flat_to) of the surface are */
+    gint flat_to;             /* flat (only noise); flat_to <= flat_from: none */
+    gboolean drift;           /* random smooth drift; FALSE: linear drift */
+    gdouble drift_scale;      /* multiplies the random drift (1: up to ~10 px) */
+    gdouble shift_x;          /* the linear drift when !drift: */
+    gdouble shift_y;          /* shift + velocity*row */
+    gdouble velocity_x;       /* px per row */
+    gdouble velocity_y;
+} FramePairSpec;
+
+typedef struct {
+    gint xres;
+    gint yres;
+    gdouble *reference;       /* yres x xres, row-major */
+    gdouble *image;
+    gdouble *row_dx;          /* yres: the true drift of each image row */
+    gdouble *row_dy;
+} FramePair;
+
+/* Defaults: 256 x 256, noise 0.05, roughness 0.15, random drift of scale 1. */
+void        frame_pair_spec_init   (FramePairSpec *spec);
+
+/* The reference is the surface z(x, y) at pixel (r, c) = z(c, r); the image
+ * row r is scanned with the drift p(r) and shows z(c - dx(r), r - dy(r)), so
+ * reference content at (r, c) appears in the image at (r + dy, c + dx). */
+FramePair*  frame_pair_generate    (const FramePairSpec *spec, guint32 seed);
+void        frame_pair_free        (FramePair *pair);
+
+/* The true drift of each of n stripes: the mean over its rows. */
+void        frame_pair_stripe_truth(const FramePair *pair, gint n,
+                                    gdouble *dx, gdouble *dy);
+
+/* The seed of a test: LOCALSCAN_TEST_SEED if set, else a fresh one; printed. */
+guint32     frame_pair_test_seed   (const gchar *program);
+
+G_END_DECLS
+
+#endif

@@ -1,0 +1,327 @@
+/*
+ *  Tests of the stripe registration against a reference frame.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <check.h>
+#include <fftw3.h>
+#include "stripe-registration.h"
+#include "registration-frames.h"
+
+static guint32 test_seed;
+
+typedef struct {
+    gdouble rms;
+    gdouble max;
+    gint accepted;
+    gint stripes;
+} Errors;
+
+static void
+register_pair(const FramePair *pair, gint n, StripeShift *shifts)
+{
+    GError *error = NULL;
+    gboolean ok;
+
+    ok = stripe_registration_measure(pair->image, pair->reference, pair->xres, pair->yres, n, 0.0,
+                                     STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, shifts, &error);
+    ck_assert_msg(ok, "registration failed: %s", error ? error->message : "?");
+}
+
+static void
+add_errors(const FramePair *pair, gint n, Errors *errors)
+{
+    StripeShift *shifts = g_new(StripeShift, n);
+    gdouble *tx = g_new(gdouble, n), *ty = g_new(gdouble, n);
+    gdouble sum = errors->rms*errors->rms*errors->stripes;
+    gint s;
+
+    register_pair(pair, n, shifts);
+    frame_pair_stripe_truth(pair, n, tx, ty);
+    for (s = 0; s < n; s++) {
+        gdouble e = hypot(shifts[s].dx - tx[s], shifts[s].dy - ty[s]);
+
+        sum += e*e;
+        errors->max = MAX(errors->max, e);
+        errors->accepted += !!shifts[s].accepted;
+    }
+    errors->stripes += n;
+    errors->rms = sqrt(sum/errors->stripes);
+    g_free(shifts);
+    g_free(tx);
+    g_free(ty);
+}
+
+static void
+check_random_pairs(gint xres, gint yres, gint n, gint pairs)
+{
+    FramePairSpec spec;
+    Errors errors = { 0, 0, 0, 0 };
+    gint i;
+
+    frame_pair_spec_init(&spec);
+    spec.xres = xres;
+    spec.yres = yres;
+    for (i = 0; i < pairs; i++) {
+        FramePair *pair = frame_pair_generate(&spec, test_seed + i);
+
+        add_errors(pair, n, &errors);
+        frame_pair_free(pair);
+    }
+    printf("%dx%d, N = %d, %d pairs: rms %.4f px, max %.4f px, %d of %d accepted\n",
+           xres, yres, n, pairs, errors.rms, errors.max, errors.accepted, errors.stripes);
+    ck_assert_msg(errors.rms <= 0.15, "rms error %g px > 0.15 px (seed %u)", errors.rms, test_seed);
+    ck_assert_msg(errors.max < 1.0, "max error %g px >= 1 px (seed %u)", errors.max, test_seed);
+    ck_assert_msg(errors.accepted >= 0.9*errors.stripes, "only %d of %d stripes accepted (seed %u)",
+                  errors.accepted, errors.stripes, test_seed);
+}
+
+START_TEST(test_random_drift_pairs)
+{
+    check_random_pairs(256, 256, 16, 10);
+}
+END_TEST
+
+START_TEST(test_non_square_images)
+{
+    check_random_pairs(320, 192, 12, 3);
+    check_random_pairs(160, 300, 10, 3);
+}
+END_TEST
+
+START_TEST(test_integer_shift)
+{
+    FramePairSpec spec;
+    FramePair *pair;
+    StripeShift shifts[16];
+    gint s;
+
+    frame_pair_spec_init(&spec);
+    spec.drift = FALSE;
+    spec.shift_x = 3.0;
+    spec.shift_y = -2.0;
+    spec.noise = 0.02;
+    pair = frame_pair_generate(&spec, test_seed);
+    register_pair(pair, 16, shifts);
+    for (s = 0; s < 16; s++) {
+        ck_assert_msg(fabs(shifts[s].dx - 3.0) <= 0.05 && fabs(shifts[s].dy + 2.0) <= 0.05,
+                      "stripe %d: (%g, %g) instead of (3, -2) (seed %u)", s, shifts[s].dx, shifts[s].dy,
+                      test_seed);
+        ck_assert(shifts[s].accepted);
+    }
+    frame_pair_free(pair);
+}
+END_TEST
+
+/* The image is the reference moved by whole pixels by hand, independently
+ * of the generator: content at (r, c) must appear at (r + dy, c + dx). */
+START_TEST(test_sign_convention)
+{
+    enum { RES = 128, DX = 5, DY = 2, N = 8 };
+    FramePairSpec spec;
+    FramePair *pair;
+    gdouble *image = g_new(gdouble, RES*RES);
+    StripeShift shifts[N];
+    GError *error = NULL;
+    gint r, c, s;
+
+    frame_pair_spec_init(&spec);
+    spec.xres = spec.yres = RES;
+    spec.drift = FALSE;
+    pair = frame_pair_generate(&spec, test_seed);
+    for (r = 0; r < RES; r++) {
+        for (c = 0; c < RES; c++)
+            image[(r*RES) + c] = pair->reference[CLAMP(r - DY, 0, RES-1)*RES + CLAMP(c - DX, 0, RES-1)];
+    }
+    ck_assert(stripe_registration_measure(image, pair->reference, RES, RES, N, 0.0,
+                                          STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, shifts, &error));
+    for (s = 1; s < N; s++) {
+        ck_assert_msg(fabs(shifts[s].dx - DX) <= 0.05 && fabs(shifts[s].dy - DY) <= 0.05,
+                      "stripe %d: (%g, %g) instead of (%d, %d)", s, shifts[s].dx, shifts[s].dy, DX, DY);
+    }
+    frame_pair_free(pair);
+    g_free(image);
+}
+END_TEST
+
+/* Rows 96-143 of the surface are flat: stripe 7 (rows 112-127) sees only
+ * noise however it drifts (drift scale 0.3 keeps |dy| below ~4 px). */
+START_TEST(test_featureless_stripe_rejected)
+{
+    FramePairSpec spec;
+    FramePair *pair;
+    StripeShift shifts[16];
+    gint s;
+
+    frame_pair_spec_init(&spec);
+    spec.drift_scale = 0.3;
+    spec.flat_from = 96;
+    spec.flat_to = 144;
+    pair = frame_pair_generate(&spec, test_seed);
+    register_pair(pair, 16, shifts);
+    printf("featureless stripe 7: score %.3f (peak %.3f, rival %.3f)\n",
+           shifts[7].score, shifts[7].peak, shifts[7].rival);
+    ck_assert_msg(shifts[7].score < 0.1, "featureless stripe scored %g", shifts[7].score);
+    ck_assert(!shifts[7].accepted);
+    for (s = 0; s < 5; s++)
+        ck_assert_msg(shifts[s].accepted && shifts[s].score > 0.5, "textured stripe %d scored %g",
+                      s, shifts[s].score);
+    frame_pair_free(pair);
+}
+END_TEST
+
+/* A strong lattice with almost nothing else: every stripe matches many
+ * lattice positions equally well, so nearly all must be rejected. */
+START_TEST(test_periodic_texture_lowers_score)
+{
+    FramePairSpec spec;
+    FramePair *pair;
+    StripeShift shifts[16];
+    gint s, accepted;
+    gdouble score = 0.0;
+
+    frame_pair_spec_init(&spec);
+    spec.lattice = 1.0;
+    spec.particle_density = 0.0;
+    spec.roughness = 0.02;
+    pair = frame_pair_generate(&spec, test_seed);
+    register_pair(pair, 16, shifts);
+    for (s = 0; s < 16; s++)
+        score += shifts[s].score/16;
+    accepted = stripe_registration_count_accepted(shifts, 16);
+    printf("lattice: mean score %.3f, %d accepted\n", score, accepted);
+    ck_assert_msg(score < 0.1, "mean score %g on a pure lattice", score);
+    ck_assert_msg(accepted <= 1, "%d lattice stripes accepted", accepted);
+    frame_pair_free(pair);
+}
+END_TEST
+
+static void
+fill_shift(StripeShift *shift, gdouble dx, gdouble dy, gdouble score, gboolean accepted)
+{
+    memset(shift, 0, sizeof(StripeShift));
+    shift->dx = dx;
+    shift->dy = dy;
+    shift->score = score;
+    shift->accepted = accepted;
+}
+
+START_TEST(test_table)
+{
+    StripeShift shifts[3];
+    DriftTable *table;
+    gchar *text;
+    gdouble value;
+
+    fill_shift(shifts + 0, -1.26, 0.4, 0.9, TRUE);
+    fill_shift(shifts + 1, 7.0, 3.0, 0.05, FALSE);
+    fill_shift(shifts + 2, 2.5, -0.51, 0.8, TRUE);
+    table = stripe_registration_to_table(shifts, 3, FALSE);
+    ck_assert_int_eq(table->n_stripes, 3);
+    ck_assert_int_eq(table->unit, DRIFT_UNIT_PX);
+    ck_assert(table->rows[0].has_drift && !table->rows[1].has_drift && table->rows[2].has_drift);
+    ck_assert(fabs(table->rows[0].dx + 1.26) < 1e-12 && fabs(table->rows[2].dy + 0.51) < 1e-12);
+    ck_assert(drift_table_get_extra(table, 0, "dx_exact", &value) && fabs(value + 1.26) < 1e-12);
+    ck_assert(drift_table_get_extra(table, 1, "score", &value) && fabs(value - 0.05) < 1e-12);
+    ck_assert(!drift_table_get_extra(table, 1, "dx_exact", &value));
+    text = drift_table_to_string(table);
+    ck_assert_msg(strstr(text, "stripe,dx,dy,dx_exact,dy_exact,score"), "header in:\n%s", text);
+    ck_assert_msg(strstr(text, "\n1,,,"), "blank row 1 in:\n%s", text);
+    g_free(text);
+    drift_table_free(table);
+
+    table = stripe_registration_to_table(shifts, 3, TRUE);
+    ck_assert(table->rows[0].dx == -1.0 && table->rows[0].dy == 0.0);
+    ck_assert(table->rows[2].dx == 3.0 && table->rows[2].dy == -1.0);
+    ck_assert(drift_table_get_extra(table, 2, "dx_exact", &value) && fabs(value - 2.5) < 1e-12);
+    ck_assert(!table->rows[1].has_drift);
+    drift_table_free(table);
+}
+END_TEST
+
+START_TEST(test_bad_arguments)
+{
+    GwyDataField *image = gwy_data_field_new(64, 64, 64, 64, TRUE);
+    GwyDataField *reference = gwy_data_field_new(64, 60, 64, 60, TRUE);
+    StripeShift shifts[65];
+    GError *error = NULL;
+    gdouble *data;
+
+    ck_assert(!stripe_registration_measure_fields(image, reference, 4, 0.0, 0.25, shifts, &error));
+    ck_assert(g_error_matches(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE));
+    ck_assert_str_eq(error->message, "The reference (64 x 60 px) does not have the image's size (64 x 64 px).");
+    g_clear_error(&error);
+
+    data = gwy_data_field_get_data(image);
+    ck_assert(!stripe_registration_measure(data, data, 64, 64, 65, 0.0, 0.25, shifts, &error));
+    ck_assert(g_error_matches(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_STRIPES));
+    ck_assert_str_eq(error->message, "The number of stripes (65) must be between 1 and the image's 64 rows.");
+    g_clear_error(&error);
+    ck_assert(!stripe_registration_measure(data, data, 64, 64, 0, 0.0, 0.25, shifts, &error));
+    ck_assert(g_error_matches(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_STRIPES));
+    g_clear_error(&error);
+
+    data[100] = NAN;
+    ck_assert(!stripe_registration_measure(data, data, 64, 64, 4, 0.0, 0.25, shifts, &error));
+    ck_assert(g_error_matches(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE));
+    g_clear_error(&error);
+    ck_assert(!stripe_registration_measure(data, data, 3, 3, 1, 0.0, 0.25, shifts, &error));
+    ck_assert(g_error_matches(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE));
+    g_clear_error(&error);
+
+    g_object_unref(image);
+    g_object_unref(reference);
+}
+END_TEST
+
+/* A flat image has no texture at all: nothing is accepted, nothing crashes. */
+START_TEST(test_flat_image)
+{
+    gdouble *flat = g_new0(gdouble, 64*64);
+    StripeShift shifts[4];
+    GError *error = NULL;
+
+    ck_assert(stripe_registration_measure(flat, flat, 64, 64, 4, 0.0, 0.25, shifts, &error));
+    ck_assert_int_eq(stripe_registration_count_accepted(shifts, 4), 0);
+    g_free(flat);
+}
+END_TEST
+
+static Suite*
+registration_suite(void)
+{
+    Suite *suite = suite_create("stripe-registration");
+    TCase *tc = tcase_create("core");
+
+    tcase_add_test(tc, test_random_drift_pairs);
+    tcase_add_test(tc, test_non_square_images);
+    tcase_add_test(tc, test_integer_shift);
+    tcase_add_test(tc, test_sign_convention);
+    tcase_add_test(tc, test_featureless_stripe_rejected);
+    tcase_add_test(tc, test_periodic_texture_lowers_score);
+    tcase_add_test(tc, test_table);
+    tcase_add_test(tc, test_bad_arguments);
+    tcase_add_test(tc, test_flat_image);
+    suite_add_tcase(suite, tc);
+    return suite;
+}
+
+int
+main(void)
+{
+    SRunner *runner;
+    gint failed;
+
+    test_seed = frame_pair_test_seed("test-stripe-registration");
+    runner = srunner_create(registration_suite());
+    srunner_run_all(runner, CK_NORMAL);
+    failed = srunner_ntests_failed(runner);
+    srunner_free(runner);
+    fftw_cleanup();
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
