@@ -1,0 +1,255 @@
+/*
+ *  Tests of the drift-model fit: known trajectories sampled as
+ *  displacement measurements at known times must give their parameters back,
+ *  and constant drift must never be taken for an effect.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <stdlib.h>
+#include <math.h>
+#include <check.h>
+#include "drift-fit.h"
+#include "sim-random.h"
+
+/* Three frames of 16 blocks, 100 s each, every later block measured against
+ * every earlier frame, the way displacement-measure.c ties blocks to times. */
+#define N_FRAMES 3
+#define N_BLOCKS 16
+#define FRAME_TIME 100.0
+
+static DriftMeasurement*
+sample_model(const DriftModel *model, gdouble noise_nm, guint32 seed, gint *n)
+{
+    DriftMeasurement *meas = g_new0(DriftMeasurement,
+                                    N_FRAMES*N_FRAMES*N_BLOCKS);
+    SimRandom rng;
+    gint k, j, b, m = 0;
+
+    sim_random_init(&rng, seed, 7);
+    for (k = 1; k < N_FRAMES; k++) {
+        for (j = 0; j < k; j++) {
+            for (b = 0; b < N_BLOCKS; b++) {
+                DriftMeasurement *d = meas + m++;
+                gdouble ax, ay, bx, by;
+
+                d->t_a = FRAME_TIME*(k + (b + 0.5)/N_BLOCKS);
+                d->t_b = FRAME_TIME*(j + (b + 0.5)/N_BLOCKS);
+                drift_model_eval(model, d->t_a, &ax, &ay);
+                drift_model_eval(model, d->t_b, &bx, &by);
+                d->dx = ax - bx + 1e-9*noise_nm*sim_random_gaussian(&rng);
+                d->dy = ay - by + 1e-9*noise_nm*sim_random_gaussian(&rng);
+                d->weight = 1.0;
+                d->group = b;
+                d->frame_a = k;
+                d->frame_b = j;
+            }
+        }
+    }
+    *n = m;
+    return meas;
+}
+
+static const DriftFit*
+select_model(const DriftMeasurement *meas, gint n, DriftFit *fits)
+{
+    gint i = drift_fit_select(meas, n, NULL, fits);
+
+    ck_assert_int_ge(i, 0);
+    return fits + i;
+}
+
+START_TEST(test_constant_velocity)
+{
+    DriftModel model;
+    DriftFit fits[8];
+    DriftFitParameters p;
+    DriftMeasurement *meas;
+    const DriftFit *fit;
+    gint n, seed;
+
+    for (seed = 1; seed <= 20; seed++) {
+        drift_model_init(&model, DRIFT_MODEL_NONE);
+        model.v[0] = 0.08e-9;
+        model.v[1] = -0.03e-9;
+        meas = sample_model(&model, 0.5, seed, &n);
+        fit = select_model(meas, n, fits);
+        drift_fit_parameters(fit, &p);
+        ck_assert_msg(fit->type == DRIFT_MODEL_NONE,
+                      "seed %d: constant drift taken for %s", seed,
+                      drift_model_type_name(fit->type));
+        ck_assert_msg(fabs(p.velocity_nm_per_s[0] - 0.08) < 0.005
+                      && fabs(p.velocity_nm_per_s[1] + 0.03) < 0.005,
+                      "v = %g, %g nm/s", p.velocity_nm_per_s[0],
+                      p.velocity_nm_per_s[1]);
+        g_free(meas);
+    }
+}
+END_TEST
+
+START_TEST(test_settling)
+{
+    DriftModel model;
+    DriftFit fits[8];
+    DriftFitParameters p;
+    DriftMeasurement *meas;
+    const DriftFit *fit;
+    gint n;
+
+    drift_model_init(&model, DRIFT_MODEL_SETTLING);
+    model.v[0] = 0.02e-9;
+    model.u[0] = 0.5e-9;
+    model.u[1] = -0.3e-9;
+    model.tau = 60.0;
+    meas = sample_model(&model, 0.3, 3, &n);
+    fit = select_model(meas, n, fits);
+    drift_fit_parameters(fit, &p);
+    ck_assert_str_eq(drift_model_type_name(fit->type), "settling");
+    ck_assert_msg(fabs(p.tau_s/60.0 - 1.0) < 0.15, "tau %g s", p.tau_s);
+    ck_assert_msg(fabs(p.u_nm_per_s[0] - 0.5) < 0.08
+                  && fabs(p.u_nm_per_s[1] + 0.3) < 0.08,
+                  "u = %g, %g", p.u_nm_per_s[0], p.u_nm_per_s[1]);
+    g_free(meas);
+}
+END_TEST
+
+START_TEST(test_oscillation)
+{
+    DriftModel model;
+    DriftFit fits[8];
+    DriftFitParameters p;
+    DriftMeasurement *meas;
+    const DriftFit *fit;
+    gint n;
+
+    drift_model_init(&model, DRIFT_MODEL_OSCILLATION);
+    model.v[1] = 0.05e-9;
+    model.a[0] = 3e-9;
+    model.a[1] = 1.5e-9;
+    model.period = 37.0;
+    model.phase = 0.7;
+    meas = sample_model(&model, 0.3, 5, &n);
+    fit = select_model(meas, n, fits);
+    drift_fit_parameters(fit, &p);
+    ck_assert_str_eq(drift_model_type_name(fit->type), "oscillation");
+    ck_assert_msg(fabs(p.period_s - 37.0) < 0.5, "period %g s", p.period_s);
+    /* The sign of the amplitude goes with the phase (a, phi) ~ (-a, phi+pi). */
+    ck_assert_msg(fabs(fabs(p.amplitude_nm[0]) - 3.0) < 0.3
+                  && fabs(fabs(p.amplitude_nm[1]) - 1.5) < 0.3
+                  && p.amplitude_nm[0]*p.amplitude_nm[1] > 0.0,
+                  "a = %g, %g nm", p.amplitude_nm[0], p.amplitude_nm[1]);
+    g_free(meas);
+}
+END_TEST
+
+START_TEST(test_jump)
+{
+    DriftModel model;
+    DriftFit fits[8];
+    DriftFitParameters p;
+    DriftMeasurement *meas;
+    const DriftFit *fit;
+    gint n;
+
+    drift_model_init(&model, DRIFT_MODEL_JUMP);
+    model.v[0] = -0.04e-9;
+    model.step[0] = 4e-9;
+    model.step[1] = -2e-9;
+    model.t_jump = 142.0;
+    meas = sample_model(&model, 0.3, 9, &n);
+    fit = select_model(meas, n, fits);
+    drift_fit_parameters(fit, &p);
+    ck_assert_str_eq(drift_model_type_name(fit->type), "jump");
+    /* Blocks are 6.25 s apart: the step is placed between two of them. */
+    ck_assert_msg(fabs(p.t_s - 142.0) < 6.25, "t_s %g s", p.t_s);
+    ck_assert_msg(fabs(p.step_nm[0] - 4.0) < 0.3
+                  && fabs(p.step_nm[1] + 2.0) < 0.3,
+                  "step %g, %g nm", p.step_nm[0], p.step_nm[1]);
+    g_free(meas);
+}
+END_TEST
+
+START_TEST(test_outlier_dropped)
+{
+    DriftModel model;
+    DriftFit fits[8];
+    DriftFitParameters p;
+    DriftMeasurement *meas;
+    const DriftFit *fit;
+    gint n;
+
+    drift_model_init(&model, DRIFT_MODEL_NONE);
+    model.v[0] = 0.1e-9;
+    meas = sample_model(&model, 0.3, 11, &n);
+    /* A registration that locked onto the wrong peak. */
+    meas[5].dx += 40e-9;
+    meas[20].dy -= 25e-9;
+    fit = select_model(meas, n, fits);
+    drift_fit_parameters(fit, &p);
+    ck_assert_str_eq(drift_model_type_name(fit->type), "none");
+    ck_assert_msg(fabs(p.velocity_nm_per_s[0] - 0.1) < 0.005,
+                  "v %g nm/s", p.velocity_nm_per_s[0]);
+    ck_assert_msg(fit->rms_nm < 0.5, "rms %g nm", fit->rms_nm);
+    g_free(meas);
+}
+END_TEST
+
+START_TEST(test_model_roundtrip)
+{
+    DriftModel model, back;
+    DriftFit fits[8];
+    DriftMeasurement *meas;
+    gdouble t, x0, y0, x1, y1, mx0, my0, mx1, my1;
+    gint n, i;
+
+    drift_model_init(&model, DRIFT_MODEL_OSCILLATION);
+    model.v[0] = 0.05e-9;
+    model.a[0] = 2e-9;
+    model.a[1] = -1e-9;
+    model.period = 53.0;
+    model.phase = 2.0;
+    meas = sample_model(&model, 0.0, 1, &n);
+    i = drift_fit_select(meas, n, NULL, fits);
+    drift_fit_to_model(fits + i, &back);
+    /* Differences of the trajectory agree (p0 is not observable). */
+    for (t = 10.0; t < 300.0; t += 17.0) {
+        drift_model_eval(&model, t, &x1, &y1);
+        drift_model_eval(&model, 5.0, &x0, &y0);
+        drift_model_eval(&back, t, &mx1, &my1);
+        drift_model_eval(&back, 5.0, &mx0, &my0);
+        ck_assert_msg(fabs((x1 - x0) - (mx1 - mx0)) < 0.05e-9
+                      && fabs((y1 - y0) - (my1 - my0)) < 0.05e-9,
+                      "t = %g: model and fit differ", t);
+    }
+    drift_model_clear(&back);
+    g_free(meas);
+}
+END_TEST
+
+static Suite*
+drift_fit_suite(void)
+{
+    Suite *s = suite_create("drift-fit");
+    TCase *tc = tcase_create("fit");
+
+    tcase_add_test(tc, test_constant_velocity);
+    tcase_add_test(tc, test_settling);
+    tcase_add_test(tc, test_oscillation);
+    tcase_add_test(tc, test_jump);
+    tcase_add_test(tc, test_outlier_dropped);
+    tcase_add_test(tc, test_model_roundtrip);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+int
+main(void)
+{
+    SRunner *sr = srunner_create(drift_fit_suite());
+    gint failed;
+
+    srunner_run_all(sr, CK_NORMAL);
+    failed = srunner_ntests_failed(sr);
+    srunner_free(sr);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
