@@ -1,0 +1,452 @@
+/*
+ *  simscan's command line.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+#include "simscan-presets.h"
+#include "simscan-options.h"
+#include "simscan-i18n.h"
+
+#define NM 1e-9
+#define UM 1e-6
+
+/* The options as the user writes them (nm, um, s). */
+typedef struct {
+    gchar *preset, *sample, *size, *direction, *drift;
+    gchar *velocity, *offset, *settle_velocity, *amplitude, *jump_step;
+    gdouble radius, radius_spread, density, spacing, roughness, correlation;
+    gint count;
+    gint xres, yres;
+    gdouble line_time, noise, tip_radius;
+    gdouble tau, period, phase, jump_time, walk_sigma, walk_dt;
+    gint stripes, ls_points;
+    gdouble ls_speed, ls_rmax, ls_overhead, ls_delay, ls_threshold;
+    gint64 seed;
+    gchar *output, *table, *json;
+    gboolean quiet;
+} RawOptions;
+
+static void
+raw_from_config(RawOptions *raw, const SimscanConfig *config)
+{
+    const SimParticleParams *pp = &config->particles;
+
+    memset(raw, 0, sizeof(RawOptions));
+    raw->radius = pp->radius/NM;
+    raw->radius_spread = pp->radius_spread;
+    raw->count = pp->count;
+    raw->density = pp->density*UM*UM;
+    raw->spacing = pp->min_spacing/NM;
+    raw->roughness = pp->roughness_rms/NM;
+    raw->correlation = pp->roughness_corr/NM;
+    raw->xres = config->xres;
+    raw->yres = config->yres;
+    raw->line_time = config->line_time;
+    raw->noise = config->noise_rms/NM;
+    raw->tip_radius = config->tip_radius/NM;
+    raw->tau = config->drift.tau;
+    raw->period = config->drift.period;
+    raw->phase = config->drift.phase;
+    raw->jump_time = config->drift.t_jump;
+    raw->walk_sigma = config->drift.walk_sigma/NM;
+    raw->walk_dt = config->drift.walk_dt;
+    raw->stripes = config->n_stripes;
+    raw->ls_points = config->local.points;
+    raw->ls_speed = config->local.tip_speed/UM;
+    raw->ls_rmax = config->local.r_max/NM;
+    raw->ls_overhead = config->local.line_overhead;
+    raw->ls_delay = config->local_delay;
+    raw->ls_threshold = config->local.threshold_fraction;
+    raw->seed = config->seed;
+}
+
+static void
+raw_clear(RawOptions *raw)
+{
+    gchar **strings[] = {
+        &raw->preset, &raw->sample, &raw->size, &raw->direction, &raw->drift,
+        &raw->velocity, &raw->offset, &raw->settle_velocity, &raw->amplitude,
+        &raw->jump_step, &raw->output, &raw->table, &raw->json,
+    };
+    guint i;
+
+    for (i = 0; i < G_N_ELEMENTS(strings); i++) {
+        g_free(*strings[i]);
+        *strings[i] = NULL;
+    }
+}
+
+static GOptionEntry*
+make_entries(RawOptions *raw)
+{
+    GOptionEntry entries[] = {
+        { "preset", 0, 0, G_OPTION_ARG_STRING, &raw->preset,
+          N_("paper (Section IV) or figure6 (the paper's Figure 6); "
+             "later options override it"), "NAME" },
+        { "sample", 0, 0, G_OPTION_ARG_FILENAME, &raw->sample,
+          N_("measured image used as the sample (channel ID, default the "
+             "first)"), "FILE[:ID]" },
+        { "radius", 0, 0, G_OPTION_ARG_DOUBLE, &raw->radius,
+          N_("particle radius, nm (25)"), "NM" },
+        { "radius-spread", 0, 0, G_OPTION_ARG_DOUBLE, &raw->radius_spread,
+          N_("relative RMS spread of the radii (0)"), "F" },
+        { "count", 0, 0, G_OPTION_ARG_INT, &raw->count,
+          N_("number of particles (0: use --density)"), "N" },
+        { "density", 0, 0, G_OPTION_ARG_DOUBLE, &raw->density,
+          N_("particles per um^2 when --count is 0 (4)"), "D" },
+        { "spacing", 0, 0, G_OPTION_ARG_DOUBLE, &raw->spacing,
+          N_("least distance between particle centres, nm (100)"), "NM" },
+        { "roughness", 0, 0, G_OPTION_ARG_DOUBLE, &raw->roughness,
+          N_("substrate RMS roughness, nm (0.3)"), "NM" },
+        { "correlation", 0, 0, G_OPTION_ARG_DOUBLE, &raw->correlation,
+          N_("substrate correlation length, nm (50)"), "NM" },
+        { "xres", 0, 0, G_OPTION_ARG_INT, &raw->xres,
+          N_("pixels per line (256)"), "N" },
+        { "yres", 0, 0, G_OPTION_ARG_INT, &raw->yres,
+          N_("lines per image (256)"), "N" },
+        { "size", 0, 0, G_OPTION_ARG_STRING, &raw->size,
+          N_("scan size, um, square or width,height (5)"), "UM[,UM]" },
+        { "line-time", 0, 0, G_OPTION_ARG_DOUBLE, &raw->line_time,
+          N_("seconds per line, trace and retrace (300/256)"), "S" },
+        { "direction", 0, 0, G_OPTION_ARG_STRING, &raw->direction,
+          N_("slow-scan direction, down or up (down)"), "DIR" },
+        { "noise", 0, 0, G_OPTION_ARG_DOUBLE, &raw->noise,
+          N_("RMS measurement noise, nm (0)"), "NM" },
+        { "tip-radius", 0, 0, G_OPTION_ARG_DOUBLE, &raw->tip_radius,
+          N_("spherical tip radius, nm (0: sharp)"), "NM" },
+        { "drift", 0, 0, G_OPTION_ARG_STRING, &raw->drift,
+          N_("none (constant velocity), settling, oscillation, jump, "
+             "random-walk, or figure6 (per-stripe shifts)"), "MODEL" },
+        { "velocity", 0, 0, G_OPTION_ARG_STRING, &raw->velocity,
+          N_("constant drift velocity, nm/s (0.08,0.02)"), "VX,VY" },
+        { "offset", 0, 0, G_OPTION_ARG_STRING, &raw->offset,
+          N_("drift at t = 0, nm (0,0)"), "X,Y" },
+        { "settle-velocity", 0, 0, G_OPTION_ARG_STRING, &raw->settle_velocity,
+          N_("settling: initial excess velocity, nm/s (0,0)"), "UX,UY" },
+        { "tau", 0, 0, G_OPTION_ARG_DOUBLE, &raw->tau,
+          N_("settling: time constant, s (1)"), "S" },
+        { "amplitude", 0, 0, G_OPTION_ARG_STRING, &raw->amplitude,
+          N_("oscillation: amplitude, nm (0,0)"), "AX,AY" },
+        { "period", 0, 0, G_OPTION_ARG_DOUBLE, &raw->period,
+          N_("oscillation: period, s (1)"), "S" },
+        { "phase", 0, 0, G_OPTION_ARG_DOUBLE, &raw->phase,
+          N_("oscillation: phase, rad (0)"), "RAD" },
+        { "jump-time", 0, 0, G_OPTION_ARG_DOUBLE, &raw->jump_time,
+          N_("jump: when, s (0)"), "S" },
+        { "jump-step", 0, 0, G_OPTION_ARG_STRING, &raw->jump_step,
+          N_("jump: step, nm (0,0)"), "DX,DY" },
+        { "walk-sigma", 0, 0, G_OPTION_ARG_DOUBLE, &raw->walk_sigma,
+          N_("random walk: velocity diffusion, nm/s per sqrt(s) (0)"), "NM" },
+        { "walk-dt", 0, 0, G_OPTION_ARG_DOUBLE, &raw->walk_dt,
+          N_("random walk: time step, s (1)"), "S" },
+        { "stripes", 0, 0, G_OPTION_ARG_INT, &raw->stripes,
+          N_("number of stripes N, one local scan each (16)"), "N" },
+        { "ls-points", 0, 0, G_OPTION_ARG_INT, &raw->ls_points,
+          N_("samples per local-scan line (64)"), "N" },
+        { "ls-speed", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_speed,
+          N_("tip speed along a local-scan line, um/s (4)"), "UM_S" },
+        { "ls-rmax", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_rmax,
+          N_("largest drift expected, nm; lines are 2(R + rmax) long (100)"),
+          "NM" },
+        { "ls-overhead", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_overhead,
+          N_("extra time per local-scan line, s (0)"), "S" },
+        { "ls-delay", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_delay,
+          N_("time from the end of the image to the first local scan, s (0)"),
+          "S" },
+        { "ls-threshold", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_threshold,
+          N_("chord threshold, fraction of the particle height (0.75)"), "F" },
+        { "seed", 0, 0, G_OPTION_ARG_INT64, &raw->seed,
+          N_("random seed, 0 to 4294967295 (1)"), "N" },
+        { "output", 'o', 0, G_OPTION_ARG_FILENAME, &raw->output,
+          N_("write the .gwy file (contaminated image with its drift table, "
+             "truth)"), "OUT.gwy" },
+        { "table", 0, 0, G_OPTION_ARG_FILENAME, &raw->table,
+          N_("write the measured drift table as CSV"), "OUT.csv" },
+        { "json", 0, 0, G_OPTION_ARG_FILENAME, &raw->json,
+          N_("write a JSON summary (true and measured drift per stripe)"),
+          "OUT.json" },
+        { "quiet", 'q', 0, G_OPTION_ARG_NONE, &raw->quiet,
+          N_("print nothing on success"), NULL },
+        { NULL, 0, 0, 0, NULL, NULL, NULL },
+    };
+
+    return g_memdup2(entries, sizeof(entries));
+}
+
+static gboolean
+bad_value(GError **error, const gchar *option, const gchar *what)
+{
+    g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                _("--%s: %s"), option, what);
+    return FALSE;
+}
+
+/* "A" or "A,B" (single: both the same when allow_single). */
+static gboolean
+parse_pair(const gchar *text, const gchar *option, gboolean allow_single,
+           gdouble scale, gdouble *v, GError **error)
+{
+    gchar **parts = g_strsplit(text, ",", -1);
+    guint n = g_strv_length(parts), i;
+    gboolean ok = (n == 2 || (n == 1 && allow_single));
+
+    for (i = 0; ok && i < n; i++) {
+        gchar *end;
+
+        g_strstrip(parts[i]);
+        v[i] = g_ascii_strtod(parts[i], &end)*scale;
+        ok = (*parts[i] && !*end && isfinite(v[i]));
+    }
+    if (ok && n == 1)
+        v[1] = v[0];
+    g_strfreev(parts);
+    if (!ok)
+        return bad_value(error, option,
+                         allow_single ? _("expected a number or two numbers "
+                                          "separated by a comma")
+                                      : _("expected two numbers separated "
+                                          "by a comma"));
+    return TRUE;
+}
+
+static gboolean
+check_range(gdouble value, gdouble min, gdouble max, gboolean min_open,
+            const gchar *option, GError **error)
+{
+    gchar *msg;
+
+    if (isfinite(value) && (min_open ? value > min : value >= min)
+        && value <= max)
+        return TRUE;
+    msg = g_strdup_printf(_("%g is out of range (%s %g to %g)"), value,
+                          min_open ? _("above") : _("from"), min, max);
+    bad_value(error, option, msg);
+    g_free(msg);
+    return FALSE;
+}
+
+static gboolean
+check_numbers(const RawOptions *raw, GError **error)
+{
+    return (check_range(raw->radius, 0, 1e6, TRUE, "radius", error)
+            && check_range(raw->radius_spread, 0, 1, FALSE, "radius-spread",
+                           error)
+            && check_range(raw->count, 0, 1e6, FALSE, "count", error)
+            && check_range(raw->density, 0, 1e6, TRUE, "density", error)
+            && check_range(raw->spacing, 0, 1e9, FALSE, "spacing", error)
+            && check_range(raw->roughness, 0, 1e6, FALSE, "roughness", error)
+            && check_range(raw->correlation, 0, 1e9, TRUE, "correlation",
+                           error)
+            && check_range(raw->xres, 8, 16384, FALSE, "xres", error)
+            && check_range(raw->yres, 8, 16384, FALSE, "yres", error)
+            && check_range(raw->line_time, 0, 1e6, TRUE, "line-time", error)
+            && check_range(raw->noise, 0, 1e6, FALSE, "noise", error)
+            && check_range(raw->tip_radius, 0, 1e6, FALSE, "tip-radius", error)
+            && check_range(raw->tau, 0, 1e9, TRUE, "tau", error)
+            && check_range(raw->period, 0, 1e9, TRUE, "period", error)
+            && check_range(raw->phase, -1e6, 1e6, FALSE, "phase", error)
+            && check_range(raw->jump_time, -1e9, 1e9, FALSE, "jump-time",
+                           error)
+            && check_range(raw->walk_sigma, 0, 1e6, FALSE, "walk-sigma", error)
+            && check_range(raw->walk_dt, 1e-6, 1e6, FALSE, "walk-dt", error)
+            && check_range(raw->stripes, 1, raw->yres, FALSE, "stripes", error)
+            && check_range(raw->ls_points, 3, 1000000, FALSE, "ls-points",
+                           error)
+            && check_range(raw->ls_speed, 0, 1e6, TRUE, "ls-speed", error)
+            && check_range(raw->ls_rmax, 0, 1e9, FALSE, "ls-rmax", error)
+            && check_range(raw->ls_overhead, 0, 1e6, FALSE, "ls-overhead",
+                           error)
+            && check_range(raw->ls_delay, 0, 1e9, FALSE, "ls-delay", error)
+            && check_range(raw->ls_threshold, 0, 1, TRUE, "ls-threshold",
+                           error)
+            && check_range(raw->seed, 0, G_MAXUINT32, FALSE, "seed", error));
+}
+
+/* FILE or FILE:ID; a file name may hold colons, so only an all-digit tail
+ * is an id. */
+static gboolean
+parse_sample(const gchar *text, SimscanConfig *config, GError **error)
+{
+    const gchar *colon = strrchr(text, ':');
+
+    if (colon && colon[1] && strspn(colon + 1, "0123456789")
+                             == strlen(colon + 1)) {
+        config->sample_file = g_strndup(text, colon - text);
+        config->sample_channel = atoi(colon + 1);
+    }
+    else
+        config->sample_file = g_strdup(text);
+    if (!*config->sample_file)
+        return bad_value(error, "sample", _("empty file name"));
+    return TRUE;
+}
+
+static gboolean
+parse_drift(const RawOptions *raw, SimscanConfig *config, GError **error)
+{
+    DriftModel *m = &config->drift;
+    DriftModelType type = m->type;
+    gdouble pair[2];
+
+    if (raw->drift) {
+        config->figure6 = g_str_equal(raw->drift, "figure6");
+        if (!config->figure6
+            && !drift_model_type_from_name(raw->drift, &type))
+            return bad_value(error, "drift",
+                             _("unknown model (none, settling, oscillation, "
+                               "jump, random-walk, figure6)"));
+        m->type = type;
+    }
+    if (raw->velocity) {
+        if (!parse_pair(raw->velocity, "velocity", FALSE, NM, pair, error))
+            return FALSE;
+        m->v[0] = pair[0];
+        m->v[1] = pair[1];
+    }
+    if (raw->offset) {
+        if (!parse_pair(raw->offset, "offset", FALSE, NM, m->p0, error))
+            return FALSE;
+    }
+    if (raw->settle_velocity
+        && !parse_pair(raw->settle_velocity, "settle-velocity", FALSE, NM,
+                       m->u, error))
+        return FALSE;
+    if (raw->amplitude
+        && !parse_pair(raw->amplitude, "amplitude", FALSE, NM, m->a, error))
+        return FALSE;
+    if (raw->jump_step
+        && !parse_pair(raw->jump_step, "jump-step", FALSE, NM, m->step, error))
+        return FALSE;
+    m->tau = raw->tau;
+    m->period = raw->period;
+    m->phase = raw->phase;
+    m->t_jump = raw->jump_time;
+    m->walk_sigma = raw->walk_sigma*NM;
+    m->walk_dt = raw->walk_dt;
+    m->walk_seed = config->seed;
+    return TRUE;
+}
+
+static gboolean
+raw_to_config(const RawOptions *raw, SimscanConfig *config, GError **error)
+{
+    SimParticleParams *pp = &config->particles;
+    gdouble size[2];
+
+    if (!check_numbers(raw, error))
+        return FALSE;
+    config->seed = (guint32)raw->seed;
+    pp->radius = raw->radius*NM;
+    pp->radius_spread = raw->radius_spread;
+    pp->count = raw->count;
+    pp->density = raw->density/(UM*UM);
+    pp->min_spacing = raw->spacing*NM;
+    pp->roughness_rms = raw->roughness*NM;
+    pp->roughness_corr = raw->correlation*NM;
+    config->xres = raw->xres;
+    config->yres = raw->yres;
+    if (raw->size) {
+        if (!parse_pair(raw->size, "size", TRUE, UM, size, error))
+            return FALSE;
+        if (!check_range(size[0]/UM, 0, 1e6, TRUE, "size", error)
+            || !check_range(size[1]/UM, 0, 1e6, TRUE, "size", error))
+            return FALSE;
+        config->xreal = pp->xreal = size[0];
+        config->yreal = pp->yreal = size[1];
+    }
+    config->line_time = raw->line_time;
+    if (raw->direction) {
+        if (g_str_equal(raw->direction, "down"))
+            config->direction = SCAN_DIRECTION_DOWN;
+        else if (g_str_equal(raw->direction, "up"))
+            config->direction = SCAN_DIRECTION_UP;
+        else
+            return bad_value(error, "direction", _("expected down or up"));
+    }
+    config->noise_rms = raw->noise*NM;
+    config->tip_radius = raw->tip_radius*NM;
+    if (!parse_drift(raw, config, error))
+        return FALSE;
+    config->n_stripes = raw->stripes;
+    config->local.radius = pp->radius;
+    config->local.points = raw->ls_points;
+    config->local.tip_speed = raw->ls_speed*UM;
+    config->local.r_max = raw->ls_rmax*NM;
+    config->local.line_overhead = raw->ls_overhead;
+    config->local.threshold_fraction = raw->ls_threshold;
+    config->local_delay = raw->ls_delay;
+    if (raw->sample && !parse_sample(raw->sample, config, error))
+        return FALSE;
+    config->output = g_strdup(raw->output);
+    config->table = g_strdup(raw->table);
+    config->json = g_strdup(raw->json);
+    config->quiet = raw->quiet;
+    return TRUE;
+}
+
+/* The preset is applied before the other options are parsed, so it must be
+ * found first. */
+static gboolean
+find_preset(gint argc, gchar **argv, SimscanPreset *preset, GError **error)
+{
+    const gchar *name = NULL;
+    gint i;
+
+    for (i = 1; i < argc; i++) {
+        if (g_str_equal(argv[i], "--"))
+            break;
+        if (g_str_equal(argv[i], "--preset") && i+1 < argc)
+            name = argv[++i];
+        else if (g_str_has_prefix(argv[i], "--preset="))
+            name = argv[i] + strlen("--preset=");
+    }
+    *preset = SIMSCAN_PRESET_NONE;
+    if (name && !simscan_preset_from_name(name, preset))
+        return bad_value(error, "preset", _("unknown preset (paper, figure6)"));
+    return TRUE;
+}
+
+gboolean
+simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
+                      const GOptionEntry *extra, SimscanConfig *config,
+                      GError **error)
+{
+    GOptionContext *context;
+    GOptionEntry *entries;
+    SimscanPreset preset;
+    RawOptions raw;
+    gchar **args;
+    gboolean ok;
+    gint i;
+
+    if (!find_preset(argc, argv, &preset, error))
+        return FALSE;
+    simscan_preset_apply(config, preset);
+    raw_from_config(&raw, config);
+    entries = make_entries(&raw);
+    context = g_option_context_new(usage);
+    g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
+    g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
+    if (extra)
+        g_option_context_add_main_entries(context, extra, GETTEXT_PACKAGE);
+    /* parse_strv consumes what it parses; argv stays the caller's. */
+    args = g_new0(gchar*, argc + 1);
+    for (i = 0; i < argc; i++)
+        args[i] = g_strdup(argv[i]);
+    ok = g_option_context_parse_strv(context, &args, error);
+    if (ok && g_strv_length(args) > 1) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                    _("unexpected argument %s"), args[1]);
+        ok = FALSE;
+    }
+    ok = ok && raw_to_config(&raw, config, error);
+    g_strfreev(args);
+    raw_clear(&raw);
+    g_free(entries);
+    g_option_context_free(context);
+    return ok;
+}

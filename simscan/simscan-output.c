@@ -1,0 +1,372 @@
+/*
+ *  simscan's output files.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <errno.h>
+#include <math.h>
+#include <unistd.h>
+#include <sys/stat.h>
+#include <glib/gstdio.h>
+#include <json-glib/json-glib.h>
+#include <libgwyddion/gwyserializable.h>
+#include "simscan-output.h"
+#include "simscan-i18n.h"
+
+#define GWY_MAGIC "GWYP"
+
+typedef struct {
+    const gchar *filename;
+    gchar *tmpname;
+} PendingFile;
+
+/* Numbers in metadata as the shortest text that reads back exactly. */
+static void
+set_meta_number(GwyContainer *meta, const gchar *key, gdouble value)
+{
+    gchar buf[G_ASCII_DTOSTR_BUF_SIZE];
+
+    gwy_container_set_string_by_name(meta, key, (const guchar*)
+                                     g_strdup(g_ascii_dtostr(buf, sizeof(buf),
+                                                             value)));
+}
+
+static void
+set_meta_pair(GwyContainer *meta, const gchar *key, const gdouble *v,
+              gdouble scale)
+{
+    gchar bx[G_ASCII_DTOSTR_BUF_SIZE], by[G_ASCII_DTOSTR_BUF_SIZE];
+
+    gwy_container_set_string_by_name(meta, key, (const guchar*)
+        g_strdup_printf("%s, %s", g_ascii_dtostr(bx, sizeof(bx), v[0]*scale),
+                        g_ascii_dtostr(by, sizeof(by), v[1]*scale)));
+}
+
+static const gchar*
+model_name(const SimscanScene *scene)
+{
+    return scene->shift_dx ? "figure6" : drift_model_type_name(scene->drift.type);
+}
+
+static GwyContainer*
+make_meta(const SimscanScene *scene, const SimscanMeasurement *m)
+{
+    const SimscanConfig *config = scene->config;
+    GwyContainer *meta = gwy_container_new();
+
+    set_meta_number(meta, SIMSCAN_META_LINE_TIME, scene->scan.line_time);
+    gwy_container_set_const_string_by_name(meta, SIMSCAN_META_SLOW_SCAN,
+        (const guchar*)(scene->scan.direction == SCAN_DIRECTION_UP
+                        ? "up" : "down"));
+    set_meta_number(meta, SIMSCAN_META_FRAME_START, scene->scan.frame_start);
+    set_meta_number(meta, "Seed", config->seed);
+    gwy_container_set_const_string_by_name(meta, "Drift model",
+                                           (const guchar*)model_name(scene));
+    if (!scene->shift_dx)
+        set_meta_pair(meta, "Drift velocity (nm/s)", scene->drift.v, 1e9);
+    gwy_container_set_const_string_by_name(meta, "Preset",
+        (const guchar*)simscan_preset_name(config->preset));
+    set_meta_number(meta, "Stripes", m->n_stripes);
+    set_meta_number(meta, "Local scans start (s)", m->t_start);
+    set_meta_number(meta, "Local scans end (s)", m->t_end);
+    set_meta_pair(meta, "Reference drift (nm)", m->ref_drift, 1e9);
+    gwy_container_set_const_string_by_name(meta, "Simulator",
+                                           (const guchar*)("simscan "
+                                                           PACKAGE_VERSION));
+    return meta;
+}
+
+static gchar*
+particles_text(const SimscanMeasurement *m)
+{
+    gchar b[4][G_ASCII_DTOSTR_BUF_SIZE];
+    GString *str = g_string_new("x,y,x_shown,y_shown\n");
+    gint i, k;
+
+    for (i = 0; i < m->n_particles; i++) {
+        gdouble v[4] = { m->truth_px[2*i], m->truth_px[2*i + 1],
+                         m->shown_px[2*i], m->shown_px[2*i + 1] };
+
+        for (k = 0; k < 4; k++)
+            g_ascii_formatd(b[k], sizeof(b[k]), "%.6f", v[k]);
+        g_string_append_printf(str, "%s,%s,%s,%s\n", b[0], b[1], b[2], b[3]);
+    }
+    return g_string_free(str, FALSE);
+}
+
+GwyContainer*
+simscan_output_container(const SimscanScene *scene,
+                         const SimscanMeasurement *m)
+{
+    GwyContainer *data = gwy_container_new();
+    GwyContainer *meta = make_meta(scene, m);
+    gchar key[64];
+
+    gwy_container_set_object_by_name(data, "/0/data", scene->image);
+    gwy_container_set_const_string_by_name(data, "/0/data/title",
+                                           (const guchar*)SIMSCAN_TITLE_IMAGE);
+    g_snprintf(key, sizeof(key), DRIFT_TABLE_KEY_FORMAT, 0);
+    gwy_container_set_string_by_name(data, key, (const guchar*)
+                                     drift_table_to_string(m->table));
+    gwy_container_set_object_by_name(data, "/0/meta", meta);
+    if (m->n_particles)
+        gwy_container_set_string_by_name(data, SIMSCAN_PARTICLES_KEY,
+                                         (const guchar*)particles_text(m));
+    gwy_container_set_object_by_name(data, "/1/data", scene->truth);
+    gwy_container_set_const_string_by_name(data, "/1/data/title",
+                                           (const guchar*)SIMSCAN_TITLE_TRUTH);
+    g_object_unref(meta);
+    return data;
+}
+
+static void
+add_error(JsonBuilder *b, const gchar *name, const CentreError *e)
+{
+    json_builder_set_member_name(b, name);
+    json_builder_begin_object(b);
+    json_builder_set_member_name(b, "particles");
+    json_builder_add_int_value(b, e->n_expected);
+    json_builder_set_member_name(b, "matched");
+    json_builder_add_int_value(b, e->n_matched);
+    json_builder_set_member_name(b, "rms_px");
+    json_builder_add_double_value(b, e->rms_px);
+    json_builder_set_member_name(b, "max_px");
+    json_builder_add_double_value(b, e->max_px);
+    json_builder_set_member_name(b, "rms_nm");
+    json_builder_add_double_value(b, e->rms_nm);
+    json_builder_set_member_name(b, "max_nm");
+    json_builder_add_double_value(b, e->max_nm);
+    json_builder_end_object(b);
+}
+
+static void
+add_number_or_null(JsonBuilder *b, const gchar *name, gboolean known,
+                   gdouble value)
+{
+    json_builder_set_member_name(b, name);
+    if (known)
+        json_builder_add_double_value(b, value);
+    else
+        json_builder_add_null_value(b);
+}
+
+static void
+add_stripes(JsonBuilder *b, const SimscanMeasurement *m)
+{
+    gint s;
+
+    json_builder_set_member_name(b, "stripes");
+    json_builder_begin_array(b);
+    for (s = 0; s < m->n_stripes; s++) {
+        const LocalScanParticle *r = m->scans + s;
+        const DriftTableRow *row = m->table->rows + s;
+
+        json_builder_begin_object(b);
+        json_builder_set_member_name(b, "stripe");
+        json_builder_add_int_value(b, s);
+        json_builder_set_member_name(b, "true_px");
+        json_builder_begin_array(b);
+        json_builder_add_double_value(b, m->true_dx[s]);
+        json_builder_add_double_value(b, m->true_dy[s]);
+        json_builder_end_array(b);
+        add_number_or_null(b, "dx", row->has_drift, row->dx);
+        add_number_or_null(b, "dy", row->has_drift, row->dy);
+        add_number_or_null(b, "dx_exact", row->has_drift, r->dx);
+        add_number_or_null(b, "dy_exact", row->has_drift, r->dy);
+        add_number_or_null(b, "x", r->lines > 0, r->x_disp);
+        add_number_or_null(b, "y", r->lines > 0, r->y_disp);
+        add_number_or_null(b, "t_image", r->lines > 0, r->t_image);
+        add_number_or_null(b, "t_local", row->has_drift, r->t_local);
+        json_builder_set_member_name(b, "lines");
+        json_builder_add_int_value(b, r->lines);
+        json_builder_end_object(b);
+    }
+    json_builder_end_array(b);
+}
+
+gchar*
+simscan_output_json(const SimscanScene *scene, const SimscanMeasurement *m)
+{
+    const SimscanConfig *config = scene->config;
+    JsonBuilder *b = json_builder_new();
+    JsonGenerator *gen;
+    JsonNode *root;
+    gchar *text;
+
+    json_builder_begin_object(b);
+    json_builder_set_member_name(b, "preset");
+    json_builder_add_string_value(b, simscan_preset_name(config->preset));
+    json_builder_set_member_name(b, "seed");
+    json_builder_add_int_value(b, config->seed);
+    json_builder_set_member_name(b, "drift_model");
+    json_builder_add_string_value(b, model_name(scene));
+    json_builder_set_member_name(b, "xres");
+    json_builder_add_int_value(b, scene->scan.xres);
+    json_builder_set_member_name(b, "yres");
+    json_builder_add_int_value(b, scene->scan.yres);
+    json_builder_set_member_name(b, "pixel_nm");
+    json_builder_begin_array(b);
+    json_builder_add_double_value(b, 1e9*scene->scan.xreal/scene->scan.xres);
+    json_builder_add_double_value(b, 1e9*scene->scan.yreal/scene->scan.yres);
+    json_builder_end_array(b);
+    json_builder_set_member_name(b, "frame_time_s");
+    json_builder_add_double_value(b, scan_timing_frame_end(&scene->timing));
+    json_builder_set_member_name(b, "local_scans");
+    json_builder_begin_object(b);
+    json_builder_set_member_name(b, "start_s");
+    json_builder_add_double_value(b, m->t_start);
+    json_builder_set_member_name(b, "end_s");
+    json_builder_add_double_value(b, m->t_end);
+    json_builder_set_member_name(b, "lines");
+    json_builder_add_int_value(b, m->lines);
+    json_builder_end_object(b);
+    json_builder_set_member_name(b, "reference_drift_nm");
+    json_builder_begin_array(b);
+    json_builder_add_double_value(b, 1e9*m->ref_drift[0]);
+    json_builder_add_double_value(b, 1e9*m->ref_drift[1]);
+    json_builder_end_array(b);
+    add_stripes(b, m);
+    if (m->have_errors) {
+        json_builder_set_member_name(b, "centre_error");
+        json_builder_begin_object(b);
+        add_error(b, "before", &m->before);
+        add_error(b, "after", &m->after);
+        json_builder_end_object(b);
+    }
+    json_builder_end_object(b);
+
+    root = json_builder_get_root(b);
+    gen = json_generator_new();
+    json_generator_set_pretty(gen, TRUE);
+    json_generator_set_root(gen, root);
+    text = json_generator_to_data(gen, NULL);
+    json_node_unref(root);
+    g_object_unref(gen);
+    g_object_unref(b);
+    return text;
+}
+
+static gboolean
+write_temp(const gchar *filename, const guchar *data, gsize length,
+           gchar **tmpname, GError **error)
+{
+    gchar *dir = g_path_get_dirname(filename);
+    gchar *base = g_path_get_basename(filename);
+    gchar *tmpl = g_strdup_printf("%s%c.%s.XXXXXX", dir, G_DIR_SEPARATOR,
+                                  base);
+    gint fd = g_mkstemp(tmpl);
+    gboolean ok = (fd >= 0);
+    gsize done = 0;
+    mode_t mask = umask(0);
+
+    /* mkstemp makes the file private; outputs get the usual permissions. */
+    umask(mask);
+    if (ok)
+        ok = (fchmod(fd, 0666 & ~mask) == 0);
+
+    while (ok && done < length) {
+        gssize n = write(fd, data + done, length - done);
+
+        if (n < 0 && errno == EINTR)
+            continue;
+        ok = (n > 0);
+        done += ok ? (gsize)n : 0;
+    }
+    if (fd >= 0 && close(fd) != 0)
+        ok = FALSE;
+    if (!ok) {
+        g_set_error(error, G_FILE_ERROR, g_file_error_from_errno(errno),
+                    _("cannot write %s: %s"), filename, g_strerror(errno));
+        if (fd >= 0)
+            g_unlink(tmpl);
+        g_free(tmpl);
+        tmpl = NULL;
+    }
+    g_free(dir);
+    g_free(base);
+    *tmpname = tmpl;
+    return ok;
+}
+
+gboolean
+simscan_write_file(const gchar *filename, const guchar *data, gsize length,
+                   GError **error)
+{
+    gchar *tmpname;
+
+    if (!write_temp(filename, data, length, &tmpname, error))
+        return FALSE;
+    if (g_rename(tmpname, filename) != 0) {
+        g_set_error(error, G_FILE_ERROR, g_file_error_from_errno(errno),
+                    _("cannot write %s: %s"), filename, g_strerror(errno));
+        g_unlink(tmpname);
+        g_free(tmpname);
+        return FALSE;
+    }
+    g_free(tmpname);
+    return TRUE;
+}
+
+static GByteArray*
+gwy_file_bytes(const SimscanScene *scene, const SimscanMeasurement *m)
+{
+    GwyContainer *data = simscan_output_container(scene, m);
+    GByteArray *bytes = g_byte_array_new();
+
+    g_byte_array_append(bytes, (const guint8*)GWY_MAGIC, strlen(GWY_MAGIC));
+    gwy_serializable_serialize(G_OBJECT(data), bytes);
+    g_object_unref(data);
+    return bytes;
+}
+
+gboolean
+simscan_output_write_all(const SimscanScene *scene,
+                         const SimscanMeasurement *m, GError **error)
+{
+    const SimscanConfig *config = scene->config;
+    PendingFile pending[3];
+    gint n = 0, i;
+    gboolean ok = TRUE;
+
+    if (config->output) {
+        GByteArray *bytes = gwy_file_bytes(scene, m);
+
+        pending[n].filename = config->output;
+        ok = write_temp(config->output, bytes->data, bytes->len,
+                        &pending[n].tmpname, error);
+        n += ok;
+        g_byte_array_free(bytes, TRUE);
+    }
+    if (ok && config->table) {
+        gchar *text = drift_table_to_string(m->table);
+
+        pending[n].filename = config->table;
+        ok = write_temp(config->table, (const guchar*)text, strlen(text),
+                        &pending[n].tmpname, error);
+        n += ok;
+        g_free(text);
+    }
+    if (ok && config->json) {
+        gchar *text = simscan_output_json(scene, m);
+
+        pending[n].filename = config->json;
+        ok = write_temp(config->json, (const guchar*)text, strlen(text),
+                        &pending[n].tmpname, error);
+        n += ok;
+        g_free(text);
+    }
+    for (i = 0; i < n; i++) {
+        if (ok && g_rename(pending[i].tmpname, pending[i].filename) != 0) {
+            g_set_error(error, G_FILE_ERROR, g_file_error_from_errno(errno),
+                        _("cannot write %s: %s"), pending[i].filename,
+                        g_strerror(errno));
+            ok = FALSE;
+        }
+        if (!ok)
+            g_unlink(pending[i].tmpname);
+        g_free(pending[i].tmpname);
+    }
+    return ok;
+}

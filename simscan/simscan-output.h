@@ -1,0 +1,47 @@
+/*
+ *  simscan's output files: the .gwy (contaminated image carrying its drift
+ *  table and timing metadata, the truth), the CSV table and the JSON
+ *  summary.  All are written to temporary files first and renamed only
+ *  when every one succeeded, so an error leaves no output behind.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef SIMSCAN_OUTPUT_H
+#define SIMSCAN_OUTPUT_H
+
+#include <glib.h>
+#include <libgwyddion/gwycontainer.h>
+#include "simscan-run.h"
+
+G_BEGIN_DECLS
+
+/* Channel titles and metadata keys that other tools read. */
+#define SIMSCAN_TITLE_IMAGE      "Simulated scan (drift)"
+#define SIMSCAN_TITLE_TRUTH      "Simulated scan (drift-free truth)"
+#define SIMSCAN_META_LINE_TIME   "Line time (s)"
+#define SIMSCAN_META_SLOW_SCAN   "Slow scan"
+#define SIMSCAN_META_FRAME_START "Frame start (s)"
+/* True particle positions, px, CSV "x,y,x_shown,y_shown": where each
+ * particle belongs in a compensated image and where the scan shows it. */
+#define SIMSCAN_PARTICLES_KEY    "/0/simscan/particles"
+
+/* The container written to the .gwy file (new reference). */
+GwyContainer*  simscan_output_container  (const SimscanScene *scene,
+                                          const SimscanMeasurement *m);
+gchar*         simscan_output_json       (const SimscanScene *scene,
+                                          const SimscanMeasurement *m);
+
+/* Writes every output the configuration asks for, all or nothing. */
+gboolean       simscan_output_write_all  (const SimscanScene *scene,
+                                          const SimscanMeasurement *m,
+                                          GError **error);
+
+/* Writes data atomically: temporary file in the same folder, then rename. */
+gboolean       simscan_write_file        (const gchar *filename,
+                                          const guchar *data,
+                                          gsize length,
+                                          GError **error);
+
+G_END_DECLS
+
+#endif

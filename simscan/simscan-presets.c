@@ -1,0 +1,42 @@
+/*
+ *  simscan's presets.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include "simscan-presets.h"
+
+gboolean
+simscan_preset_from_name(const gchar *name, SimscanPreset *preset)
+{
+    if (g_str_equal(name, "paper"))
+        *preset = SIMSCAN_PRESET_PAPER;
+    else if (g_str_equal(name, "figure6"))
+        *preset = SIMSCAN_PRESET_FIGURE6;
+    else
+        return FALSE;
+    return TRUE;
+}
+
+void
+simscan_preset_apply(SimscanConfig *config, SimscanPreset preset)
+{
+    config->preset = preset;
+    if (preset == SIMSCAN_PRESET_PAPER) {
+        /* The defaults are the paper's Section IV already: 256 x 256 over
+         * 5 um, 50 nm latex spheres, 300 s, v = (0.08, 0.02) nm/s, N = 16.
+         * 2 s of local scans over 16 stripes: 2 lines of 62.5 ms each. */
+        config->local.r_max = 100e-9;
+        config->local.tip_speed = 4e-6;
+    }
+    else if (preset == SIMSCAN_PRESET_FIGURE6) {
+        /* Shifts up to 16 px (312 nm): neighbours farther apart than twice
+         * that, so the local scan cannot take a neighbour for the particle,
+         * and lines long enough to reach it. */
+        config->figure6 = TRUE;
+        config->n_stripes = 16;
+        config->particles.min_spacing = 700e-9;
+        config->particles.count = 60;
+        config->local.r_max = 400e-9;
+    }
+}
