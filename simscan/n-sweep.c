@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
+#include <math.h>
 #include "simscan-options.h"
 #include "simscan-run.h"
 #include "simscan-sample-file.h"
@@ -40,16 +41,21 @@ parse_n_list(const gchar *text, gint yres, GArray *list, GError **error)
     return ok && list->len;
 }
 
-static gboolean
-sweep_point(SimscanScene *scene, gint n, SweepPoint *point, GError **error)
+/* A stripe count whose local scans found nothing is a result too (the drift
+ * outran r_max): it shows as measured 0, no errors. */
+static void
+sweep_point(SimscanScene *scene, gint n, SweepPoint *point)
 {
-    SimscanMeasurement *m = simscan_measure(scene, n, error);
+    SimscanMeasurement *m = simscan_measure(scene, n, NULL);
     gint s;
 
-    if (!m)
-        return FALSE;
     point->n = n;
     point->measured = 0;
+    if (!m) {
+        point->before.rms_px = point->after.rms_px = NAN;
+        point->after.max_px = point->after.rms_nm = NAN;
+        return;
+    }
     for (s = 0; s < n; s++)
         point->measured += m->table->rows[s].has_drift;
     point->lines = m->lines;
@@ -57,7 +63,6 @@ sweep_point(SimscanScene *scene, gint n, SweepPoint *point, GError **error)
     point->before = m->before;
     point->after = m->after;
     simscan_measurement_free(m);
-    return TRUE;
 }
 
 static void
@@ -109,10 +114,9 @@ run_sweep(const SimscanConfig *config, GArray *list, const gchar *plot,
     if (!(scene = simscan_scene_new(config, NULL, error)))
         return FALSE;
     points = g_new0(SweepPoint, list->len);
-    for (i = 0; ok && i < list->len; i++)
-        ok = sweep_point(scene, g_array_index(list, gint, i), points + i,
-                         error);
-    if (ok && plot) {
+    for (i = 0; i < list->len; i++)
+        sweep_point(scene, g_array_index(list, gint, i), points + i);
+    if (plot) {
         title = g_strdup_printf(_("drift %s, seed %u"),
                                 config->figure6 ? "figure6"
                                 : drift_model_type_name(config->drift.type),

@@ -72,7 +72,7 @@ draw_axes(const Axes *axes, const SweepPoint *points, gint n_points)
     }
     draw_text(cr, 0.5*WIDTH, HEIGHT - 18, _("stripes N"), 0.5);
     cairo_save(cr);
-    cairo_move_to(cr, 20, 0.5*HEIGHT);
+    cairo_translate(cr, 24, 0.5*HEIGHT);
     cairo_rotate(cr, -G_PI/2);
     draw_text(cr, 0, 0, _("particle-centre error (px)"), 0.5);
     cairo_restore(cr);
@@ -88,21 +88,32 @@ draw_curve(const Axes *axes, const SweepPoint *points, gint n_points,
     gdouble lx = LEFT + 16, ly = TOP + 18 + 18*legend_row;
     gint i;
 
+    /* Text leaves a current point; a curve must not start from it. */
+    cairo_new_path(cr);
     cairo_set_source_rgb(cr, r, g, b);
     cairo_set_line_width(cr, 2.0);
     cairo_set_dash(cr, dash, dashed ? 2 : 0, 0.0);
     for (i = 0; i < n_points; i++) {
         gdouble e = *(const gdouble*)((const gchar*)(points + i) + offset);
 
-        cairo_line_to(cr, to_x(axes, points[i].n), to_y(axes, e));
+        /* No measurement at this N: a gap in the curve. */
+        if (!isfinite(e))
+            cairo_new_sub_path(cr);
+        else
+            cairo_line_to(cr, to_x(axes, points[i].n), to_y(axes, e));
     }
     cairo_stroke(cr);
     for (i = 0; i < n_points; i++) {
         gdouble e = *(const gdouble*)((const gchar*)(points + i) + offset);
 
+        if (!isfinite(e))
+            continue;
+        cairo_new_sub_path(cr);
         cairo_arc(cr, to_x(axes, points[i].n), to_y(axes, e), 3.0, 0, 2*G_PI);
         cairo_fill(cr);
     }
+    cairo_set_dash(cr, dash, dashed ? 2 : 0, 0.0);
+    cairo_set_source_rgb(cr, r, g, b);
     cairo_move_to(cr, lx, ly);
     cairo_line_to(cr, lx + 30, ly);
     cairo_stroke(cr);
@@ -139,7 +150,8 @@ sweep_plot_write_png(const SweepPoint *points, gint n_points,
         axes.ymax = fmax(axes.ymax, fmax(points[i].before.rms_px,
                                          points[i].after.max_px));
     }
-    axes.ymax = (axes.ymax > 0.0) ? 1.1*axes.ymax : 1.0;
+    /* Headroom for the legend above the curves. */
+    axes.ymax = (axes.ymax > 0.0) ? 1.3*axes.ymax : 1.0;
     cairo_set_source_rgb(axes.cr, 1, 1, 1);
     cairo_paint(axes.cr);
     draw_axes(&axes, points, n_points);
