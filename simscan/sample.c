@@ -18,6 +18,7 @@ enum {
     SUBSTRATE_MIN_NODES = 16,
     PARTICLE_GRID_MAX_CELLS = 1024,
     PLACEMENT_TRIES_PER_PARTICLE = 200,
+    PLACEMENT_MAX_FAILURES_IN_ROW = 20000,
 };
 
 /* Buckets of particles by position, as linked lists, so a height needs only
@@ -278,14 +279,15 @@ placement_is_free(const SimSample *sample, gdouble x, gdouble y, gdouble r,
 }
 
 /* Random sequential addition: candidates uniform over the field (one radius
- * from its edges), refused when too close to a placed particle. */
+ * from its edges), refused when too close to a placed particle.  A long run
+ * of refusals means the field is full (jammed) for this spacing. */
 static void
 place_particles(SimSample *sample, const SimParticleParams *params,
                 gint wanted, SimRandom *rng)
 {
     gdouble max_r = params->radius*(1.0 + 4.0*MAX(params->radius_spread, 0.0));
     gdouble x, y, r;
-    gint tries, n = 0;
+    gint tries, n = 0, failures = 0;
 
     particle_grid_init(&sample->grid, params->xreal, params->yreal,
                        MAX(params->min_spacing, 2.0*max_r), wanted);
@@ -293,13 +295,18 @@ place_particles(SimSample *sample, const SimParticleParams *params,
     sample->py = g_new(gdouble, MAX(wanted, 1));
     sample->pr = g_new(gdouble, MAX(wanted, 1));
     sample->pz = g_new(gdouble, MAX(wanted, 1));
-    for (tries = wanted*PLACEMENT_TRIES_PER_PARTICLE; tries > 0 && n < wanted;
-         tries--) {
+    for (tries = 0;
+         n < wanted && failures < PLACEMENT_MAX_FAILURES_IN_ROW
+         && tries/PLACEMENT_TRIES_PER_PARTICLE < wanted;
+         tries++) {
         r = draw_radius(params, rng);
         x = r + (params->xreal - 2.0*r)*sim_random_uniform(rng);
         y = r + (params->yreal - 2.0*r)*sim_random_uniform(rng);
-        if (!placement_is_free(sample, x, y, r, params->min_spacing))
+        if (!placement_is_free(sample, x, y, r, params->min_spacing)) {
+            failures++;
             continue;
+        }
+        failures = 0;
         sample->px[n] = x;
         sample->py[n] = y;
         sample->pr[n] = r;

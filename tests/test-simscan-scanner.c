@@ -218,11 +218,12 @@ check_velocity_centroid(ScanDirection direction, guint32 seed)
     gint attempt;
 
     drift_model_init(&drift, DRIFT_MODEL_NONE);
-    drift.p0[0] = g_rand_double_range(rng, -20e-9, 20e-9);
-    drift.p0[1] = g_rand_double_range(rng, -20e-9, 20e-9);
-    /* Up to 0.4 nm/s: some 90 nm (18 px) over the 234 s frame. */
+    /* Up to 0.4 nm/s: some 90 nm (18 px) over the 234 s frame; p0 of the
+     * same sign, at least 6 nm, so the particle surely moves. */
     drift.v[0] = g_rand_double_range(rng, -0.4e-9, 0.4e-9);
     drift.v[1] = g_rand_double_range(rng, -0.4e-9, 0.4e-9);
+    drift.p0[0] = copysign(g_rand_double_range(rng, 6e-9, 20e-9), drift.v[0]);
+    drift.p0[1] = copysign(g_rand_double_range(rng, 6e-9, 20e-9), drift.v[1]);
     /* A particle the drift keeps well inside the frame. */
     for (attempt = 0; attempt < 50; attempt++) {
         sim_sample_free(sample);
@@ -521,7 +522,7 @@ START_TEST(test_particle_geometry)
     }
     sim_sample_free(sample);
 
-    /* Too many for the spacing: fewer are placed, none overlap. */
+    /* Too many for the spacing (at most some 800 fit): fewer are placed. */
     pp.count = 100000;
     sample = sim_sample_new_particles(&pp, test_seed + 61);
     ck_assert_int_gt(sim_sample_n_particles(sample), 100);
