@@ -8,6 +8,7 @@
 #include <locale.h>
 #include "simscan-generate.h"
 #include "n-sweep.h"
+#include "simscan-compare.h"
 #include "simscan-i18n.h"
 
 int
@@ -20,5 +21,7 @@ main(int argc, char **argv)
     /* A subcommand is the first argument; without one, simulate. */
     if (argc > 1 && strcmp(argv[1], "sweep") == 0)
         return simscan_sweep_main(argc - 1, argv + 1);
+    if (argc > 1 && strcmp(argv[1], "compare") == 0)
+        return simscan_compare_main(argc - 1, argv + 1);
     return simscan_generate_main(argc, argv);
 }

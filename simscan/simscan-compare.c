@@ -1,0 +1,216 @@
+/*
+ *  `simscan compare`: errors of a compensated simulator file.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <stdlib.h>
+#include <stdio.h>
+#include <string.h>
+#include <math.h>
+#include <libgwymodule/gwymodule-file.h>
+#include <app/gwyapp.h>
+#include "particle-detect.h"
+#include "centre-error.h"
+#include "simscan-output.h"
+#include "simscan-report.h"
+#include "channel-png.h"
+#include "simscan-compare.h"
+#include "simscan-i18n.h"
+
+/* The compensated channel's title ends so (interfaces.md section 2). */
+#define COMPENSATED_SUFFIX " (local-scan compensated)"
+#define MAX_CHANNEL_ID 4096
+/* Particles this close to the border are left out, px. */
+#define BORDER_MARGIN 4.0
+
+typedef struct {
+    gchar *before_png, *after_png, *truth_png;
+    gchar **inputs;
+} CompareOptions;
+
+static GwyDataField*
+channel(GwyContainer *data, gint id)
+{
+    GwyDataField *field = NULL;
+    gchar key[32];
+
+    g_snprintf(key, sizeof(key), "/%d/data", id);
+    gwy_container_gis_object_by_name(data, key, &field);
+    return field;
+}
+
+static gint
+find_compensated(GwyContainer *data)
+{
+    const guchar *title;
+    gchar key[40];
+    gint id;
+
+    for (id = 0; id <= MAX_CHANNEL_ID; id++) {
+        g_snprintf(key, sizeof(key), "/%d/data/title", id);
+        if (channel(data, id)
+            && gwy_container_gis_string_by_name(data, key, &title)
+            && g_str_has_suffix((const gchar*)title, COMPENSATED_SUFFIX))
+            return id;
+    }
+    return -1;
+}
+
+/* The simulator's particle list: true and shown positions, px. */
+static gint
+read_particles(GwyContainer *data, gdouble **truth, gdouble **shown)
+{
+    const guchar *text;
+    gchar **lines;
+    gint n = 0, i;
+
+    if (!gwy_container_gis_string_by_name(data, SIMSCAN_PARTICLES_KEY, &text))
+        return 0;
+    lines = g_strsplit((const gchar*)text, "\n", -1);
+    *truth = g_new(gdouble, 2*g_strv_length(lines));
+    *shown = g_new(gdouble, 2*g_strv_length(lines));
+    for (i = 1; lines[i]; i++) {
+        gchar **f = g_strsplit(lines[i], ",", -1);
+
+        if (g_strv_length(f) == 4) {
+            (*truth)[2*n] = g_ascii_strtod(f[0], NULL);
+            (*truth)[2*n + 1] = g_ascii_strtod(f[1], NULL);
+            (*shown)[2*n] = g_ascii_strtod(f[2], NULL);
+            (*shown)[2*n + 1] = g_ascii_strtod(f[3], NULL);
+            n++;
+        }
+        g_strfreev(f);
+    }
+    g_strfreev(lines);
+    return n;
+}
+
+/* Half the closest distance between two particles: beyond it a match could
+ * be the neighbour. */
+static gdouble
+match_radius(const gdouble *truth, gint n)
+{
+    gdouble best = G_MAXDOUBLE;
+    gint i, k;
+
+    for (i = 0; i < n; i++)
+        for (k = i+1; k < n; k++)
+            best = fmin(best, hypot(truth[2*i] - truth[2*k],
+                                    truth[2*i+1] - truth[2*k+1]));
+    return (best < G_MAXDOUBLE) ? 0.5*best : 4.0;
+}
+
+static void
+measure(GwyDataField *field, const gdouble *search, const gdouble *truth,
+        gint n, gdouble radius, CentreError *error)
+{
+    ParticleDetectParams params;
+    GArray *found;
+
+    particle_detect_params_init(&params);
+    found = particle_detect(field, &params, NULL, NULL);
+    centre_error_measure(found, search, truth, n,
+                         gwy_data_field_get_xres(field),
+                         gwy_data_field_get_yres(field),
+                         BORDER_MARGIN, radius,
+                         gwy_data_field_get_dx(field),
+                         gwy_data_field_get_dy(field), error);
+    g_array_free(found, TRUE);
+}
+
+static gboolean
+write_pngs(GwyContainer *data, gint comp_id, const CompareOptions *options,
+           GError **error)
+{
+    return ((!options->before_png
+             || channel_png_write(channel(data, 0), options->before_png, error))
+            && (!options->after_png
+                || channel_png_write(channel(data, comp_id),
+                                     options->after_png, error))
+            && (!options->truth_png || !channel(data, 1)
+                || channel_png_write(channel(data, 1), options->truth_png,
+                                     error)));
+}
+
+static gboolean
+compare_file(const gchar *filename, const CompareOptions *options,
+             GError **error)
+{
+    GwyContainer *data;
+    gdouble *truth = NULL, *shown = NULL, radius;
+    CentreError before, after;
+    gint n, comp_id;
+    gboolean ok = FALSE;
+
+    gwy_app_init_nongui("enable-threads", FALSE, NULL);
+    if (!(data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, error)))
+        return FALSE;
+    comp_id = find_compensated(data);
+    n = read_particles(data, &truth, &shown);
+    if (comp_id < 0 || !channel(data, 0))
+        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL,
+                    _("%s has no channel titled ...%s"), filename,
+                    COMPENSATED_SUFFIX);
+    else if (!n)
+        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL,
+                    _("%s holds no simulated particle list (%s)"), filename,
+                    SIMSCAN_PARTICLES_KEY);
+    else
+        ok = write_pngs(data, comp_id, options, error);
+    if (ok) {
+        radius = match_radius(truth, n);
+        measure(channel(data, 0), shown, truth, n, radius, &before);
+        measure(channel(data, comp_id), truth, truth, n, radius, &after);
+        printf(_("%s: particle centres against their true places\n"),
+               filename);
+        simscan_report_centre_error(stdout, _("before"), &before);
+        simscan_report_centre_error(stdout, _("after"), &after);
+    }
+    g_free(truth);
+    g_free(shown);
+    g_object_unref(data);
+    return ok;
+}
+
+int
+simscan_compare_main(int argc, char **argv)
+{
+    CompareOptions options = { NULL, NULL, NULL, NULL };
+    GOptionEntry entries[] = {
+        { "before-png", 0, 0, G_OPTION_ARG_FILENAME, &options.before_png,
+          N_("draw the contaminated channel"), "OUT.png" },
+        { "after-png", 0, 0, G_OPTION_ARG_FILENAME, &options.after_png,
+          N_("draw the compensated channel"), "OUT.png" },
+        { "truth-png", 0, 0, G_OPTION_ARG_FILENAME, &options.truth_png,
+          N_("draw the drift-free truth"), "OUT.png" },
+        { G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY,
+          &options.inputs, NULL, "FILE.gwy" },
+        { NULL, 0, 0, 0, NULL, NULL, NULL },
+    };
+    GOptionContext *context;
+    GError *error = NULL;
+    gboolean ok;
+
+    context = g_option_context_new(_("FILE.gwy - errors of a compensated "
+                                     "simscan file"));
+    g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
+    g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
+    ok = g_option_context_parse(context, &argc, &argv, &error);
+    if (ok && (!options.inputs || g_strv_length(options.inputs) != 1)) {
+        g_set_error(&error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                    _("expected one input file"));
+        ok = FALSE;
+    }
+    ok = ok && compare_file(options.inputs[0], &options, &error);
+    if (!ok) {
+        fprintf(stderr, "simscan compare: %s\n", error->message);
+        g_error_free(error);
+    }
+    g_option_context_free(context);
+    g_strfreev(options.inputs);
+    g_free(options.before_png);
+    g_free(options.after_png);
+    g_free(options.truth_png);
+    return ok ? EXIT_SUCCESS : EXIT_FAILURE;
+}
