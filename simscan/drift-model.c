@@ -9,6 +9,9 @@
 #include "drift-model.h"
 #include "sim-random.h"
 
+/* 4M nodes, 64 MB of path; a finer walk_dt over a long time is coarsened. */
+#define RANDOM_WALK_MAX_NODES 4194304
+
 static const gchar *const drift_model_names[DRIFT_MODEL_NTYPES] = {
     "none", "settling", "oscillation", "jump", "random-walk",
 };
@@ -54,6 +57,12 @@ drift_model_prepare(DriftModel *model, gdouble t_end)
     g_return_if_fail(model->walk_dt > 0.0);
     drift_model_clear(model);
     t_end = MAX(t_end, 0.0);
+    if (t_end/model->walk_dt > RANDOM_WALK_MAX_NODES - 2) {
+        g_warning("simscan: random walk step %g s over %g s needs too many "
+                  "nodes; using %g s", model->walk_dt, t_end,
+                  t_end/(RANDOM_WALK_MAX_NODES - 2));
+        model->walk_dt = t_end/(RANDOM_WALK_MAX_NODES - 2);
+    }
     n = (gint)ceil(t_end/model->walk_dt) + 2;
     model->walk_n = n;
     model->walk_t_end = t_end;

@@ -56,7 +56,9 @@ void          drift_model_copy       (DriftModel *dest, const DriftModel *src);
  * step of walk_dt, taking independent N(0, walk_sigma^2 walk_dt) increments
  * per axis, so p is its exact integral (piecewise linear).  Before t = 0 the
  * walk part is 0; after t_end it continues with its last velocity.  Without
- * a path (not prepared) the walk part is 0.  Others: no-op. */
+ * a path (not prepared) the walk part is 0.  The path holds at most 4M
+ * nodes: a walk_dt finer than t_end/4e6 is coarsened to that (g_warning;
+ * the diffusion walk_sigma keeps its meaning).  Others: no-op. */
 void          drift_model_prepare    (DriftModel *model, gdouble t_end);
 void          drift_model_clear      (DriftModel *model);
 void          drift_model_eval       (const DriftModel *model, gdouble t,
