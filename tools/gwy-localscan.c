@@ -1,0 +1,393 @@
+/*
+ *  gwy-localscan: batch local-scan drift compensation from the command line
+ *  (shared/spec/interfaces.md section 2).
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <locale.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <glib/gstdio.h>
+#include <libgwyddion/gwymacros.h>
+#include <libprocess/datafield.h>
+#include <app/gwyapp.h>
+#include "drift-table.h"
+#include "headless-run.h"
+#include "localscan-settings.h"
+
+#undef _
+#define _(s) dgettext(GETTEXT_PACKAGE, s)
+
+#define PROGRAM_NAME "gwy-localscan"
+
+/* No -c given: the channel with the lowest id. */
+#define CHANNEL_FIRST G_MININT
+
+enum {
+    EXIT_OK    = 0,
+    EXIT_ERROR = 1,   /* bad input, table, module or output */
+    EXIT_USAGE = 2,   /* bad command line */
+};
+
+typedef struct {
+    gchar *output;
+    gchar *table_file;
+    gint channel;
+    gchar *mode_name;
+    gchar *write_drift;
+    gboolean show_version;
+    gchar **inputs;
+    /* Reference registration (interfaces.md section 2, "later options")
+     * adds its fields here, e.g. gchar *reference; gint stripes; */
+} Options;
+
+static Options options = {
+    .channel = CHANNEL_FIRST,
+};
+
+/* Every option gwy-localscan knows; --help is generated from this table.
+ * A new option is one entry here plus its handling in run_batch() (drift
+ * sources: obtain_drift_table()). */
+static const GOptionEntry option_table[] = {
+    { "output", 'o', 0, G_OPTION_ARG_FILENAME, &options.output,
+      N_("Write the result to OUT.gwy (required)"), N_("OUT.gwy") },
+    { "drift", 'd', 0, G_OPTION_ARG_FILENAME, &options.table_file,
+      N_("Read the drift table from TABLE.csv instead of the one stored "
+         "with the channel"), N_("TABLE.csv") },
+    { "channel", 'c', 0, G_OPTION_ARG_INT, &options.channel,
+      N_("Compensate channel ID (default: the first channel)"), N_("ID") },
+    { "mode", 'm', 0, G_OPTION_ARG_STRING, &options.mode_name,
+      N_("Compensation mode: paper (default) or continuous"),
+      N_("paper|continuous") },
+    { "write-drift", 0, 0, G_OPTION_ARG_FILENAME, &options.write_drift,
+      N_("Also write the drift table used to TABLE.csv"), N_("TABLE.csv") },
+    { "version", 0, 0, G_OPTION_ARG_NONE, &options.show_version,
+      N_("Print the version and exit"), NULL },
+    { G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &options.inputs,
+      NULL, N_("INPUT") },
+    { NULL, 0, 0, 0, NULL, NULL, NULL },
+};
+
+/* The modes of -m; whole_pixels is what the module's validation of the
+ * table requires in that mode. */
+typedef struct {
+    const gchar *name;
+    LocalscanMode value;
+    gboolean whole_pixels;
+} CompensationMode;
+
+static const CompensationMode compensation_modes[] = {
+    { "paper",      LOCALSCAN_MODE_PAPER,      TRUE,  },
+    { "continuous", LOCALSCAN_MODE_CONTINUOUS, FALSE, },
+};
+
+/* Messages must stay one line, whatever a library put into them. */
+static void
+print_error(const gchar *message)
+{
+    gchar *line = g_strstrip(g_strdup(message));
+    gchar *p;
+
+    for (p = line; *p; p++) {
+        if (*p == '\n' || *p == '\r')
+            *p = ' ';
+    }
+    fprintf(stderr, "%s: %s\n", PROGRAM_NAME, line);
+    g_free(line);
+}
+
+static void
+free_options(void)
+{
+    g_free(options.output);
+    g_free(options.table_file);
+    g_free(options.mode_name);
+    g_free(options.write_drift);
+    g_strfreev(options.inputs);
+}
+
+static gboolean
+parse_options(gint *argc, gchar ***argv, GError **error)
+{
+    GOptionContext *context;
+    gboolean ok;
+
+    context = g_option_context_new(NULL);
+    g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
+    g_option_context_set_summary(context,
+        _("Removes thermal drift from an AFM image by the local-scan method:\n"
+          "every stripe of the image is moved back by its measured drift.\n"
+          "INPUT is any file Gwyddion can read; INPUT is never modified."));
+    g_option_context_set_description(context,
+        _("Exit status: 0 on success, 1 on any error, 2 on a bad command "
+          "line.\nOn error nothing is written."));
+    g_option_context_add_main_entries(context, option_table, GETTEXT_PACKAGE);
+    ok = g_option_context_parse(context, argc, argv, error);
+    g_option_context_free(context);
+    return ok;
+}
+
+static const CompensationMode*
+find_mode(const gchar *name, GError **error)
+{
+    guint i;
+
+    if (!name)
+        return compensation_modes;
+    for (i = 0; i < G_N_ELEMENTS(compensation_modes); i++) {
+        if (gwy_strequal(name, compensation_modes[i].name))
+            return compensation_modes + i;
+    }
+    g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                _("unknown mode '%s' (known: paper, continuous)"), name);
+    return NULL;
+}
+
+static gboolean
+is_same_file(const gchar *a, const gchar *b)
+{
+    GStatBuf sa, sb;
+
+    if (g_stat(a, &sa) != 0 || g_stat(b, &sb) != 0)
+        return FALSE;
+    return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+static const CompensationMode*
+check_command_line(GError **error)
+{
+    guint ninputs = options.inputs ? g_strv_length(options.inputs) : 0;
+
+    if (!options.output) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                    _("no output file: give -o OUT.gwy"));
+        return NULL;
+    }
+    if (ninputs != 1) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                    ninputs
+                    ? _("exactly one INPUT file is needed, %u were given")
+                    : _("no INPUT file given"), ninputs);
+        return NULL;
+    }
+    if (is_same_file(options.inputs[0], options.output)) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                    _("refusing to overwrite the input file %s"),
+                    options.inputs[0]);
+        return NULL;
+    }
+    return find_mode(options.mode_name, error);
+}
+
+static gchar*
+format_channel_list(const gint *ids)
+{
+    GString *str = g_string_new(NULL);
+    guint i;
+
+    for (i = 0; ids[i] != -1; i++)
+        g_string_append_printf(str, i ? ", %d" : "%d", ids[i]);
+    return g_string_free(str, FALSE);
+}
+
+static gint
+pick_channel(GwyContainer *data, const gchar *filename, gint wanted,
+             GError **error)
+{
+    gint *ids = headless_run_channel_ids(data);
+    gchar *list;
+    gint id = -1;
+
+    if (ids[0] == -1) {
+        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
+                    _("%s contains no image channel"), filename);
+    }
+    else if (wanted == CHANNEL_FIRST)
+        id = ids[0];
+    else if (headless_run_has_channel(data, wanted))
+        id = wanted;
+    else {
+        list = format_channel_list(ids);
+        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
+                    _("%s has no channel %d (its channels: %s)"),
+                    filename, wanted, list);
+        g_free(list);
+    }
+    g_free(ids);
+    return id;
+}
+
+static gchar*
+stored_table_key(gint id)
+{
+    return g_strdup_printf(DRIFT_TABLE_KEY_FORMAT, id);
+}
+
+static DriftTable*
+load_stored_table(GwyContainer *data, const gchar *filename, gint id,
+                  GError **error)
+{
+    const guchar *text = NULL;
+    gchar *key = stored_table_key(id), *source;
+    DriftTable *table = NULL;
+
+    if (!gwy_container_gis_string_by_name(data, key, &text)) {
+        g_set_error(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_IO,
+                    _("%s: channel %d has no stored drift table (%s); "
+                      "give one with -d TABLE.csv"), filename, id, key);
+    }
+    else {
+        /* Messages then read "in.gwy:/0/localscan/drift-table:LINE: ...". */
+        source = g_strconcat(filename, ":", key, NULL);
+        table = drift_table_parse((const gchar*)text, -1, source, error);
+        g_free(source);
+    }
+    g_free(key);
+    return table;
+}
+
+/* Where the drift comes from: -d, else the table stored with the channel.
+ * Reference registration (--reference) becomes a third source here. */
+static DriftTable*
+obtain_drift_table(GwyContainer *data, const gchar *filename, gint id,
+                   GError **error)
+{
+    if (options.table_file)
+        return drift_table_load(options.table_file, error);
+    return load_stored_table(data, filename, id, error);
+}
+
+/* The same checks the module makes, so that every problem is reported here
+ * with file and line instead of as a silent no-op of the module. */
+static gboolean
+check_table_fits(const DriftTable *table, GwyDataField *field,
+                 const CompensationMode *mode, GError **error)
+{
+    gdouble *dx = g_new(gdouble, table->n_stripes);
+    gdouble *dy = g_new(gdouble, table->n_stripes);
+    gboolean ok;
+
+    ok = localscan_table_to_field_pixels(table, field, mode->whole_pixels,
+                                         dx, dy, error);
+    g_free(dx);
+    g_free(dy);
+    return ok;
+}
+
+/* A compensated channel without a mask is correct when no pixel was
+ * filled, so only the channel itself is required. */
+static gboolean
+compensate_channel(GwyContainer *data, gint id, const CompensationMode *mode,
+                   GError **error)
+{
+    LocalscanBatchParams params;
+
+    params.source = (options.table_file
+                     ? LOCALSCAN_SOURCE_FILE : LOCALSCAN_SOURCE_STORED);
+    params.table_file = options.table_file;
+    params.mode = mode->value;
+    localscan_settings_apply(&params);
+    return headless_run_process(data, id, LOCALSCAN_FUNCTION_NAME, error) >= 0;
+}
+
+static gboolean
+save_results(GwyContainer *data, const DriftTable *table, GError **error)
+{
+    if (!headless_run_save_gwy(data, options.output, error))
+        return FALSE;
+    if (options.write_drift && !drift_table_save(table, options.write_drift,
+                                                 error)) {
+        g_unlink(options.output);
+        return FALSE;
+    }
+    return TRUE;
+}
+
+static gboolean
+run_batch(const CompensationMode *mode, GError **error)
+{
+    const gchar *input = options.inputs[0];
+    GwyContainer *data;
+    DriftTable *table = NULL;
+    GwyDataField *field;
+    gboolean ok = FALSE;
+    gint id;
+
+    if (!(data = headless_run_load(input, error)))
+        return FALSE;
+    if ((id = pick_channel(data, input, options.channel, error)) < 0)
+        goto end;
+    if (!(table = obtain_drift_table(data, input, id, error)))
+        goto end;
+    field = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
+    if (!check_table_fits(table, field, mode, error))
+        goto end;
+
+    ok = (compensate_channel(data, id, mode, error)
+          && save_results(data, table, error));
+
+end:
+    if (table)
+        drift_table_free(table);
+    g_object_unref(data);
+    return ok;
+}
+
+static gboolean
+load_module(GError **error)
+{
+    const gchar *module_file = g_getenv("LOCALSCAN_MODULE");
+
+    if (module_file && !*module_file)
+        module_file = NULL;
+    return (headless_run_init(module_file, error)
+            && headless_run_require_function(LOCALSCAN_FUNCTION_NAME,
+                                             GWY_LOCALSCAN_MODULE_DIR,
+                                             error));
+}
+
+static void
+init_i18n(void)
+{
+    const gchar *localedir = g_getenv("LOCALSCAN_LOCALEDIR");
+
+    setlocale(LC_ALL, "");
+    bindtextdomain(GETTEXT_PACKAGE,
+                   localedir && *localedir ? localedir : LOCALEDIR);
+    bind_textdomain_codeset(GETTEXT_PACKAGE, "UTF-8");
+}
+
+int
+main(int argc, char *argv[])
+{
+    const CompensationMode *mode;
+    GError *error = NULL;
+    gint status = EXIT_OK;
+
+    init_i18n();
+    if (!parse_options(&argc, &argv, &error)) {
+        status = EXIT_USAGE;
+        goto end;
+    }
+    if (options.show_version) {
+        printf("%s %s\n", PROGRAM_NAME, PACKAGE_VERSION);
+        goto end;
+    }
+    if (!(mode = check_command_line(&error))) {
+        status = EXIT_USAGE;
+        goto end;
+    }
+    if (!load_module(&error) || !run_batch(mode, &error))
+        status = EXIT_ERROR;
+    gwy_app_settings_free();
+
+end:
+    if (error) {
+        print_error(error->message);
+        g_error_free(error);
+    }
+    free_options();
+    return status;
+}

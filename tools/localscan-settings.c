@@ -1,0 +1,31 @@
+/*
+ *  The localscan_drift process function as batch callers see it: its name
+ *  and the parameters it reads from Gwyddion's settings.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <app/gwyapp.h>
+#include "localscan-settings.h"
+
+#define SETTINGS_PREFIX "/module/" LOCALSCAN_FUNCTION_NAME "/"
+
+/* GwyParams keeps enums and ints as int32, booleans as booleans. */
+void
+localscan_settings_apply(const LocalscanBatchParams *params)
+{
+    GwyContainer *settings = gwy_app_settings_get();
+    gchar *table_file;
+
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "source", params->source);
+    if (params->source == LOCALSCAN_SOURCE_FILE) {
+        /* Absolute, so it means the same file whatever the module's cwd. */
+        table_file = g_canonicalize_filename(params->table_file, NULL);
+        gwy_container_set_string_by_name(settings, SETTINGS_PREFIX "table-file",
+                                         (const guchar*)table_file);
+    }
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "mode", params->mode);
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "fill", LOCALSCAN_FILL_MEAN);
+    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "add-mask", TRUE);
+    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "plot-drift", FALSE);
+}
