@@ -153,8 +153,10 @@ particle_choose_for_stripes(const GArray *particles, gint n, gint xres,
         if (p->on_edge || row < 0 || row >= yres)
             continue;
         s = stripe_of_row(row, n, yres);
-        is_inside = (p->row_min >= stripe_first_row(s, n, yres)
-                     && p->row_max < stripe_end_row(s, n, yres));
+        /* Clear of the boundary rows: a grain touching them may be the
+         * part of a particle that the stripe boundary cut off. */
+        is_inside = (p->row_min > stripe_first_row(s, n, yres)
+                     && p->row_max < stripe_end_row(s, n, yres) - 1);
         if (inside[s] && !is_inside)
             continue;
         ex = p->x - 0.5*(xres - 1);

@@ -48,8 +48,8 @@ GArray*     particle_detect              (GwyDataField *field,
 /* The paper's choice: for each of the n stripes, the index of the particle
  * (not touching the border) whose centre row lies in the stripe and whose
  * centre is closest to the stripe centre ((xres-1)/2, (first+last)/2); -1 for
- * a stripe without one.  Particles lying wholly inside the stripe's rows go
- * first: one cut by a stripe boundary may be a sheared fragment whose centre
+ * a stripe without one.  Particles clear of the stripe's first and last rows
+ * go first: one cut by a stripe boundary may be a sheared fragment whose centre
  * is off by a pixel when the stripes' drifts differ.  chosen gets n values. */
 void        particle_choose_for_stripes  (const GArray *particles,
                                           gint n,

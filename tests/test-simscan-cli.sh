@@ -1,0 +1,115 @@
+#!/bin/sh
+# Tests of the simscan command line: same seed, same bytes; the drift table
+# travels inside the .gwy; every bad option exits non-zero with one line and
+# leaves no output; --help lists every option.
+# Copyright (C) 2026 The gwy-localscan authors.
+# SPDX-License-Identifier: GPL-2.0-or-later
+set -u
+simscan=${SIMSCAN:-./simscan/simscan}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+failures=0
+checks=0
+
+fail() {
+    echo "FAIL: $*"
+    failures=$((failures + 1))
+}
+
+check() {
+    checks=$((checks + 1))
+}
+
+seed=${LOCALSCAN_TEST_SEED:-$(od -An -N4 -tu4 /dev/urandom | tr -d ' ')}
+echo "test-simscan-cli: seed $seed (LOCALSCAN_TEST_SEED overrides)"
+small="--xres 128 --yres 128 --size 2.5 --stripes 8 --noise 0.2 --seed $seed"
+
+# Same seed, same bytes; another seed, other bytes.
+for run in a b; do
+    "$simscan" $small -q -o "$tmp/$run.gwy" --table "$tmp/$run.csv" \
+        --json "$tmp/$run.json" || fail "run $run exited with $?"
+done
+check
+for ext in gwy csv json; do
+    cmp -s "$tmp/a.$ext" "$tmp/b.$ext" || fail "same seed, different .$ext"
+done
+check
+"$simscan" $small --seed $((seed ^ 1)) -q -o "$tmp/c.gwy" || fail "seed ^ 1 run"
+cmp -s "$tmp/a.gwy" "$tmp/c.gwy" && fail "another seed gave the same .gwy"
+
+# The .gwy is Gwyddion's format and carries the table simscan wrote.
+check
+[ "$(head -c 4 "$tmp/a.gwy")" = "GWYP" ] || fail ".gwy lacks the GWYP magic"
+check
+grep -q "/0/localscan/drift-table" "$tmp/a.gwy" || fail "no stored drift table"
+check
+grep -qF "$(sed -n 2p "$tmp/a.csv")" "$tmp/a.gwy" \
+    || fail "the stored table differs from the CSV"
+check
+head -n 1 "$tmp/a.csv" | grep -q '^stripe,dx,dy,dx_exact,dy_exact,t_image,t_local,x,y,lines$' \
+    || fail "CSV header: $(head -n 1 "$tmp/a.csv")"
+check
+[ "$(grep -c '^[0-9]' "$tmp/a.csv")" -eq 8 ] || fail "CSV has not 8 stripes"
+
+# Bad options: non-zero, exactly one line on stderr, nothing written.
+bad_case() {
+    rm -f "$tmp"/e.* "$tmp"/.e.*
+    "$simscan" "$@" -o "$tmp/e.gwy" --table "$tmp/e.csv" \
+        --json "$tmp/e.json" >"$tmp/out" 2>"$tmp/err"
+    status=$?
+    check
+    [ $status -ne 0 ] || fail "$* exited 0"
+    [ "$(wc -l <"$tmp/err")" -eq 1 ] || fail "$*: stderr is not one line: $(cat "$tmp/err")"
+    if ls -A "$tmp" | grep -q '^\.\{0,1\}e\.'; then
+        fail "$* left output: $(ls -A "$tmp")"
+    fi
+}
+bad_case --stripes 0
+bad_case --stripes 300
+bad_case --bogus
+bad_case --drift wobble
+bad_case --velocity 1
+bad_case --velocity 1,nan
+bad_case --seed -1
+bad_case --xres 4
+bad_case --preset nope
+bad_case --size 0
+bad_case --direction sideways
+bad_case --ls-threshold 1.5
+bad_case --radius abc
+bad_case --sample "$tmp/missing.gwy"
+bad_case unexpected-argument
+
+# One output unwritable: none of the others is left behind.
+rm -f "$tmp"/e.*
+"$simscan" $small -q -o "$tmp/e.gwy" --table "$tmp/no/such/dir/e.csv" \
+    2>"$tmp/err"
+status=$?
+check
+[ $status -ne 0 ] || fail "an unwritable table exited 0"
+if ls -A "$tmp" | grep -q 'e\.gwy'; then
+    fail "unwritable table left the .gwy: $(ls -A "$tmp")"
+fi
+
+# --help lists every option.
+"$simscan" --help >"$tmp/help" || fail "--help exited non-zero"
+for opt in preset sample radius radius-spread count density spacing \
+        roughness correlation xres yres size line-time direction noise \
+        tip-radius drift velocity offset settle-velocity tau amplitude \
+        period phase jump-time jump-step walk-sigma walk-dt stripes \
+        ls-points ls-speed ls-rmax ls-overhead ls-delay ls-threshold seed \
+        output table json quiet; do
+    check
+    grep -q -- "--$opt" "$tmp/help" || fail "--help does not list --$opt"
+done
+
+# The sweep runs and plots.
+"$simscan" sweep $small --n-list 1,4 --plot "$tmp/s.png" >"$tmp/sweep" \
+    || fail "sweep exited non-zero"
+check
+[ "$(head -c 4 "$tmp/s.png" | tail -c 3)" = "PNG" ] || fail "sweep plot is not a PNG"
+check
+[ "$(grep -c '^ *[14] ' "$tmp/sweep")" -eq 2 ] || fail "sweep table: $(cat "$tmp/sweep")"
+
+echo "test-simscan-cli: $checks checks, $failures failures"
+[ $failures -eq 0 ]
