@@ -1,0 +1,1151 @@
+/*
+ *  End-to-end tests of the gwy-localscan command: the built program is run
+ *  on .gwy files written here, and its output is compared bit for bit with
+ *  paper_compensate() called directly.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <check.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <glib/gstdio.h>
+#include <libgwyddion/gwymacros.h>
+#include <libprocess/datafield.h>
+#include <libprocess/stats.h>
+#include <libprocess/brick.h>
+#include <libgwymodule/gwymodule-file.h>
+#include <app/gwyapp.h>
+#include "drift-table.h"
+#include "paper-compensate.h"
+
+#define TOOL_PATH TEST_BUILDDIR "/tools/gwy-localscan"
+#define DEFAULT_MODULE TEST_BUILDDIR "/modules/.libs/localscan.so"
+#define TITLE_SUFFIX " (local-scan compensated)"
+#define N_RANDOM_CASES 24
+
+static guint32 seed;
+static gchar *scratch;      /* per test: in/, out/, home/ */
+static gchar *in_dir;
+static gchar *out_dir;
+static gchar *child_home;
+
+typedef struct {
+    gint status;            /* exit status; -1 when not a normal exit */
+    gchar *out;
+    gchar *err;
+} ToolRun;
+
+/* What a test expects of one compensated channel. */
+typedef struct {
+    GwyDataField *source;
+    gint *dx;               /* per stripe, after the nearest-stripe rule */
+    gint *dy;
+    gint n;
+    gchar *title;
+    gchar *table_text;      /* the table the new channel must carry */
+} Expected;
+
+/************************************************************************
+ * Scratch folders and files
+ ************************************************************************/
+
+static void
+remove_tree(const gchar *path)
+{
+    const gchar *name;
+    gchar *child;
+    GDir *dir;
+
+    if ((dir = g_dir_open(path, 0, NULL))) {
+        while ((name = g_dir_read_name(dir))) {
+            child = g_build_filename(path, name, NULL);
+            remove_tree(child);
+            g_free(child);
+        }
+        g_dir_close(dir);
+        g_chmod(path, 0700);
+        g_rmdir(path);
+    }
+    else
+        g_unlink(path);
+}
+
+static void
+setup_scratch(void)
+{
+    scratch = g_dir_make_tmp("test-gwy-localscan-XXXXXX", NULL);
+    ck_assert_ptr_nonnull(scratch);
+    in_dir = g_build_filename(scratch, "in", NULL);
+    out_dir = g_build_filename(scratch, "out", NULL);
+    child_home = g_build_filename(scratch, "home", NULL);
+    g_mkdir(in_dir, 0700);
+    g_mkdir(out_dir, 0700);
+    g_mkdir(child_home, 0700);
+}
+
+static void
+teardown_scratch(void)
+{
+    remove_tree(scratch);
+    g_free(scratch);
+    g_free(in_dir);
+    g_free(out_dir);
+    g_free(child_home);
+}
+
+static gchar*
+in_path(const gchar *name)
+{
+    return g_build_filename(in_dir, name, NULL);
+}
+
+static gchar*
+out_path(const gchar *name)
+{
+    return g_build_filename(out_dir, name, NULL);
+}
+
+static void
+write_text(const gchar *filename, const gchar *text)
+{
+    ck_assert(g_file_set_contents(filename, text, -1, NULL));
+}
+
+static gchar*
+file_checksum(const gchar *filename)
+{
+    gchar *contents = NULL, *sum;
+    gsize length;
+
+    ck_assert_msg(g_file_get_contents(filename, &contents, &length, NULL),
+                  "cannot read %s", filename);
+    sum = g_compute_checksum_for_data(G_CHECKSUM_SHA256, (const guchar*)contents, length);
+    g_free(contents);
+    return sum;
+}
+
+static gint
+compare_names(gconstpointer a, gconstpointer b)
+{
+    return strcmp(*(const gchar *const*)a, *(const gchar *const*)b);
+}
+
+/* Names in a folder, sorted, joined with spaces ("" when empty). */
+static gchar*
+folder_listing(const gchar *path)
+{
+    GPtrArray *names = g_ptr_array_new_with_free_func(g_free);
+    const gchar *name;
+    gchar *joined;
+    GDir *dir;
+
+    dir = g_dir_open(path, 0, NULL);
+    ck_assert_ptr_nonnull(dir);
+    while ((name = g_dir_read_name(dir)))
+        g_ptr_array_add(names, g_strdup(name));
+    g_dir_close(dir);
+    g_ptr_array_sort(names, compare_names);
+    g_ptr_array_add(names, NULL);
+    joined = g_strjoinv(" ", (gchar**)names->pdata);
+    g_ptr_array_free(names, TRUE);
+    return joined;
+}
+
+/************************************************************************
+ * Running the tool
+ ************************************************************************/
+
+static void
+tool_run_clear(ToolRun *run)
+{
+    g_free(run->out);
+    g_free(run->err);
+}
+
+static void
+run_tool_env(ToolRun *run, const gchar *module, const gchar *const *args)
+{
+    GPtrArray *argv = g_ptr_array_new();
+    gchar **envp = g_get_environ();
+    GError *error = NULL;
+    gint wait_status = 0;
+    guint i;
+
+    g_ptr_array_add(argv, (gpointer)TOOL_PATH);
+    for (i = 0; args[i]; i++)
+        g_ptr_array_add(argv, (gpointer)args[i]);
+    g_ptr_array_add(argv, NULL);
+
+    /* A scratch HOME: neither an installed module nor the user's settings
+     * can interfere, and a settings file written by mistake would show. */
+    envp = g_environ_setenv(envp, "HOME", child_home, TRUE);
+    envp = g_environ_setenv(envp, "LC_ALL", "C", TRUE);
+    envp = g_environ_unsetenv(envp, "LANGUAGE");
+    if (module)
+        envp = g_environ_setenv(envp, "LOCALSCAN_MODULE", module, TRUE);
+    else
+        envp = g_environ_unsetenv(envp, "LOCALSCAN_MODULE");
+
+    ck_assert_msg(g_spawn_sync(NULL, (gchar**)argv->pdata, envp, G_SPAWN_DEFAULT,
+                               NULL, NULL, &run->out, &run->err, &wait_status, &error),
+                  "cannot run %s: %s", TOOL_PATH, error ? error->message : "?");
+    run->status = WIFEXITED(wait_status) ? WEXITSTATUS(wait_status) : -1;
+    g_ptr_array_free(argv, TRUE);
+    g_strfreev(envp);
+}
+
+static const gchar*
+module_path(void)
+{
+    const gchar *module = g_getenv("LOCALSCAN_MODULE");
+
+    return module && *module ? module : DEFAULT_MODULE;
+}
+
+static void
+run_tool(ToolRun *run, const gchar *const *args)
+{
+    run_tool_env(run, module_path(), args);
+}
+
+static void
+assert_success(const ToolRun *run)
+{
+    ck_assert_msg(run->status == 0, "gwy-localscan failed with status %d: %s",
+                  run->status, run->err);
+    ck_assert_str_eq(run->err, "");
+}
+
+/* Failure: the status, exactly the expected one line on stderr (a trailing
+ * "*" in expected matches any rest of the line), nothing in out/. */
+static void
+assert_failure(const ToolRun *run, gint status, const gchar *expected)
+{
+    gsize len = strlen(expected);
+    gchar *listing;
+
+    ck_assert_msg(run->status == status, "status %d, expected %d; stderr: %s",
+                  run->status, status, run->err);
+    ck_assert_msg(strchr(run->err, '\n') == run->err + strlen(run->err) - 1,
+                  "stderr is not exactly one line: <%s>", run->err);
+    if (len && expected[len-1] == '*')
+        ck_assert_msg(strncmp(run->err, expected, len-1) == 0,
+                      "stderr <%s> does not start with <%.*s>", run->err, (gint)len-1, expected);
+    else {
+        gchar *line = g_strconcat(expected, "\n", NULL);
+        ck_assert_str_eq(run->err, line);
+        g_free(line);
+    }
+    listing = folder_listing(out_dir);
+    ck_assert_msg(!*listing, "files left in the output folder: %s", listing);
+    g_free(listing);
+}
+
+/************************************************************************
+ * Building inputs
+ ************************************************************************/
+
+static GwyDataField*
+random_field(GRand *rng, gint xres, gint yres, gdouble dx, gdouble dy)
+{
+    GwyDataField *field = gwy_data_field_new(xres, yres, xres*dx, yres*dy, FALSE);
+    gdouble *d = gwy_data_field_get_data(field);
+    gint i;
+
+    for (i = 0; i < xres*yres; i++)
+        d[i] = g_rand_double_range(rng, -5e-9, 5e-9);
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(field), "m");
+    return field;
+}
+
+static gchar*
+table_key(gint id)
+{
+    return g_strdup_printf(DRIFT_TABLE_KEY_FORMAT, id);
+}
+
+static void
+add_channel(GwyContainer *data, gint id, GwyDataField *field, const gchar *title,
+            const gchar *table_text)
+{
+    gchar *key;
+
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(id), field);
+    gwy_container_set_const_string(data, gwy_app_get_data_title_key_for_id(id),
+                                   (const guchar*)title);
+    if (table_text) {
+        key = table_key(id);
+        gwy_container_set_const_string_by_name(data, key, (const guchar*)table_text);
+        g_free(key);
+    }
+}
+
+static void
+save_gwy(GwyContainer *data, const gchar *filename)
+{
+    GError *error = NULL;
+
+    ck_assert_msg(gwy_file_func_run_save("gwyfile", data, filename, GWY_RUN_NONINTERACTIVE, &error),
+                  "cannot save %s: %s", filename, error ? error->message : "?");
+}
+
+/* A px table of n stripes; blank_percent of the stripes have no drift (at
+ * least one keeps it); shifts up to max_shift pixels either way. */
+static DriftTable*
+random_table(GRand *rng, gint n, gint max_shift, gint blank_percent)
+{
+    DriftTable *table = drift_table_new(n, DRIFT_UNIT_PX);
+    gint s, keep = g_rand_int_range(rng, 0, n);
+
+    for (s = 0; s < n; s++) {
+        DriftTableRow *row = table->rows + s;
+
+        row->has_drift = (s == keep || g_rand_int_range(rng, 0, 100) >= blank_percent);
+        if (row->has_drift) {
+            row->dx = g_rand_int_range(rng, -max_shift, max_shift + 1);
+            row->dy = g_rand_int_range(rng, -max_shift, max_shift + 1);
+        }
+    }
+    return table;
+}
+
+/* The paper's nearest-stripe rule, written out independently of the core:
+ * the nearest stripe with drift, the lower index on a tie. */
+static void
+expected_drift(const DriftTable *table, gint *dx, gint *dy)
+{
+    gint n = table->n_stripes, s, d, src;
+
+    for (s = 0; s < n; s++) {
+        src = -1;
+        for (d = 0; d < n && src < 0; d++) {
+            if (s - d >= 0 && table->rows[s-d].has_drift)
+                src = s - d;
+            else if (s + d < n && table->rows[s+d].has_drift)
+                src = s + d;
+        }
+        ck_assert_int_ge(src, 0);
+        dx[s] = (gint)table->rows[src].dx;
+        dy[s] = (gint)table->rows[src].dy;
+    }
+}
+
+static void
+expected_init(Expected *exp, GwyDataField *source, const gchar *title, const DriftTable *table)
+{
+    exp->source = source;
+    exp->n = table->n_stripes;
+    exp->dx = g_new(gint, exp->n);
+    exp->dy = g_new(gint, exp->n);
+    expected_drift(table, exp->dx, exp->dy);
+    exp->title = g_strconcat(title, TITLE_SUFFIX, NULL);
+    exp->table_text = drift_table_to_string(table);
+}
+
+static void
+expected_clear(Expected *exp)
+{
+    g_free(exp->dx);
+    g_free(exp->dy);
+    g_free(exp->title);
+    g_free(exp->table_text);
+}
+
+/************************************************************************
+ * Checking outputs
+ ************************************************************************/
+
+static GwyContainer*
+load_gwy(const gchar *filename)
+{
+    GError *error = NULL;
+    GwyContainer *data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, &error);
+
+    ck_assert_msg(data, "cannot load %s: %s", filename, error ? error->message : "?");
+    return data;
+}
+
+static GwyDataField*
+get_field(GwyContainer *data, GQuark key)
+{
+    GObject *object = NULL;
+
+    if (!gwy_container_gis_object(data, key, &object))
+        return NULL;
+    ck_assert(GWY_IS_DATA_FIELD(object));
+    return GWY_DATA_FIELD(object);
+}
+
+static gboolean
+fields_identical(GwyDataField *a, GwyDataField *b)
+{
+    gint xres = gwy_data_field_get_xres(a), yres = gwy_data_field_get_yres(a);
+
+    return (xres == gwy_data_field_get_xres(b) && yres == gwy_data_field_get_yres(b)
+            && !memcmp(gwy_data_field_get_data_const(a), gwy_data_field_get_data_const(b),
+                       xres*yres*sizeof(gdouble)));
+}
+
+static const gchar*
+get_string(GwyContainer *data, const gchar *key)
+{
+    const guchar *s = NULL;
+
+    gwy_container_gis_string_by_name(data, key, &s);
+    return (const gchar*)s;
+}
+
+/* Every item of every channel of in is in out unchanged, and out has
+ * exactly one channel more; returns its id. */
+static gint
+check_inputs_preserved(GwyContainer *in, GwyContainer *out)
+{
+    gint *in_ids = gwy_app_data_browser_get_data_ids(in);
+    gint *out_ids = gwy_app_data_browser_get_data_ids(out);
+    gint i, j, n_in = 0, n_out = 0, newid = -1;
+    GwyDataField *a, *b;
+    gchar *key;
+
+    for (i = 0; in_ids[i] != -1; i++) {
+        n_in++;
+        a = get_field(in, gwy_app_get_data_key_for_id(in_ids[i]));
+        b = get_field(out, gwy_app_get_data_key_for_id(in_ids[i]));
+        ck_assert_msg(b, "channel %d of the input is missing in the output", in_ids[i]);
+        ck_assert_msg(fields_identical(a, b), "channel %d changed", in_ids[i]);
+        a = get_field(in, gwy_app_get_mask_key_for_id(in_ids[i]));
+        b = get_field(out, gwy_app_get_mask_key_for_id(in_ids[i]));
+        ck_assert(!a == !b);
+        ck_assert(!a || fields_identical(a, b));
+        ck_assert_str_eq(get_string(out, g_quark_to_string(gwy_app_get_data_title_key_for_id(in_ids[i]))),
+                         get_string(in, g_quark_to_string(gwy_app_get_data_title_key_for_id(in_ids[i]))));
+        key = table_key(in_ids[i]);
+        ck_assert_pstr_eq(get_string(out, key), get_string(in, key));
+        g_free(key);
+    }
+    for (j = 0; out_ids[j] != -1; j++) {
+        n_out++;
+        for (i = 0; in_ids[i] != -1 && in_ids[i] != out_ids[j]; i++)
+            ;
+        if (in_ids[i] == -1)
+            newid = out_ids[j];
+    }
+    ck_assert_int_eq(n_out, n_in + 1);
+    ck_assert_int_ge(newid, 0);
+    g_free(in_ids);
+    g_free(out_ids);
+    return newid;
+}
+
+static void
+check_compensated(GwyContainer *out, gint newid, const Expected *exp)
+{
+    GwyDataField *src = exp->source, *result, *mask;
+    gint xres = gwy_data_field_get_xres(src), yres = gwy_data_field_get_yres(src);
+    const gdouble *a = gwy_data_field_get_data_const(src);
+    gdouble *want = g_new(gdouble, xres*yres), *want_mask = g_new(gdouble, xres*yres);
+    gint i, n_filled = 0;
+    gchar *key;
+
+    paper_compensate(a, xres, yres, exp->n, exp->dx, exp->dy, paper_image_mean(a, xres, yres),
+                     want, want_mask);
+    result = get_field(out, gwy_app_get_data_key_for_id(newid));
+    ck_assert_msg(result, "no compensated channel");
+    ck_assert_int_eq(gwy_data_field_get_xres(result), xres);
+    ck_assert_int_eq(gwy_data_field_get_yres(result), yres);
+    ck_assert_double_eq(gwy_data_field_get_xreal(result), gwy_data_field_get_xreal(src));
+    ck_assert_double_eq(gwy_data_field_get_yreal(result), gwy_data_field_get_yreal(src));
+    ck_assert_msg(!memcmp(gwy_data_field_get_data_const(result), want, xres*yres*sizeof(gdouble)),
+                  "the compensated channel differs from paper_compensate() (seed %u)", seed);
+
+    for (i = 0; i < xres*yres; i++)
+        n_filled += (want_mask[i] > 0.0);
+    mask = get_field(out, gwy_app_get_mask_key_for_id(newid));
+    if (n_filled) {
+        ck_assert_msg(mask, "no mask although %d pixels are filled", n_filled);
+        ck_assert(!memcmp(gwy_data_field_get_data_const(mask), want_mask, xres*yres*sizeof(gdouble)));
+    }
+    else
+        ck_assert(!mask || gwy_data_field_get_max(mask) == 0.0);
+
+    ck_assert_str_eq(get_string(out, g_quark_to_string(gwy_app_get_data_title_key_for_id(newid))),
+                     exp->title);
+    key = table_key(newid);
+    ck_assert_pstr_eq(get_string(out, key), exp->table_text);
+    g_free(key);
+    g_free(want);
+    g_free(want_mask);
+}
+
+/* Runs the tool on in.gwy (already saved from data) with args and checks
+ * everything: success, input unchanged, channels preserved, result exact. */
+static void
+run_and_check(GwyContainer *data, const gchar *input, const gchar *const *args, const Expected *exp)
+{
+    gchar *sum_before = file_checksum(input), *sum_after, *output = out_path("out.gwy");
+    gchar *settings_file = g_build_filename(child_home, ".gwyddion", "settings", NULL);
+    GwyContainer *out;
+    ToolRun run;
+    gint newid;
+
+    run_tool(&run, args);
+    assert_success(&run);
+    sum_after = file_checksum(input);
+    ck_assert_str_eq(sum_before, sum_after);
+
+    out = load_gwy(output);
+    newid = check_inputs_preserved(data, out);
+    check_compensated(out, newid, exp);
+    ck_assert_msg(!g_file_test(settings_file, G_FILE_TEST_EXISTS), "gwy-localscan wrote a settings file");
+
+    g_object_unref(out);
+    tool_run_clear(&run);
+    g_free(sum_before);
+    g_free(sum_after);
+    g_free(output);
+    g_free(settings_file);
+}
+
+/************************************************************************
+ * Tests of results
+ ************************************************************************/
+
+/* Three channels with ids 3, 1, 6 (the first channel is the lowest id, 1),
+ * each with its own stored table; channel 3 has a mask of its own. */
+typedef struct {
+    GwyContainer *data;
+    GwyDataField *fields[3];
+    DriftTable *tables[3];
+    gchar *input;
+} ThreeChannels;
+
+static const gint three_ids[3] = { 3, 1, 6 };
+static const gchar *three_titles[3] = { "Height", "Amplitude", "Phase" };
+
+static void
+three_channels_init(ThreeChannels *tc, GRand *rng)
+{
+    static const gint sizes[3][3] = { { 40, 30, 7 }, { 33, 50, 6 }, { 21, 17, 17 } };
+    GwyDataField *mask;
+    gchar *text;
+    gint i;
+
+    tc->data = gwy_container_new();
+    for (i = 0; i < 3; i++) {
+        tc->fields[i] = random_field(rng, sizes[i][0], sizes[i][1], 2e-9, 3e-9);
+        tc->tables[i] = random_table(rng, sizes[i][2], 8, 30);
+        text = drift_table_to_string(tc->tables[i]);
+        add_channel(tc->data, three_ids[i], tc->fields[i], three_titles[i], text);
+        g_free(text);
+    }
+    mask = gwy_data_field_new_alike(tc->fields[0], TRUE);
+    gwy_data_field_area_fill(mask, 2, 3, 5, 4, 1.0);
+    gwy_container_set_object(tc->data, gwy_app_get_mask_key_for_id(3), mask);
+    g_object_unref(mask);
+    tc->input = in_path("in.gwy");
+    save_gwy(tc->data, tc->input);
+}
+
+static void
+three_channels_clear(ThreeChannels *tc)
+{
+    gint i;
+
+    for (i = 0; i < 3; i++) {
+        g_object_unref(tc->fields[i]);
+        drift_table_free(tc->tables[i]);
+    }
+    g_object_unref(tc->data);
+    g_free(tc->input);
+}
+
+START_TEST(test_stored_table_first_channel)
+{
+    GRand *rng = g_rand_new_with_seed(seed);
+    ThreeChannels tc;
+    Expected exp;
+    gchar *output;
+
+    three_channels_init(&tc, rng);
+    output = out_path("out.gwy");
+    expected_init(&exp, tc.fields[1], three_titles[1], tc.tables[1]);
+    run_and_check(tc.data, tc.input, (const gchar *const[]){ "-o", output, tc.input, NULL }, &exp);
+    expected_clear(&exp);
+    g_free(output);
+    three_channels_clear(&tc);
+    g_rand_free(rng);
+}
+END_TEST
+
+START_TEST(test_channel_option)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 1);
+    ThreeChannels tc;
+    Expected exp;
+    gchar *output;
+
+    three_channels_init(&tc, rng);
+    output = out_path("out.gwy");
+    expected_init(&exp, tc.fields[2], three_titles[2], tc.tables[2]);
+    run_and_check(tc.data, tc.input,
+                  (const gchar *const[]){ "-c", "6", "-m", "paper", "-o", output, tc.input, NULL }, &exp);
+    expected_clear(&exp);
+    g_free(output);
+    three_channels_clear(&tc);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* -d with a table in physical units on non-square pixels (2.5 nm by 4 nm);
+ * values a third of a pixel off whole pixels must round.  The stored table
+ * of the channel, different, must be ignored. */
+static const gchar *unit_names[] = { "nm", "um", "m" };
+static const gdouble unit_metres[] = { 1e-9, 1e-6, 1.0 };
+
+START_TEST(test_table_file_physical_units)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 2 + _i);
+    GwyDataField *field = random_field(rng, 37, 29, 2.5e-9, 4e-9);
+    DriftTable *px = random_table(rng, 5, 6, 0), *stored = random_table(rng, 4, 3, 0), *loaded;
+    GwyContainer *data = gwy_container_new();
+    gchar *input = in_path("in.gwy"), *csv = in_path("drift.csv"), *output = out_path("out.gwy");
+    gchar *text;
+    GString *str = g_string_new(NULL);
+    Expected exp;
+    gint s;
+
+    text = drift_table_to_string(stored);
+    add_channel(data, 0, field, "Topo", text);
+    g_free(text);
+    save_gwy(data, input);
+
+    g_string_append_printf(str, "# written by test-gwy-localscan\n# units: %s\nstripe,dx,dy,score\n",
+                           unit_names[_i]);
+    for (s = 0; s < px->n_stripes; s++) {
+        gdouble offx = (s % 2 ? 0.3 : -0.3), offy = (s % 2 ? -0.3 : 0.3);
+
+        g_string_append_printf(str, "%d,%.17g,%.17g,0.%d\n", s,
+                               (px->rows[s].dx + offx)*2.5e-9/unit_metres[_i],
+                               (px->rows[s].dy + offy)*4e-9/unit_metres[_i], s);
+    }
+    write_text(csv, str->str);
+    loaded = drift_table_load(csv, NULL);
+    ck_assert_ptr_nonnull(loaded);
+
+    expected_init(&exp, field, "Topo", px);
+    g_free(exp.table_text);
+    exp.table_text = drift_table_to_string(loaded);
+    run_and_check(data, input, (const gchar *const[]){ "-o", output, "-d", csv, input, NULL }, &exp);
+
+    expected_clear(&exp);
+    drift_table_free(loaded);
+    drift_table_free(px);
+    drift_table_free(stored);
+    g_string_free(str, TRUE);
+    g_object_unref(field);
+    g_object_unref(data);
+    g_free(input);
+    g_free(csv);
+    g_free(output);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* Seeded random images and tables: non-square, yres not a multiple of N,
+ * N = yres, N = 1, shifts beyond the image, blank stripes. */
+START_TEST(test_random_cases)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 100 + _i);
+    gint xres = g_rand_int_range(rng, 2, 61), yres = g_rand_int_range(rng, 1, 61);
+    gint n, max_shift;
+    GwyDataField *field;
+    GwyContainer *data = gwy_container_new();
+    gchar *input = in_path("in.gwy"), *output = out_path("out.gwy"), *text;
+    DriftTable *table;
+    Expected exp;
+
+    if (_i % 6 == 0)
+        n = yres;
+    else if (_i % 6 == 1)
+        n = 1;
+    else
+        n = g_rand_int_range(rng, 1, yres + 1);
+    max_shift = (_i % 4 == 0 ? 2*MAX(xres, yres) : MAX(1, MIN(xres, yres)/3));
+    field = random_field(rng, xres, yres, 1e-9, 1e-9);
+    table = random_table(rng, n, max_shift, _i % 3 ? 25 : 0);
+    text = drift_table_to_string(table);
+    add_channel(data, 0, field, "Random", text);
+    save_gwy(data, input);
+    expected_init(&exp, field, "Random", table);
+    run_and_check(data, input, (const gchar *const[]){ "-o", output, input, NULL }, &exp);
+
+    expected_clear(&exp);
+    drift_table_free(table);
+    g_free(text);
+    g_object_unref(field);
+    g_object_unref(data);
+    g_free(input);
+    g_free(output);
+    g_rand_free(rng);
+}
+END_TEST
+
+START_TEST(test_write_drift)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 3);
+    ThreeChannels tc;
+    ToolRun run;
+    gchar *output, *used, *contents = NULL, *want, *listing;
+
+    three_channels_init(&tc, rng);
+    output = out_path("out.gwy");
+    used = out_path("used.csv");
+    run_tool(&run, (const gchar *const[]){ "--write-drift", used, "-c", "3", "-o", output, tc.input, NULL });
+    assert_success(&run);
+    ck_assert(g_file_get_contents(used, &contents, NULL, NULL));
+    want = drift_table_to_string(tc.tables[0]);
+    ck_assert_str_eq(contents, want);
+    listing = folder_listing(out_dir);
+    ck_assert_str_eq(listing, "out.gwy used.csv");
+
+    g_free(listing);
+    g_free(want);
+    g_free(contents);
+    g_free(used);
+    g_free(output);
+    tool_run_clear(&run);
+    three_channels_clear(&tc);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* The user's own settings for the module (as left by the GUI) must not
+ * change a batch result: fill, mode, source, mask and graph are the batch
+ * run's.  The settings file is read but never written. */
+START_TEST(test_user_settings_do_not_leak)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 4);
+    GwyContainer *settings = gwy_container_new();
+    gchar *dir = g_build_filename(child_home, ".gwyddion", NULL);
+    gchar *settings_file = g_build_filename(dir, "settings", NULL);
+    gchar *sum_before, *sum_after, *text, *output;
+    GPtrArray *lines;
+    GString *str = g_string_new("Gwyddion Settings 1.0\n");
+    GwyContainer *out;
+    ThreeChannels tc;
+    Expected exp;
+    ToolRun run;
+    guint i;
+
+    gwy_container_set_int32_by_name(settings, "/module/localscan_drift/fill", 1);
+    gwy_container_set_int32_by_name(settings, "/module/localscan_drift/mode", 1);
+    gwy_container_set_int32_by_name(settings, "/module/localscan_drift/source", 1);
+    gwy_container_set_const_string_by_name(settings, "/module/localscan_drift/table-file",
+                                           (const guchar*)"/nonexistent.csv");
+    gwy_container_set_boolean_by_name(settings, "/module/localscan_drift/add-mask", FALSE);
+    gwy_container_set_boolean_by_name(settings, "/module/localscan_drift/plot-drift", TRUE);
+    lines = gwy_container_serialize_to_text(settings);
+    for (i = 0; i < lines->len; i++) {
+        g_string_append(str, g_ptr_array_index(lines, i));
+        g_string_append_c(str, '\n');
+        g_free(g_ptr_array_index(lines, i));
+    }
+    g_ptr_array_free(lines, TRUE);
+    g_mkdir(dir, 0700);
+    write_text(settings_file, str->str);
+    sum_before = file_checksum(settings_file);
+
+    three_channels_init(&tc, rng);
+    output = out_path("out.gwy");
+    run_tool(&run, (const gchar *const[]){ "-o", output, tc.input, NULL });
+    assert_success(&run);
+    out = load_gwy(output);
+    expected_init(&exp, tc.fields[1], three_titles[1], tc.tables[1]);
+    check_compensated(out, check_inputs_preserved(tc.data, out), &exp);
+    text = g_strdup("/0/graph/graph/1");
+    ck_assert_msg(!gwy_container_contains_by_name(out, text), "a drift graph was added");
+    sum_after = file_checksum(settings_file);
+    ck_assert_str_eq(sum_before, sum_after);
+
+    g_free(text);
+    expected_clear(&exp);
+    g_object_unref(out);
+    tool_run_clear(&run);
+    three_channels_clear(&tc);
+    g_free(output);
+    g_free(sum_before);
+    g_free(sum_after);
+    g_string_free(str, TRUE);
+    g_free(settings_file);
+    g_free(dir);
+    g_object_unref(settings);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* A real instrument file (Nanoscope, three channels, non-square pixels):
+ * any file Gwyddion reads is a valid INPUT. */
+START_TEST(test_nanoscope_input)
+{
+    const gchar *measured = g_getenv("LOCALSCAN_MEASURED_DIR");
+    gchar *input, *csv = in_path("drift.csv"), *output = out_path("out.gwy");
+    GwyContainer *data, *out;
+    GwyDataField *field;
+    DriftTable *table;
+    Expected exp;
+    ToolRun run;
+
+    input = g_build_filename(measured ? measured : "", "fastscan-series", "09261606.001", NULL);
+    if (!measured || !g_file_test(input, G_FILE_TEST_IS_REGULAR)) {
+        printf("SKIPPED test_nanoscope_input: measured data absent (%s)\n", input);
+        g_free(input);
+        g_free(csv);
+        g_free(output);
+        return;
+    }
+    write_text(csv, "stripe,dx,dy\n0,-3,0\n1,,\n2,-5,-1\n3,-7,-1\n4,-9,-2\n5,-11,-2\n");
+    table = drift_table_load(csv, NULL);
+    data = load_gwy(input);
+    /* Channel 0, the lowest id, is the tool's default channel. */
+    field = get_field(data, gwy_app_get_data_key_for_id(0));
+    ck_assert_ptr_nonnull(field);
+    expected_init(&exp, field, get_string(data, "/0/data/title"), table);
+    run_tool(&run, (const gchar *const[]){ "-d", csv, "-o", output, input, NULL });
+    assert_success(&run);
+    out = load_gwy(output);
+    check_compensated(out, check_inputs_preserved(data, out), &exp);
+
+    g_object_unref(out);
+    tool_run_clear(&run);
+    expected_clear(&exp);
+    g_object_unref(data);
+    drift_table_free(table);
+    g_free(input);
+    g_free(csv);
+    g_free(output);
+}
+END_TEST
+
+/************************************************************************
+ * Command line
+ ************************************************************************/
+
+START_TEST(test_help_lists_options)
+{
+    static const gchar *options[] = {
+        "-o, --output=OUT.gwy", "-d, --drift=TABLE.csv", "-c, --channel=ID",
+        "-m, --mode=paper|continuous", "--write-drift=TABLE.csv", "--version", "INPUT",
+    };
+    ToolRun run;
+    guint i;
+
+    run_tool(&run, (const gchar *const[]){ "--help", NULL });
+    ck_assert_int_eq(run.status, 0);
+    for (i = 0; i < G_N_ELEMENTS(options); i++)
+        ck_assert_msg(strstr(run.out, options[i]), "--help does not list %s:\n%s", options[i], run.out);
+    tool_run_clear(&run);
+
+    run_tool(&run, (const gchar *const[]){ "--version", NULL });
+    ck_assert_int_eq(run.status, 0);
+    ck_assert_str_eq(run.out, "gwy-localscan " PACKAGE_VERSION "\n");
+    tool_run_clear(&run);
+}
+END_TEST
+
+/************************************************************************
+ * Errors: one line, non-zero status, nothing written, input unchanged
+ ************************************************************************/
+
+/* One channel (id 0, 6 rows) with a stored table, saved as in/in.gwy. */
+static gchar*
+simple_input(const gchar *table_text)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 5);
+    GwyDataField *field = random_field(rng, 8, 6, 1e-9, 1e-9);
+    GwyContainer *data = gwy_container_new();
+    gchar *input = in_path("in.gwy");
+
+    add_channel(data, 0, field, "Simple", table_text);
+    save_gwy(data, input);
+    g_object_unref(data);
+    g_object_unref(field);
+    g_rand_free(rng);
+    return input;
+}
+
+#define GOOD_TABLE "stripe,dx,dy\n0,1,0\n1,-1,1\n"
+
+typedef struct {
+    const gchar *name;
+    const gchar *stored;       /* stored table of in.gwy, or NULL */
+    const gchar *csv;          /* contents of in/drift.csv, or NULL */
+    const gchar *args[8];      /* "@IN", "@OUTDIR", "@OUT", "@CSV" are replaced */
+    gint status;
+    const gchar *message;      /* the same replaced; a trailing * matches any rest */
+} ErrorCase;
+
+static const ErrorCase error_cases[] = {
+    { "missing -o", GOOD_TABLE, NULL, { "@IN", }, 2,
+      "gwy-localscan: no output file: give -o OUT.gwy" },
+    { "no input", GOOD_TABLE, NULL, { "-o", "@OUT", }, 2,
+      "gwy-localscan: no INPUT file given" },
+    { "two inputs", GOOD_TABLE, NULL, { "-o", "@OUT", "@IN", "@IN", }, 2,
+      "gwy-localscan: exactly one INPUT file is needed, 2 were given" },
+    { "unknown mode", GOOD_TABLE, NULL, { "-m", "fast", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: unknown mode 'fast' (known: paper, continuous)" },
+    { "unknown option", GOOD_TABLE, NULL, { "--stripez", "3", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: Unknown option --stripez" },
+    { "-c not a number", GOOD_TABLE, NULL, { "-c", "two", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: Cannot parse integer value*" },
+    { "unreadable input", GOOD_TABLE, NULL, { "-o", "@OUT", "@IN.missing", }, 1,
+      "gwy-localscan: cannot read @IN.missing: no such file" },
+    { "input not SPM data", NULL, "just some text\n", { "-o", "@OUT", "@CSV", }, 1,
+      "gwy-localscan: cannot read @CSV: *" },
+    { "no such channel", GOOD_TABLE, NULL, { "-c", "4", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN has no channel 4 (its channels: 0)" },
+    { "negative channel", GOOD_TABLE, NULL, { "-c", "-1", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN has no channel -1 (its channels: 0)" },
+    { "no stored table", NULL, NULL, { "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN: channel 0 has no stored drift table (/0/localscan/drift-table); "
+      "give one with -d TABLE.csv" },
+    { "malformed stored table", "stripe,dx,dy\n0,1,0\n1,x,0\n", NULL, { "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN:/0/localscan/drift-table:3: bad number 'x' for dx" },
+    { "missing table file", GOOD_TABLE, NULL, { "-d", "@CSV", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @CSV: cannot read: No such file or directory" },
+    { "NaN in table file", GOOD_TABLE, "stripe,dx,dy\n0,1,0\n1,nan,0\n",
+      { "-d", "@CSV", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @CSV:3: dx = nan: NaN or infinity is not a drift" },
+    { "fraction in paper mode", GOOD_TABLE, "stripe,dx,dy\n0,1,0\n1,0.5,0\n",
+      { "-d", "@CSV", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @CSV:3: dx = 0.5 px is not a whole number of pixels; paper mode needs whole pixels" },
+    { "too many stripes", GOOD_TABLE, "stripe,dx,dy\n0,0,0\n1,0,0\n2,0,0\n3,0,0\n4,0,0\n5,0,0\n6,0,0\n",
+      { "-d", "@CSV", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @CSV:8: the table has 7 stripes but the image has only 6 rows" },
+    { "output folder missing", GOOD_TABLE, NULL, { "-o", "@OUTDIR/../nowhere/out.gwy", "@IN", }, 1,
+      "gwy-localscan: cannot write @OUTDIR/../nowhere/out.gwy: No such file or directory" },
+    { "output folder is a file", GOOD_TABLE, "x\n", { "-o", "@CSV/out.gwy", "@IN", }, 1,
+      "gwy-localscan: cannot write @CSV/out.gwy: Not a directory" },
+    { "output is the input", GOOD_TABLE, NULL, { "-o", "@IN", "@IN", }, 2,
+      "gwy-localscan: refusing to overwrite the input file @IN" },
+};
+
+static gchar*
+substitute(const gchar *text, const gchar *input, const gchar *output, const gchar *csv)
+{
+    gchar **parts, *joined, *result = g_strdup(text);
+    const gchar *names[4] = { "@IN", "@OUTDIR", "@OUT", "@CSV" };
+    const gchar *values[4] = { input, out_dir, output, csv };
+    guint i;
+
+    for (i = 0; i < G_N_ELEMENTS(names); i++) {
+        parts = g_strsplit(result, names[i], -1);
+        joined = g_strjoinv(values[i], parts);
+        g_strfreev(parts);
+        g_free(result);
+        result = joined;
+    }
+    return result;
+}
+
+START_TEST(test_error_exit)
+{
+    const ErrorCase *ec = error_cases + _i;
+    gchar *input = simple_input(ec->stored), *csv = in_path("drift.csv"), *output = out_path("out.gwy");
+    gchar *sum_before, *sum_after, *message;
+    GPtrArray *args = g_ptr_array_new_with_free_func(g_free);
+    ToolRun run;
+    guint i;
+
+    if (ec->csv)
+        write_text(csv, ec->csv);
+    for (i = 0; ec->args[i]; i++)
+        g_ptr_array_add(args, substitute(ec->args[i], input, output, csv));
+    g_ptr_array_add(args, NULL);
+    sum_before = file_checksum(input);
+
+    run_tool(&run, (const gchar *const*)args->pdata);
+    message = substitute(ec->message, input, output, csv);
+    printf("error case \"%s\": %s", ec->name, run.err);
+    assert_failure(&run, ec->status, message);
+    sum_after = file_checksum(input);
+    ck_assert_str_eq(sum_before, sum_after);
+
+    g_free(message);
+    g_free(sum_before);
+    g_free(sum_after);
+    tool_run_clear(&run);
+    g_ptr_array_free(args, TRUE);
+    g_free(input);
+    g_free(csv);
+    g_free(output);
+}
+END_TEST
+
+/* An input file with no image channel at all (volume data only). */
+START_TEST(test_error_no_channel)
+{
+    GwyContainer *data = gwy_container_new();
+    GwyBrick *brick = gwy_brick_new(3, 4, 5, 3e-9, 4e-9, 5.0, TRUE);
+    gchar *input = in_path("volume.gwy"), *output = out_path("out.gwy"), *message;
+    ToolRun run;
+
+    gwy_container_set_object_by_name(data, "/brick/0", brick);
+    save_gwy(data, input);
+    run_tool(&run, (const gchar *const[]){ "-o", output, input, NULL });
+    message = g_strdup_printf("gwy-localscan: %s contains no image channel", input);
+    assert_failure(&run, 1, message);
+
+    g_free(message);
+    tool_run_clear(&run);
+    g_object_unref(brick);
+    g_object_unref(data);
+    g_free(input);
+    g_free(output);
+}
+END_TEST
+
+START_TEST(test_error_module)
+{
+    gchar *input = simple_input(GOOD_TABLE), *output = out_path("out.gwy");
+    gchar *missing = in_path("nowhere.so"), *bogus = in_path("bogus.so"), *message;
+    ToolRun run;
+
+    run_tool_env(&run, missing, (const gchar *const[]){ "-o", output, input, NULL });
+    message = g_strdup_printf("gwy-localscan: cannot load module %s: no such file", missing);
+    assert_failure(&run, 1, message);
+    g_free(message);
+    tool_run_clear(&run);
+
+    write_text(bogus, "not a shared library\n");
+    run_tool_env(&run, bogus, (const gchar *const[]){ "-o", output, input, NULL });
+    message = g_strdup_printf("gwy-localscan: cannot load module %s: *", bogus);
+    assert_failure(&run, 1, message);
+    g_free(message);
+    tool_run_clear(&run);
+
+    /* Neither LOCALSCAN_MODULE nor the scratch HOME has the module; the
+     * build's --with-dest folder is not installed to by make check. */
+    if (!*GWY_LOCALSCAN_MODULE_DIR
+        || !g_file_test(GWY_LOCALSCAN_MODULE_DIR "/localscan.so", G_FILE_TEST_EXISTS)) {
+        run_tool_env(&run, NULL, (const gchar *const[]){ "-o", output, input, NULL });
+        assert_failure(&run, 1, "gwy-localscan: Gwyddion has no process function localscan_drift: "
+                       "the localscan module is not installed (install it, or set LOCALSCAN_MODULE "
+                       "to its file)");
+        tool_run_clear(&run);
+    }
+
+    g_free(missing);
+    g_free(bogus);
+    g_free(input);
+    g_free(output);
+}
+END_TEST
+
+/* Root may write anywhere, so this case only runs for ordinary users. */
+START_TEST(test_error_output_not_writable)
+{
+    gchar *input = simple_input(GOOD_TABLE), *output = out_path("out.gwy"), *message;
+    ToolRun run;
+
+    if (geteuid() == 0) {
+        printf("SKIPPED test_error_output_not_writable: running as root, permissions do not apply\n");
+        g_free(input);
+        g_free(output);
+        return;
+    }
+    g_chmod(out_dir, 0500);
+    run_tool(&run, (const gchar *const[]){ "-o", output, input, NULL });
+    g_chmod(out_dir, 0700);
+    message = g_strdup_printf("gwy-localscan: cannot write %s: Permission denied", output);
+    assert_failure(&run, 1, message);
+
+    g_free(message);
+    tool_run_clear(&run);
+    g_free(input);
+    g_free(output);
+}
+END_TEST
+
+/* The same table that paper mode refuses is fine for continuous mode. */
+START_TEST(test_continuous_mode_accepts_fractions)
+{
+    gchar *input = simple_input(NULL), *csv = in_path("drift.csv"), *output = out_path("out.gwy");
+    GwyContainer *out;
+    ToolRun run;
+    gchar *listing;
+
+    write_text(csv, "stripe,dx,dy\n0,1,0\n1,0.5,0\n");
+    run_tool(&run, (const gchar *const[]){ "-m", "continuous", "-d", csv, "-o", output, input, NULL });
+    assert_success(&run);
+    out = load_gwy(output);
+    ck_assert_str_eq(get_string(out, "/1/data/title"), "Simple" TITLE_SUFFIX);
+    listing = folder_listing(out_dir);
+    ck_assert_str_eq(listing, "out.gwy");
+
+    g_free(listing);
+    g_object_unref(out);
+    tool_run_clear(&run);
+    g_free(input);
+    g_free(csv);
+    g_free(output);
+}
+END_TEST
+
+static Suite*
+gwy_localscan_suite(void)
+{
+    Suite *suite = suite_create("gwy-localscan");
+    TCase *tc;
+
+    tc = tcase_create("results");
+    tcase_add_checked_fixture(tc, setup_scratch, teardown_scratch);
+    tcase_add_test(tc, test_stored_table_first_channel);
+    tcase_add_test(tc, test_channel_option);
+    tcase_add_loop_test(tc, test_table_file_physical_units, 0, G_N_ELEMENTS(unit_names));
+    tcase_add_loop_test(tc, test_random_cases, 0, N_RANDOM_CASES);
+    tcase_add_test(tc, test_write_drift);
+    tcase_add_test(tc, test_user_settings_do_not_leak);
+    tcase_add_test(tc, test_nanoscope_input);
+    tcase_add_test(tc, test_continuous_mode_accepts_fractions);
+    suite_add_tcase(suite, tc);
+
+    tc = tcase_create("command line and errors");
+    tcase_add_checked_fixture(tc, setup_scratch, teardown_scratch);
+    tcase_add_test(tc, test_help_lists_options);
+    tcase_add_loop_test(tc, test_error_exit, 0, G_N_ELEMENTS(error_cases));
+    tcase_add_test(tc, test_error_no_channel);
+    tcase_add_test(tc, test_error_module);
+    tcase_add_test(tc, test_error_output_not_writable);
+    suite_add_tcase(suite, tc);
+
+    return suite;
+}
+
+int
+main(void)
+{
+    const gchar *seed_env = g_getenv("LOCALSCAN_TEST_SEED");
+    SRunner *runner;
+    gint failed;
+
+    seed = seed_env ? (guint32)g_ascii_strtoull(seed_env, NULL, 10) : (guint32)g_random_int();
+    printf("test-gwy-localscan: seed %u (set LOCALSCAN_TEST_SEED to repeat)\n", seed);
+    fflush(stdout);
+    if (!g_file_test(TOOL_PATH, G_FILE_TEST_IS_EXECUTABLE)) {
+        printf("FAILED: %s is not built\n", TOOL_PATH);
+        return 1;
+    }
+    gwy_app_init_nongui("enable-threads", FALSE, NULL);
+
+    runner = srunner_create(gwy_localscan_suite());
+    srunner_run_all(runner, CK_NORMAL);
+    failed = srunner_ntests_failed(runner);
+    srunner_free(runner);
+    gwy_app_settings_free();
+    return failed ? 1 : 0;
+}
