@@ -119,7 +119,7 @@ kernel_weights(GwyInterpolationType type, gdouble x, gdouble *w)
 
         case GWY_INTERPOLATION_SCHAUM:
         /* Cubic Lagrange polynomials through the nodes -1, 0, 1, 2. */
-        w[0] = -x*y*(x - 2.0)/6.0;
+        w[0] = x*y*(x - 2.0)/6.0;
         w[1] = (x + 1.0)*y*(2.0 - x)/2.0;
         w[2] = (x + 1.0)*x*(2.0 - x)/2.0;
         w[3] = -(x + 1.0)*x*y/6.0;
