@@ -33,7 +33,14 @@
 #define KERNEL_INLINE static inline
 #endif
 
-enum { KERNEL_TAPS = 4 };
+enum {
+    KERNEL_TAPS = 4,
+    /* Rows kept while rebuilding the output: four taps, mirrored at the
+     * image edges, always fall within four consecutive rows. */
+    RING_ROWS = 8,
+    /* Rows whose x prefilter recursions run interleaved. */
+    PREFILTER_BATCH = 8,
+};
 
 /* The factored tridiagonal system of the B-spline/o-MOMS prefilter for one
  * length: the same for every row (or column), so factored once. */
@@ -227,48 +234,31 @@ prefilter_clear(Prefilter *prefilter)
     prefilter->factor = prefilter->inv_diag = NULL;
 }
 
-/* Data values to interpolation coefficients along one row, in place. */
+/* Data values to interpolation coefficients along count rows of src
+ * (n values each, contiguous) into dest, which may be src.  The rows'
+ * recursions are interleaved: each is a serial chain, several of them run
+ * in parallel. */
 static void
-prefilter_row(const Prefilter *prefilter, gdouble *data)
+prefilter_rows(const Prefilter *prefilter, const gdouble *src, gint count,
+               gdouble *dest)
 {
     const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
-    gdouble side = prefilter->side;
-    gint n = prefilter->n, i;
+    gdouble side = prefilter->side, f, inv;
+    gint n = prefilter->n, i, k;
 
-    for (i = 1; i < n; i++)
-        data[i] -= factor[i]*data[i-1];
-    data[n-1] *= inv_diag[n-1];
-    for (i = n-2; i >= 0; i--)
-        data[i] = (data[i] - side*data[i+1])*inv_diag[i];
-}
-
-/* The same along the columns of a width-wide image, row by row so that
- * memory is read in order. */
-static void
-prefilter_columns(const Prefilter *prefilter, gdouble *data, gint width)
-{
-    const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
-    gdouble side = prefilter->side, q, inv;
-    gdouble *row, *prev;
-    gint n = prefilter->n, i, j;
-
+    for (k = 0; k < count; k++)
+        dest[k*n] = src[k*n];
     for (i = 1; i < n; i++) {
-        row = data + i*(gsize)width;
-        prev = row - width;
-        q = factor[i];
-        for (j = 0; j < width; j++)
-            row[j] -= q*prev[j];
+        f = factor[i];
+        for (k = 0; k < count; k++)
+            dest[k*n + i] = src[k*n + i] - f*dest[k*n + i-1];
     }
-    row = data + (n-1)*(gsize)width;
-    inv = inv_diag[n-1];
-    for (j = 0; j < width; j++)
-        row[j] *= inv;
+    for (k = 0; k < count; k++)
+        dest[k*n + n-1] *= inv_diag[n-1];
     for (i = n-2; i >= 0; i--) {
-        row = data + i*(gsize)width;
-        prev = row + width;
         inv = inv_diag[i];
-        for (j = 0; j < width; j++)
-            row[j] = (row[j] - side*prev[j])*inv;
+        for (k = 0; k < count; k++)
+            dest[k*n + i] = (dest[k*n + i] - side*dest[k*n + i+1])*inv;
     }
 }
 
@@ -502,40 +492,117 @@ plan_rows(const DriftTrajectory *trajectory, const ScanTiming *timing,
     return TRUE;
 }
 
-static void
-shift_rows_x(const gdouble *a, gint xres, gint yres,
-             const ResamplePlan *plan, GwyInterpolationType interpolation,
-             gdouble *shifted)
-{
-    Prefilter prefilter = { 0, 0.0, NULL, NULL };
-    gdouble centre, side, dx;
-    gdouble *coeffs = NULL;
-    const gdouble *src;
-    gboolean needs_prefilter;
-    gint i;
+/* Produces the x-corrected source rows one at a time. */
+typedef struct {
+    const gdouble *a;
+    gint xres;
+    const ResamplePlan *plan;
+    GwyInterpolationType interpolation;
+    gboolean prefilter_x;
+    Prefilter x_prefilter;
+    gdouble *coeffs;
+} RowShifter;
 
-    needs_prefilter = kernel_needs_prefilter(interpolation, &centre, &side);
-    if (needs_prefilter) {
-        prefilter_init(&prefilter, xres, centre, side);
-        coeffs = g_new(gdouble, xres);
+/* The last few x-corrected (or y-prefiltered) rows, by row index. */
+typedef struct {
+    gint xres;
+    gint tags[RING_ROWS];
+    gdouble *rows;
+} RowRing;
+
+static void
+row_shifter_init(RowShifter *shifter, const gdouble *a, gint xres,
+                 const ResamplePlan *plan, GwyInterpolationType interpolation)
+{
+    gdouble centre, side;
+
+    shifter->a = a;
+    shifter->xres = xres;
+    shifter->plan = plan;
+    shifter->interpolation = interpolation;
+    shifter->prefilter_x = kernel_needs_prefilter(interpolation,
+                                                  &centre, &side);
+    shifter->coeffs = NULL;
+    if (shifter->prefilter_x) {
+        prefilter_init(&shifter->x_prefilter, xres, centre, side);
+        shifter->coeffs = g_new(gdouble, PREFILTER_BATCH*(gsize)xres);
     }
-    for (i = 0; i < yres; i++) {
-        src = a + i*(gsize)xres;
-        dx = plan->x_start[i];
-        if (plan->x_step[i] == 1.0 && dx == floor(dx) && fabs(dx) <= xres) {
-            shift_row_whole(src, xres, (gint)dx, shifted + i*(gsize)xres);
-            continue;
-        }
-        if (needs_prefilter) {
-            memcpy(coeffs, src, xres*sizeof(gdouble));
-            prefilter_row(&prefilter, coeffs);
-            src = coeffs;
-        }
-        resample_row(interpolation, src, xres, plan->x_start[i],
-                     plan->x_step[i], shifted + i*(gsize)xres);
+}
+
+static void
+row_shifter_clear(RowShifter *shifter)
+{
+    if (shifter->prefilter_x)
+        prefilter_clear(&shifter->x_prefilter);
+    g_free(shifter->coeffs);
+}
+
+static gboolean
+row_shift_is_whole(const ResamplePlan *plan, gint i, gint xres)
+{
+    gdouble x_start = plan->x_start[i];
+
+    return (plan->x_step[i] == 1.0 && x_start == floor(x_start)
+            && fabs(x_start) <= xres);
+}
+
+/* Source rows first .. first+count-1 (count <= PREFILTER_BATCH) shifted
+ * in x into dest, row after row. */
+static void
+row_shifter_shift_rows(RowShifter *shifter, gint first, gint count,
+                       gdouble *dest)
+{
+    const ResamplePlan *plan = shifter->plan;
+    gint xres = shifter->xres, i, k;
+    const gdouble *src = shifter->a + first*(gsize)xres, *coeffs = src;
+
+    if (shifter->prefilter_x) {
+        prefilter_rows(&shifter->x_prefilter, src, count, shifter->coeffs);
+        coeffs = shifter->coeffs;
     }
-    g_free(coeffs);
-    prefilter_clear(&prefilter);
+    for (k = 0; k < count; k++) {
+        i = first + k;
+        if (row_shift_is_whole(plan, i, xres)) {
+            shift_row_whole(src + k*(gsize)xres, xres, (gint)plan->x_start[i],
+                            dest + k*(gsize)xres);
+        }
+        else {
+            resample_row(shifter->interpolation, coeffs + k*(gsize)xres, xres,
+                         plan->x_start[i], plan->x_step[i],
+                         dest + k*(gsize)xres);
+        }
+    }
+}
+
+static void
+row_ring_init(RowRing *ring, gint xres)
+{
+    gint k;
+
+    ring->xres = xres;
+    ring->rows = g_new(gdouble, RING_ROWS*(gsize)xres);
+    for (k = 0; k < RING_ROWS; k++)
+        ring->tags[k] = -1;
+}
+
+static inline gdouble*
+row_ring_slot(RowRing *ring, gint i)
+{
+    ring->tags[i % RING_ROWS] = i;
+    return ring->rows + (i % RING_ROWS)*(gsize)ring->xres;
+}
+
+/* x-corrected row i, computed unless still in the ring. */
+static const gdouble*
+row_ring_shifted(RowRing *ring, RowShifter *shifter, gint i)
+{
+    gdouble *row = ring->rows + (i % RING_ROWS)*(gsize)ring->xres;
+
+    if (ring->tags[i % RING_ROWS] != i) {
+        row_shifter_shift_rows(shifter, i, 1, row);
+        ring->tags[i % RING_ROWS] = i;
+    }
+    return row;
 }
 
 static gboolean
@@ -550,15 +617,12 @@ rows_need_interpolation(const ResamplePlan *plan, gint yres)
     return FALSE;
 }
 
-/* dest = sum of w[k] times the rows at the mirrored indices i-1 .. i+2. */
+/* dest = sum of w[k] times rows[k]; the outer rows are not read (and may
+ * be NULL) when both their weights are zero. */
 static void
-combine_rows(const gdouble *shifted, gint xres, gint yres, gint i,
-             const gdouble *w, gdouble *dest)
+combine_rows(const gdouble **rows, const gdouble *w, gint xres, gdouble *dest)
 {
-    const gdouble *r0 = shifted + mirror_index(i-1, yres)*(gsize)xres;
-    const gdouble *r1 = shifted + mirror_index(i, yres)*(gsize)xres;
-    const gdouble *r2 = shifted + mirror_index(i+1, yres)*(gsize)xres;
-    const gdouble *r3 = shifted + mirror_index(i+2, yres)*(gsize)xres;
+    const gdouble *r0 = rows[0], *r1 = rows[1], *r2 = rows[2], *r3 = rows[3];
     gdouble w0 = w[0], w1 = w[1], w2 = w[2], w3 = w[3];
     gint c;
 
@@ -585,53 +649,166 @@ fill_row(gdouble *dest, gdouble *mask_row, gint first, gint end,
     }
 }
 
-/* Output row r from the x-corrected rows around rho[r]; the columns with a
- * source are those of the nearest source row. */
+/* Fills output row r where it has no source: all of it without a source
+ * row, else the columns the nearest source row has no x source for. */
 static void
-rebuild_rows_y(gdouble *shifted, gint xres, gint yres,
-               const ResamplePlan *plan, GwyInterpolationType interpolation,
-               gdouble fill_value, gdouble *result, gdouble *mask)
+finish_row(const ResamplePlan *plan, gint xres, gint yres, gint r,
+           gdouble fill_value, gdouble *result, gdouble *mask)
 {
-    Prefilter prefilter;
-    gdouble centre, side, rho, w[KERNEL_TAPS];
-    gdouble *dest, *mask_row;
-    gboolean prefiltered = FALSE;
-    gint r, i, nearest, first, last;
+    gdouble *dest = result + r*(gsize)xres;
+    gdouble *mask_row = mask ? mask + r*(gsize)xres : NULL;
+    gdouble rho = plan->rho[r];
+    gint nearest, first, last;
 
-    if (kernel_needs_prefilter(interpolation, &centre, &side)
-        && rows_need_interpolation(plan, yres)) {
-        prefilter_init(&prefilter, yres, centre, side);
-        prefilter_columns(&prefilter, shifted, xres);
-        prefilter_clear(&prefilter);
-        prefiltered = TRUE;
+    if (isnan(rho)) {
+        fill_row(dest, mask_row, 0, xres, fill_value);
+        return;
     }
+    nearest = CLAMP((gint)floor(rho + 0.5), 0, yres-1);
+    first = plan->valid_first[nearest];
+    last = plan->valid_last[nearest];
+    if (mask_row)
+        memset(mask_row, 0, xres*sizeof(gdouble));
+    if (first > last) {
+        fill_row(dest, mask_row, 0, xres, fill_value);
+        return;
+    }
+    fill_row(dest, mask_row, 0, first, fill_value);
+    fill_row(dest, mask_row, last + 1, xres, fill_value);
+}
+
+/* The source row just below rho and its fractional offset. */
+static inline gint
+source_row_below(gdouble rho, gdouble *frac)
+{
+    gint i = (gint)(rho + 1.0) - 1;
+
+    *frac = rho - i;
+    return i;
+}
+
+/* Interpolating kernels: each output row from the x-corrected rows around
+ * its source row, computed on demand into a small ring (rho grows with r,
+ * so every source row is shifted once, and no full-size intermediate image
+ * is written and read back). */
+static void
+rebuild_rows_streaming(RowShifter *shifter, gint yres,
+                       GwyInterpolationType interpolation,
+                       gdouble fill_value, gdouble *result, gdouble *mask)
+{
+    const ResamplePlan *plan = shifter->plan;
+    gint xres = shifter->xres, r, i, k;
+    const gdouble *rows[KERNEL_TAPS];
+    gdouble w[KERNEL_TAPS], frac;
+    gboolean outer;
+    RowRing ring;
+
+    row_ring_init(&ring, xres);
     for (r = 0; r < yres; r++) {
-        dest = result + r*(gsize)xres;
-        mask_row = mask ? mask + r*(gsize)xres : NULL;
-        rho = plan->rho[r];
-        if (isnan(rho)) {
-            fill_row(dest, mask_row, 0, xres, fill_value);
+        if (!isnan(plan->rho[r])) {
+            i = source_row_below(plan->rho[r], &frac);
+            if (frac == 0.0) {
+                memcpy(result + r*(gsize)xres,
+                       row_ring_shifted(&ring, shifter, i),
+                       xres*sizeof(gdouble));
+            }
+            else {
+                kernel_weights(interpolation, frac, w);
+                outer = (w[0] != 0.0 || w[3] != 0.0);
+                for (k = 0; k < KERNEL_TAPS; k++) {
+                    rows[k] = ((k == 1 || k == 2 || outer)
+                               ? row_ring_shifted(&ring, shifter,
+                                                  mirror_index(i - 1 + k, yres))
+                               : NULL);
+                }
+                combine_rows(rows, w, xres, result + r*(gsize)xres);
+            }
+        }
+        finish_row(plan, xres, yres, r, fill_value, result, mask);
+    }
+    g_free(ring.rows);
+}
+
+/* Lowest row index an output row's taps read (mirrored). */
+static gint
+lowest_tap(gint i, gint yres)
+{
+    gint k, lowest = yres;
+
+    for (k = -1; k <= 2; k++)
+        lowest = MIN(lowest, mirror_index(i + k, yres));
+    return lowest;
+}
+
+/* B-spline and o-MOMS with fractional source rows need coefficients along
+ * y, the solution of a tridiagonal system over each whole column.  Its
+ * forward elimination runs as the x-corrected rows are made; the back
+ * substitution runs upwards through a ring of rows, and each output row is
+ * made (upwards too) as soon as all its coefficient rows are there. */
+static void
+rebuild_rows_prefiltered(RowShifter *shifter, gint yres,
+                         GwyInterpolationType interpolation,
+                         gdouble fill_value, gdouble *result, gdouble *mask)
+{
+    const ResamplePlan *plan = shifter->plan;
+    gint xres = shifter->xres, r, i, k, c, below_row, tap;
+    const gdouble *rows[KERNEL_TAPS];
+    gdouble w[KERNEL_TAPS], centre = 0.0, side = 0.0, frac, q, inv;
+    gdouble *eliminated, *row, *prev;
+    const gdouble *below;
+    Prefilter prefilter;
+    RowRing ring;
+
+    kernel_needs_prefilter(interpolation, &centre, &side);
+    prefilter_init(&prefilter, yres, centre, side);
+    eliminated = g_new(gdouble, xres*(gsize)yres);
+    for (i = 0; i < yres; i++) {
+        row = eliminated + i*(gsize)xres;
+        if (i % PREFILTER_BATCH == 0) {
+            row_shifter_shift_rows(shifter, i, MIN(PREFILTER_BATCH, yres - i),
+                                   row);
+        }
+        if (i == 0)
             continue;
+        prev = row - xres;
+        q = prefilter.factor[i];
+        for (c = 0; c < xres; c++)
+            row[c] -= q*prev[c];
+    }
+
+    row_ring_init(&ring, xres);
+    r = yres - 1;
+    for (i = yres - 1; i >= 0; i--) {
+        row = row_ring_slot(&ring, i);
+        prev = eliminated + i*(gsize)xres;
+        inv = prefilter.inv_diag[i];
+        if (i == yres - 1) {
+            for (c = 0; c < xres; c++)
+                row[c] = prev[c]*inv;
         }
-        i = (gint)(rho + 1.0) - 1;
-        nearest = CLAMP((gint)floor(rho + 0.5), 0, yres-1);
-        if (!prefiltered && rho == i)
-            memcpy(dest, shifted + i*(gsize)xres, xres*sizeof(gdouble));
         else {
-            kernel_weights(interpolation, rho - i, w);
-            combine_rows(shifted, xres, yres, i, w, dest);
+            below = ring.rows + ((i + 1) % RING_ROWS)*(gsize)xres;
+            for (c = 0; c < xres; c++)
+                row[c] = (prev[c] - side*below[c])*inv;
         }
-        first = plan->valid_first[nearest];
-        last = plan->valid_last[nearest];
-        if (mask_row)
-            memset(mask_row, 0, xres*sizeof(gdouble));
-        if (first > last)
-            fill_row(dest, mask_row, 0, xres, fill_value);
-        else {
-            fill_row(dest, mask_row, 0, first, fill_value);
-            fill_row(dest, mask_row, last + 1, xres, fill_value);
+        for (; r >= 0; r--) {
+            if (!isnan(plan->rho[r])) {
+                below_row = source_row_below(plan->rho[r], &frac);
+                if (lowest_tap(below_row, yres) < i)
+                    break;
+                kernel_weights(interpolation, frac, w);
+                for (k = 0; k < KERNEL_TAPS; k++) {
+                    tap = mirror_index(below_row - 1 + k, yres);
+                    rows[k] = ring.rows + (tap % RING_ROWS)*(gsize)xres;
+                }
+                combine_rows(rows, w, xres, result + r*(gsize)xres);
+            }
+            finish_row(plan, xres, yres, r, fill_value, result, mask);
         }
     }
+    g_free(ring.rows);
+    g_free(eliminated);
+    prefilter_clear(&prefilter);
 }
 
 static void
@@ -665,7 +842,8 @@ continuous_compensate_trajectory(const gdouble *a,
 {
     ScanTiming default_timing;
     ResamplePlan plan;
-    gdouble *shifted;
+    RowShifter shifter;
+    gdouble centre = 0.0, side = 0.0;
     gboolean ok;
 
     g_return_val_if_fail(a && result && trajectory, FALSE);
@@ -682,11 +860,17 @@ continuous_compensate_trajectory(const gdouble *a,
     ok = (plan_columns(trajectory, timing, &plan, error)
           && plan_rows(trajectory, timing, &plan, error));
     if (ok) {
-        shifted = g_new(gdouble, xres*(gsize)yres);
-        shift_rows_x(a, xres, yres, &plan, interpolation, shifted);
-        rebuild_rows_y(shifted, xres, yres, &plan, interpolation, fill_value,
-                       result, mask);
-        g_free(shifted);
+        row_shifter_init(&shifter, a, xres, &plan, interpolation);
+        if (kernel_needs_prefilter(interpolation, &centre, &side)
+            && rows_need_interpolation(&plan, yres)) {
+            rebuild_rows_prefiltered(&shifter, yres, interpolation,
+                                     fill_value, result, mask);
+        }
+        else {
+            rebuild_rows_streaming(&shifter, yres, interpolation,
+                                   fill_value, result, mask);
+        }
+        row_shifter_clear(&shifter);
     }
     resample_plan_clear(&plan);
     return ok;
