@@ -38,7 +38,9 @@ drift_fit_options_init(DriftFitOptions *options)
 {
     memset(options, 0, sizeof(DriftFitOptions));
     options->n_folds = 5;
-    options->bic_margin = 10.0;
+    options->bic_margin = 20.0;
+    options->cv_gain = 0.1;
+    options->min_explained = 1.5;
     options->outlier_sigmas = 5.0;
 }
 
@@ -262,7 +264,7 @@ static gint
 parameter_grid(const Prepared *pm, DriftModelType type,
                const DriftFitOptions *options, gdouble **grid)
 {
-    gdouble tmin = MAX(pm->t_resolution, options->min_period);
+    gdouble tmin = MAX(2.0*pm->t_resolution, options->min_period);
     gdouble tmax = MAX(pm->t_max, 2.0*tmin), *g, *times;
     gint i, m, nt;
 
@@ -274,7 +276,7 @@ parameter_grid(const Prepared *pm, DriftModelType type,
     }
     else if (type == DRIFT_MODEL_OSCILLATION) {
         /* Uniform in frequency, fine enough that no alias is missed. */
-        gdouble fmin = 0.5/tmax, fmax = 0.5/tmin, df = 0.125/tmax;
+        gdouble fmin = 0.5/tmax, fmax = 1.0/tmin, df = 0.125/tmax;
 
         m = CLAMP((gint)ceil((fmax - fmin)/df) + 1, 8, MAX_GRID);
         g = g_new(gdouble, m);
@@ -516,6 +518,14 @@ mark_outliers(const DriftMeasurement *meas, gint n, const DriftFit *fit,
     g_free(sorted);
 }
 
+/* RMS of what the effect explains beyond constant drift. */
+static gdouble
+explained_rms(const DriftFit *none, const DriftFit *effect)
+{
+    return sqrt(MAX(none->rms_nm*none->rms_nm
+                    - effect->rms_nm*effect->rms_nm, 0.0));
+}
+
 gint
 drift_fit_select(const DriftMeasurement *meas, gint n,
                  const DriftFitOptions *options, DriftFit *fits)
@@ -561,7 +571,10 @@ drift_fit_select(const DriftMeasurement *meas, gint n,
             continue;
         if (inone >= 0 && fits[inone].ok
             && (fits[inone].bic - fits[i].bic < options->bic_margin
-                || !(fits[i].cv_rms_nm < fits[inone].cv_rms_nm)))
+                || !(fits[i].cv_rms_nm
+                     < (1.0 - options->cv_gain)*fits[inone].cv_rms_nm)
+                || (explained_rms(fits + inone, fits + i)
+                    < options->min_explained*fits[i].rms_nm)))
             continue;
         if (chosen == inone || fits[i].bic < fits[chosen].bic)
             chosen = i;

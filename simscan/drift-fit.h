@@ -45,7 +45,14 @@ typedef struct {
 
 typedef struct {
     gint n_folds;           /* cross-validation folds over groups (default 5) */
-    gdouble bic_margin;     /* an effect must beat "none" by this (default 10) */
+    gdouble bic_margin;     /* an effect must beat "none" by this (default 20) */
+    gdouble cv_gain;        /* and predict held-out groups better by this
+                               fraction (default 0.1): registration errors
+                               are correlated and hundreds of periods or
+                               jump times are tried, so the BIC alone is
+                               too lenient */
+    gdouble min_explained;  /* and explain, beyond constant drift, this many
+                               times its own residual RMS (default 1.5) */
     gdouble outlier_sigmas; /* residuals beyond this many robust sigmas are
                                dropped before the final fits (default 5) */
     gdouble min_period;     /* s, shortest period/tau searched; <= 0: from the
@@ -78,7 +85,7 @@ gdouble        drift_fit_cross_validate(const DriftMeasurement *meas,
  * drops gross outliers (weights set to 0 in a private copy) and returns the
  * index into fits of the chosen model: the lowest BIC, but an effect only
  * when it beats "none" by bic_margin and also predicts held-out groups
- * better.  Returns -1 when nothing could be fitted. */
+ * better by the fraction cv_gain.  Returns -1 when nothing could be fitted. */
 gint           drift_fit_select       (const DriftMeasurement *meas,
                                        gint n,
                                        const DriftFitOptions *options,

@@ -307,6 +307,10 @@ run_fit(const FitArgs *args, gchar **files, gint n_files, GError **error)
         doptions.n_blocks = CLAMP(args->blocks, 1,
                                   series->frames[0].timing.yres/4);
     drift_fit_options_init(&foptions);
+    /* A block averages the drift over its lines: periods and time constants
+     * shorter than a few blocks cannot be told from registration error. */
+    foptions.min_period = 3.0*series->frames[0].timing.line_time
+                          * series->frames[0].timing.yres/doptions.n_blocks;
     if (args->bic_margin >= 0.0)
         foptions.bic_margin = args->bic_margin;
     if (!fit_report_compute(series, &doptions, &foptions, &report)) {
@@ -361,7 +365,7 @@ simscan_fit_main(int argc, char **argv)
         { "keep-duplicates", 0, 0, G_OPTION_ARG_NONE, &args.keep_duplicates,
           N_("Keep frames whose data are identical"), NULL },
         { "bic-margin", 0, 0, G_OPTION_ARG_DOUBLE, &args.bic_margin,
-          N_("BIC gain an effect needs over constant drift (default 10)"),
+          N_("BIC gain an effect needs over constant drift (default 20)"),
           N_("X") },
         { G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &files,
           NULL, N_("FRAME...") },
