@@ -126,12 +126,10 @@ START_TEST(test_round_trip_built)
     gchar *text, *text2;
     gdouble v;
 
-    table->rows[0].has_drift = TRUE;
-    table->rows[0].dx = 0.1;
-    table->rows[0].dy = -(0.1 + 0.2);
-    table->rows[2].has_drift = TRUE;
-    table->rows[2].dx = 1e-300;
-    table->rows[2].dy = -7.0;
+    drift_table_set_drift(table, 0, 0.1, -(0.1 + 0.2));
+    drift_table_set_drift(table, 1, 4.0, NAN);
+    drift_table_set_drift(table, 2, 1e-300, -7.0);
+    ck_assert(!table->rows[1].has_drift && table->rows[1].dx == 0.0);
     drift_table_set_extra(table, 0, "t_image", 12.5);
     drift_table_set_extra(table, 0, "dx_exact", 0.123456789012345);
     drift_table_set_extra(table, 2, "t_image", NAN);

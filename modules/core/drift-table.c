@@ -726,6 +726,21 @@ drift_table_save(const DriftTable *table, const gchar *filename,
     return ok;
 }
 
+void
+drift_table_set_drift(DriftTable *table, gint stripe, gdouble dx, gdouble dy)
+{
+    DriftTableRow *row;
+
+    g_return_if_fail(table);
+    g_return_if_fail(stripe >= 0 && stripe < table->n_stripes);
+    g_return_if_fail(!isinf(dx) && !isinf(dy));
+
+    row = table->rows + stripe;
+    row->has_drift = !isnan(dx) && !isnan(dy);
+    row->dx = row->has_drift ? dx : 0.0;
+    row->dy = row->has_drift ? dy : 0.0;
+}
+
 /* Extra columns. */
 
 gint

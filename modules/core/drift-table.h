@@ -77,6 +77,13 @@ gboolean     drift_table_save           (const DriftTable *table,
                                          const gchar *filename,
                                          GError **error);
 
+/* Sets stripe's drift in the table's unit; NaN in either clears it (a blank
+ * dx,dy: no particle). */
+void         drift_table_set_drift      (DriftTable *table,
+                                         gint stripe,
+                                         gdouble dx,
+                                         gdouble dy);
+
 /* Extra columns. */
 gint         drift_table_find_column    (const DriftTable *table,
                                          const gchar *name);
@@ -101,10 +108,14 @@ gboolean     drift_table_check_image    (const DriftTable *table,
                                          GError **error);
 
 /* Converts to pixels with the image's pixel sizes (metres per pixel; x and y
- * may differ) and applies the nearest-stripe rule.  dx_px, dy_px get
- * n_stripes values.  With whole_pixels, a px table with a fraction is refused
- * (paper mode), and physical values are rounded to the nearest pixel.
- * Calls drift_table_check_image() first. */
+ * may differ; ignored for px tables) and applies the nearest-stripe rule.
+ * dx_px, dy_px get n_stripes values.  With whole_pixels, a px table with a
+ * fraction (more than 1e-9 from an integer) is refused (paper mode), and
+ * physical values are rounded to the nearest pixel (halves away from zero);
+ * the results are then exact integers that fit a gint.  A drift of more than
+ * 1e9 pixels is refused in either case.  Calls drift_table_check_image()
+ * first.  Tables built with drift_table_new() are named "drift table" in
+ * messages, with the line numbers they would have when written. */
 gboolean     drift_table_to_pixels      (const DriftTable *table,
                                          gint yres,
                                          gdouble x_pixel_size,
