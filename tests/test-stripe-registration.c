@@ -87,6 +87,39 @@ START_TEST(test_random_drift_pairs)
 }
 END_TEST
 
+/* The one-call path the tool and the module use gives a px table. */
+START_TEST(test_table_for_fields)
+{
+    FramePairSpec spec;
+    FramePair *pair;
+    GwyDataField *image, *reference;
+    DriftTable *table;
+    GError *error = NULL;
+    gdouble tx[8], ty[8];
+    gint s;
+
+    frame_pair_spec_init(&spec);
+    spec.xres = spec.yres = 128;
+    pair = frame_pair_generate(&spec, test_seed);
+    frame_pair_stripe_truth(pair, 8, tx, ty);
+    image = gwy_data_field_new(128, 128, 1e-6, 1e-6, FALSE);
+    reference = gwy_data_field_new_alike(image, FALSE);
+    memcpy(gwy_data_field_get_data(image), pair->image, 128*128*sizeof(gdouble));
+    memcpy(gwy_data_field_get_data(reference), pair->reference, 128*128*sizeof(gdouble));
+    table = stripe_registration_table_for_fields(image, reference, 8, 0.0, TRUE, &error);
+    ck_assert_msg(table, "%s", error ? error->message : "?");
+    ck_assert_int_eq(table->n_stripes, 8);
+    for (s = 0; s < 8; s++) {
+        if (table->rows[s].has_drift)
+            ck_assert(table->rows[s].dx == floor(tx[s] + 0.5) || fabs(tx[s] - floor(tx[s]) - 0.5) < 0.15);
+    }
+    drift_table_free(table);
+    g_object_unref(image);
+    g_object_unref(reference);
+    frame_pair_free(pair);
+}
+END_TEST
+
 START_TEST(test_non_square_images)
 {
     check_random_pairs(320, 192, 12, 3);
@@ -294,8 +327,14 @@ START_TEST(test_flat_image)
     StripeShift shifts[4];
     GError *error = NULL;
 
+    GwyDataField *field = gwy_data_field_new(64, 64, 64, 64, TRUE);
+
     ck_assert(stripe_registration_measure(flat, flat, 64, 64, 4, 0.0, 0.25, shifts, &error));
     ck_assert_int_eq(stripe_registration_count_accepted(shifts, 4), 0);
+    ck_assert(!stripe_registration_table_for_fields(field, field, 4, 0.0, TRUE, &error));
+    ck_assert(g_error_matches(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_NO_MATCH));
+    g_clear_error(&error);
+    g_object_unref(field);
     g_free(flat);
 }
 END_TEST
@@ -313,6 +352,7 @@ registration_suite(void)
     tcase_add_test(tc, test_featureless_stripe_rejected);
     tcase_add_test(tc, test_periodic_texture_lowers_score);
     tcase_add_test(tc, test_table);
+    tcase_add_test(tc, test_table_for_fields);
     tcase_add_test(tc, test_bad_arguments);
     tcase_add_test(tc, test_flat_image);
     suite_add_tcase(suite, tc);

@@ -733,3 +733,26 @@ stripe_registration_to_table(const StripeShift *shifts, gint n, gboolean whole_p
     }
     return table;
 }
+
+DriftTable*
+stripe_registration_table_for_fields(GwyDataField *image, GwyDataField *reference, gint n,
+                                     gdouble max_shift_px, gboolean whole_pixels, GError **error)
+{
+    StripeShift *shifts;
+    DriftTable *table = NULL;
+
+    g_return_val_if_fail(n >= 1, NULL);
+    shifts = g_new(StripeShift, n);
+    if (stripe_registration_measure_fields(image, reference, n, max_shift_px,
+                                           STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, shifts, error)) {
+        if (stripe_registration_count_accepted(shifts, n))
+            table = stripe_registration_to_table(shifts, n, whole_pixels);
+        else {
+            g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_NO_MATCH,
+                        "No stripe of the image could be registered against the reference "
+                        "(featureless, periodic, or not the same area).");
+        }
+    }
+    g_free(shifts);
+    return table;
+}

@@ -19,6 +19,7 @@ typedef enum {
     STRIPE_REGISTRATION_ERROR_SIZE,     /* image and reference differ, or too small */
     STRIPE_REGISTRATION_ERROR_STRIPES,  /* n outside 1..yres */
     STRIPE_REGISTRATION_ERROR_VALUE,    /* NaN or infinity in the data */
+    STRIPE_REGISTRATION_ERROR_NO_MATCH, /* no stripe could be registered */
 } StripeRegistrationError;
 
 /* A min_score that rejects featureless and ambiguous (periodic) stripes but
@@ -66,6 +67,16 @@ gboolean     stripe_registration_measure_fields(GwyDataField *image,
  * with dx_exact, dy_exact and score columns. */
 DriftTable*  stripe_registration_to_table(const StripeShift *shifts, gint n,
                                           gboolean whole_pixels);
+
+/* What the tool and the module call: measures with the default min_score
+ * and returns the table (see above), or NULL with an error when the sizes
+ * differ, n is out of range, or no stripe is accepted. */
+DriftTable*  stripe_registration_table_for_fields(GwyDataField *image,
+                                                  GwyDataField *reference,
+                                                  gint n,
+                                                  gdouble max_shift_px,
+                                                  gboolean whole_pixels,
+                                                  GError **error);
 
 /* How many stripes were accepted. */
 gint         stripe_registration_count_accepted(const StripeShift *shifts,
