@@ -9,6 +9,7 @@
 #include "simscan-generate.h"
 #include "n-sweep.h"
 #include "simscan-compare.h"
+#include "fit-command.h"
 #include "simscan-i18n.h"
 
 int
@@ -23,5 +24,7 @@ main(int argc, char **argv)
         return simscan_sweep_main(argc - 1, argv + 1);
     if (argc > 1 && strcmp(argv[1], "compare") == 0)
         return simscan_compare_main(argc - 1, argv + 1);
+    if (argc > 1 && strcmp(argv[1], "fit") == 0)
+        return simscan_fit_main(argc - 1, argv + 1);
     return simscan_generate_main(argc, argv);
 }
