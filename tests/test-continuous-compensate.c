@@ -559,6 +559,64 @@ START_TEST(test_fractional_shift_matches_gwyddion)
 }
 END_TEST
 
+/* Strong shear (x drift of 2-4 px along one trace, no y drift): every row
+ * is Gwyddion's interpolation at the positions solving
+ * x = c + Dx(t(row, x)), for every kernel. */
+START_TEST(test_sheared_rows_match_gwyddion)
+{
+    GRand *rng = test_rand(65);
+    gint xres = 64, yres = 5, size = xres*yres, r, c, k, checked = 0;
+    gdouble *a = random_image(xres, yres, rng);
+    gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
+    gdouble vx = g_rand_double_range(rng, 4.0, 8.0), x, dx, dy, expected;
+    DriftMeasurement meas[3];
+    DriftTrajectory *trajectory;
+    ScanTiming timing;
+    guint i;
+
+    if (g_rand_boolean(rng))
+        vx = -vx;
+    scan_timing_init(&timing, xres, yres, 0.0, 1.0, SCAN_DIRECTION_DOWN);
+    for (k = 0; k < 3; k++) {
+        meas[k].t_image = 2.0*k + 0.5;
+        meas[k].t_local = 25.0;
+        meas[k].dx = vx*(meas[k].t_image - 2.5);
+        meas[k].dy = 0.0;
+    }
+    trajectory = drift_trajectory_new(meas, 3, NULL);
+    for (i = 0; i < G_N_ELEMENTS(all_kernels); i++) {
+        ck_assert(continuous_compensate_trajectory(a, xres, yres, trajectory,
+                                                   &timing, all_kernels[i],
+                                                   -1.0, result, mask, NULL));
+        for (r = 0; r < yres; r++) {
+            for (c = 0; c < xres; c++) {
+                x = c;
+                for (k = 0; k < 60; k++) {
+                    drift_trajectory_eval(trajectory,
+                                          scan_timing_pixel_time(&timing, r, x),
+                                          &dx, &dy);
+                    x = c + dx;
+                }
+                if (x < 1.0 || x > xres - 3.0)
+                    continue;
+                expected = gwyddion_interpolate(a + r*xres, xres, x,
+                                                all_kernels[i]);
+                ck_assert_msg(fabs(result[r*xres + c] - expected) < 1e-9,
+                              "kernel %d (%d,%d) at x %g: %.15g vs %.15g",
+                              all_kernels[i], r, c, x, result[r*xres + c],
+                              expected);
+                checked++;
+            }
+        }
+    }
+    ck_assert_int_gt(checked, G_N_ELEMENTS(all_kernels)*size/2);
+    drift_trajectory_free(trajectory);
+    g_free(result);
+    g_free(a);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* Constant fractional drift: the filled pixels are exactly those whose
  * source lies more than half a pixel beyond the outer pixel centres. */
 START_TEST(test_mask_constant_drift)
@@ -804,6 +862,7 @@ continuous_compensate_suite(void)
     tcase_add_test(tc, test_zero_drift_exact);
     tcase_add_loop_test(tc, test_whole_pixel_equals_paper_mode, 0, 2);
     tcase_add_test(tc, test_fractional_shift_matches_gwyddion);
+    tcase_add_test(tc, test_sheared_rows_match_gwyddion);
     tcase_add_test(tc, test_mask_constant_drift);
     tcase_add_loop_test(tc, test_mask_sheared, 0, 2);
     tcase_add_test(tc, test_one_stripe);

@@ -40,6 +40,7 @@ enum {
     RING_ROWS = 8,
     /* Rows whose x prefilter recursions run interleaved. */
     PREFILTER_BATCH = 8,
+    PREFILTER_ROW_PAD = 8,
 };
 
 /* The factored tridiagonal system of the B-spline/o-MOMS prefilter for one
@@ -234,59 +235,97 @@ prefilter_clear(Prefilter *prefilter)
     prefilter->factor = prefilter->inv_diag = NULL;
 }
 
-/* Data values to interpolation coefficients along count rows of src
- * (n values each, contiguous) into dest, which may be src.  The rows'
- * recursions are interleaved: each is a serial chain, several of them run
- * in parallel. */
+/* Data values to interpolation coefficients along count rows of data
+ * (n values each, rows stride apart), in place.  The rows' recursions are
+ * interleaved: each is a serial chain, several of them run in parallel. */
 static void
-prefilter_rows(const Prefilter *prefilter, const gdouble *src, gint count,
-               gdouble *dest)
+prefilter_rows(const Prefilter *prefilter, gdouble *data, gint count,
+               gsize stride)
 {
     const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
     gdouble side = prefilter->side, f, inv;
     gint n = prefilter->n, i, k;
 
-    for (k = 0; k < count; k++)
-        dest[k*n] = src[k*n];
     for (i = 1; i < n; i++) {
         f = factor[i];
         for (k = 0; k < count; k++)
-            dest[k*n + i] = src[k*n + i] - f*dest[k*n + i-1];
+            data[k*stride + i] -= f*data[k*stride + i-1];
     }
     for (k = 0; k < count; k++)
-        dest[k*n + n-1] *= inv_diag[n-1];
+        data[k*stride + n-1] *= inv_diag[n-1];
     for (i = n-2; i >= 0; i--) {
         inv = inv_diag[i];
         for (k = 0; k < count; k++)
-            dest[k*n + i] = (dest[k*n + i] - side*dest[k*n + i+1])*inv;
+            data[k*stride + i] = (data[k*stride + i] - side*data[k*stride + i+1])*inv;
     }
 }
 
-/* Resamples one row: dest[c] = src at x_start + x_step*c, the position
- * clamped to the image's extent (values beyond it only feed neighbours of
- * filled pixels). */
+/* One output pixel at source position x (clamped to the image's extent:
+ * values beyond it only feed neighbours of filled pixels), with mirrored
+ * taps near the ends. */
+KERNEL_INLINE gdouble
+resample_pixel(GwyInterpolationType type, const gdouble *src, gint n,
+               gdouble x)
+{
+    gdouble w[KERNEL_TAPS];
+    gint i;
+
+    x = CLAMP(x, -0.5, n - 0.5);
+    i = (gint)(x + 1.0) - 1;
+    kernel_weights(type, x - i, w);
+    return (w[0]*src[mirror_index(i-1, n)] + w[1]*src[mirror_index(i, n)]
+            + w[2]*src[mirror_index(i+1, n)] + w[3]*src[mirror_index(i+2, n)]);
+}
+
+/* Output pixels from c on that read the source at the same offset d = i - c
+ * with all four taps inside: the last such pixel, or c - 1 if c is not one.
+ * x_step is within a hair of 1, so runs span most of the row. */
+static gint
+constant_offset_run(gdouble x_start, gdouble x_step, gint n, gint c, gint *d)
+{
+    gdouble x = x_start + x_step*c, e = x_step - 1.0, frac, span;
+    gint i, last;
+
+    if (!(x >= 1.0 && x < n - 3.0))
+        return c - 1;
+    i = (gint)x;
+    *d = i - c;
+    frac = x - i;
+    /* Stop a pixel early so rounding cannot carry frac out of [0, 1). */
+    if (e > 0.0)
+        span = (1.0 - frac)/e - 1.0;
+    else if (e < 0.0)
+        span = frac/(-e) - 1.0;
+    else
+        span = n;
+    last = (span < n) ? c + (gint)MAX(span, 0.0) : n - 1;
+    return MIN(last, MIN(n - 4 - *d, n - 1));
+}
+
+/* Resamples one row: dest[c] = src at x_start + x_step*c.  Within runs of
+ * constant tap offset the taps are read without index arithmetic or edge
+ * checks, so the loop is a straight polynomial-and-dot-product. */
 KERNEL_INLINE void
 resample_row_with(GwyInterpolationType type, const gdouble *src, gint n,
                   gdouble x_start, gdouble x_step, gdouble *dest)
 {
-    gdouble lo = -0.5, hi = n - 0.5, x, w[KERNEL_TAPS];
-    gint c, i;
+    gdouble w[KERNEL_TAPS];
+    const gdouble *s;
+    gint c = 0, k, d, last;
 
-    for (c = 0; c < n; c++) {
-        x = x_start + x_step*c;
-        x = CLAMP(x, lo, hi);
-        i = (gint)(x + 1.0) - 1;
-        kernel_weights(type, x - i, w);
-        if (G_LIKELY(i >= 1 && i + 2 < n)) {
-            dest[c] = (w[0]*src[i-1] + w[1]*src[i]
-                       + w[2]*src[i+1] + w[3]*src[i+2]);
+    while (c < n) {
+        last = constant_offset_run(x_start, x_step, n, c, &d);
+        if (last < c) {
+            dest[c] = resample_pixel(type, src, n, x_start + x_step*c);
+            c++;
+            continue;
         }
-        else {
-            dest[c] = (w[0]*src[mirror_index(i-1, n)]
-                       + w[1]*src[mirror_index(i, n)]
-                       + w[2]*src[mirror_index(i+1, n)]
-                       + w[3]*src[mirror_index(i+2, n)]);
+        s = src + d;
+        for (k = c; k <= last; k++) {
+            kernel_weights(type, (x_start + x_step*k) - (k + d), w);
+            dest[k] = w[0]*s[k-1] + w[1]*s[k] + w[2]*s[k+1] + w[3]*s[k+2];
         }
+        c = last + 1;
     }
 }
 
@@ -525,7 +564,8 @@ row_shifter_init(RowShifter *shifter, const gdouble *a, gint xres,
     shifter->coeffs = NULL;
     if (shifter->prefilter_x) {
         prefilter_init(&shifter->x_prefilter, xres, centre, side);
-        shifter->coeffs = g_new(gdouble, PREFILTER_BATCH*(gsize)xres);
+        shifter->coeffs = g_new(gdouble,
+                                PREFILTER_BATCH*(xres + PREFILTER_ROW_PAD));
     }
 }
 
@@ -555,9 +595,16 @@ row_shifter_shift_rows(RowShifter *shifter, gint first, gint count,
     const ResamplePlan *plan = shifter->plan;
     gint xres = shifter->xres, i, k;
     const gdouble *src = shifter->a + first*(gsize)xres, *coeffs = src;
+    gsize stride = xres;
 
     if (shifter->prefilter_x) {
-        prefilter_rows(&shifter->x_prefilter, src, count, shifter->coeffs);
+        /* Rows 32 KiB apart would share cache sets; pad them. */
+        stride = xres + PREFILTER_ROW_PAD;
+        for (k = 0; k < count; k++) {
+            memcpy(shifter->coeffs + k*stride, src + k*(gsize)xres,
+                   xres*sizeof(gdouble));
+        }
+        prefilter_rows(&shifter->x_prefilter, shifter->coeffs, count, stride);
         coeffs = shifter->coeffs;
     }
     for (k = 0; k < count; k++) {
@@ -567,7 +614,7 @@ row_shifter_shift_rows(RowShifter *shifter, gint first, gint count,
                             dest + k*(gsize)xres);
         }
         else {
-            resample_row(shifter->interpolation, coeffs + k*(gsize)xres, xres,
+            resample_row(shifter->interpolation, coeffs + k*stride, xres,
                          plan->x_start[i], plan->x_step[i],
                          dest + k*(gsize)xres);
         }
