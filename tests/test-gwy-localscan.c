@@ -167,8 +167,9 @@ tool_run_clear(ToolRun *run)
     g_free(run->err);
 }
 
+/* env: NULL or name, value pairs, NULL-terminated, applied last. */
 static void
-run_tool_env(ToolRun *run, const gchar *module, const gchar *const *args)
+run_tool_env(ToolRun *run, const gchar *module, const gchar *const *env, const gchar *const *args)
 {
     GPtrArray *argv = g_ptr_array_new();
     gchar **envp = g_get_environ();
@@ -190,6 +191,8 @@ run_tool_env(ToolRun *run, const gchar *module, const gchar *const *args)
         envp = g_environ_setenv(envp, "LOCALSCAN_MODULE", module, TRUE);
     else
         envp = g_environ_unsetenv(envp, "LOCALSCAN_MODULE");
+    for (i = 0; env && env[i] && env[i+1]; i += 2)
+        envp = g_environ_setenv(envp, env[i], env[i+1], TRUE);
 
     ck_assert_msg(g_spawn_sync(NULL, (gchar**)argv->pdata, envp, G_SPAWN_DEFAULT,
                                NULL, NULL, &run->out, &run->err, &wait_status, &error),
@@ -210,7 +213,7 @@ module_path(void)
 static void
 run_tool(ToolRun *run, const gchar *const *args)
 {
-    run_tool_env(run, module_path(), args);
+    run_tool_env(run, module_path(), NULL, args);
 }
 
 static void
@@ -1015,14 +1018,14 @@ START_TEST(test_error_module)
     gchar *missing = in_path("nowhere.so"), *bogus = in_path("bogus.so"), *message;
     ToolRun run;
 
-    run_tool_env(&run, missing, (const gchar *const[]){ "-o", output, input, NULL });
+    run_tool_env(&run, missing, NULL, (const gchar *const[]){ "-o", output, input, NULL });
     message = g_strdup_printf("gwy-localscan: cannot load module %s: no such file", missing);
     assert_failure(&run, 1, message);
     g_free(message);
     tool_run_clear(&run);
 
     write_text(bogus, "not a shared library\n");
-    run_tool_env(&run, bogus, (const gchar *const[]){ "-o", output, input, NULL });
+    run_tool_env(&run, bogus, NULL, (const gchar *const[]){ "-o", output, input, NULL });
     message = g_strdup_printf("gwy-localscan: cannot load module %s: *", bogus);
     assert_failure(&run, 1, message);
     g_free(message);
@@ -1032,7 +1035,7 @@ START_TEST(test_error_module)
      * build's --with-dest folder is not installed to by make check. */
     if (!*GWY_LOCALSCAN_MODULE_DIR
         || !g_file_test(GWY_LOCALSCAN_MODULE_DIR "/localscan.so", G_FILE_TEST_EXISTS)) {
-        run_tool_env(&run, NULL, (const gchar *const[]){ "-o", output, input, NULL });
+        run_tool_env(&run, NULL, NULL, (const gchar *const[]){ "-o", output, input, NULL });
         assert_failure(&run, 1, "gwy-localscan: Gwyddion has no process function localscan_drift: "
                        "the localscan module is not installed (install it, or set LOCALSCAN_MODULE "
                        "to its file)");
@@ -1096,6 +1099,29 @@ START_TEST(test_continuous_mode_accepts_fractions)
 }
 END_TEST
 
+/* A German user reads German help and messages (the catalogue built from
+ * po/de.po; LOCALSCAN_LOCALEDIR stands for the installed locale folder). */
+START_TEST(test_german_messages)
+{
+    static const gchar *const german[] = {
+        "LC_ALL", "C.UTF-8", "LANGUAGE", "de", "LOCALSCAN_LOCALEDIR", TEST_BUILDDIR "/tests/locale", NULL,
+    };
+    gchar *input = simple_input(GOOD_TABLE);
+    ToolRun run;
+
+    run_tool_env(&run, module_path(), german, (const gchar *const[]){ "--help", NULL });
+    ck_assert_int_eq(run.status, 0);
+    ck_assert_msg(strstr(run.out, "-o, --output=AUSGABE.gwy        Das Ergebnis nach AUSGABE.gwy schreiben"),
+                  "no German --help:\n%s", run.out);
+    tool_run_clear(&run);
+
+    run_tool_env(&run, module_path(), german, (const gchar *const[]){ input, NULL });
+    assert_failure(&run, 2, "gwy-localscan: keine Ausgabedatei: bitte -o AUSGABE.gwy angeben");
+    tool_run_clear(&run);
+    g_free(input);
+}
+END_TEST
+
 static Suite*
 gwy_localscan_suite(void)
 {
@@ -1117,6 +1143,7 @@ gwy_localscan_suite(void)
     tc = tcase_create("command line and errors");
     tcase_add_checked_fixture(tc, setup_scratch, teardown_scratch);
     tcase_add_test(tc, test_help_lists_options);
+    tcase_add_test(tc, test_german_messages);
     tcase_add_loop_test(tc, test_error_exit, 0, G_N_ELEMENTS(error_cases));
     tcase_add_test(tc, test_error_no_channel);
     tcase_add_test(tc, test_error_module);
