@@ -78,8 +78,10 @@ remove_tree(const gchar *path)
 static void
 setup_scratch(void)
 {
-    scratch = g_dir_make_tmp("test-gwy-localscan-XXXXXX", NULL);
-    ck_assert_ptr_nonnull(scratch);
+    /* In the build tree: Check skips teardown after a failed test, and a
+     * failure's files are then left where they are found and cleaned. */
+    scratch = g_strdup(TEST_BUILDDIR "/tests/scratch-gwy-localscan-XXXXXX");
+    ck_assert_ptr_nonnull(g_mkdtemp(scratch));
     in_dir = g_build_filename(scratch, "in", NULL);
     out_dir = g_build_filename(scratch, "out", NULL);
     child_home = g_build_filename(scratch, "home", NULL);
