@@ -32,6 +32,7 @@ local_scan_params_init(LocalScanParams *params)
     params->tip_speed = 4e-6;
     params->line_overhead = 0.0;
     params->threshold_fraction = 0.75;
+    params->choice = PARTICLE_CHOICE_CLOSEST;
 }
 
 gdouble
@@ -220,7 +221,8 @@ local_scan_run(GwyDataField *field, const ScanTiming *timing,
 
     g_return_val_if_fail(n >= 1 && n <= yres, NULL);
     chosen = g_new(gint, n);
-    particle_choose_for_stripes(particles, n, xres, yres, chosen);
+    particle_choose_for_stripes_by(particles, n, xres, yres, params->choice,
+                                   chosen);
     res = results ? results : g_new(LocalScanParticle, n);
     table = drift_table_new(n, DRIFT_UNIT_PX);
     for (s = 0; s < n; s++) {

@@ -34,6 +34,8 @@ typedef struct {
     gdouble threshold_fraction;/* chord threshold, fraction of the particle's
                                   height above the substrate (0.75:
                                   clear of a sphere's vertical equator) */
+    ParticleChoice choice;     /* which particle of a stripe is scanned
+                                  (PARTICLE_CHOICE_CLOSEST, the paper's) */
 } LocalScanParams;
 
 /* One particle's local scan.  Pixel coordinates as in particle-detect.h. */
@@ -71,7 +73,7 @@ gdouble      local_scan_particle      (GwyDataField *field,
                                        LocalScanParticle *result);
 
 /* The whole procedure over n stripes: choose a particle per stripe
- * (particle_choose_for_stripes), scan them in stripe order starting at
+ * (particle_choose_for_stripes_by with params->choice), scan them in stripe order starting at
  * t_start, and return the px drift table: dx, dy rounded to whole pixels
  * (blank for a stripe without a particle or whose particle was not found),
  * extra columns dx_exact, dy_exact, t_image, t_local, x, y, lines.

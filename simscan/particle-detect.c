@@ -128,17 +128,25 @@ particle_detect(GwyDataField *field, const ParticleDetectParams *params,
     return particles;
 }
 
+gboolean
+particle_touches_stripe_boundary(const DetectedParticle *particle, gint s,
+                                 gint n, gint yres)
+{
+    return (particle->row_min <= stripe_first_row(s, n, yres)
+            || particle->row_max >= stripe_end_row(s, n, yres) - 1);
+}
+
 void
-particle_choose_for_stripes(const GArray *particles, gint n, gint xres,
-                            gint yres, gint *chosen)
+particle_choose_for_stripes_by(const GArray *particles, gint n, gint xres,
+                               gint yres, ParticleChoice choice, gint *chosen)
 {
     gdouble *best;
-    gboolean *inside;
+    gboolean *whole;
     guint k;
     gint s;
 
     best = g_new(gdouble, n);
-    inside = g_new0(gboolean, n);
+    whole = g_new0(gboolean, n);
     for (s = 0; s < n; s++) {
         chosen[s] = -1;
         best[s] = G_MAXDOUBLE;
@@ -148,27 +156,35 @@ particle_choose_for_stripes(const GArray *particles, gint n, gint xres,
                                                    DetectedParticle, k);
         gint row = (gint)floor(p->y + 0.5);
         gdouble ex, ey, dist2;
-        gboolean is_inside;
+        gboolean is_whole = FALSE, better;
 
         if (p->on_edge || row < 0 || row >= yres)
             continue;
         s = stripe_of_row(row, n, yres);
-        /* Clear of the boundary rows: a grain touching them may be the
-         * part of a particle that the stripe boundary cut off. */
-        is_inside = (p->row_min > stripe_first_row(s, n, yres)
-                     && p->row_max < stripe_end_row(s, n, yres) - 1);
-        if (inside[s] && !is_inside)
-            continue;
+        if (choice == PARTICLE_CHOICE_PREFER_WHOLE) {
+            is_whole = !particle_touches_stripe_boundary(p, s, n, yres);
+            if (whole[s] && !is_whole)
+                continue;
+        }
         ex = p->x - 0.5*(xres - 1);
         ey = p->y - stripe_centre_row(s, n, yres);
         dist2 = ex*ex + ey*ey;
         /* Strictly smaller: on a tie the earlier grain wins, deterministically. */
-        if (dist2 < best[s] || (is_inside && !inside[s])) {
+        better = (dist2 < best[s]) || (is_whole && !whole[s]);
+        if (better) {
             best[s] = dist2;
             chosen[s] = (gint)k;
-            inside[s] = is_inside;
+            whole[s] = is_whole;
         }
     }
-    g_free(inside);
+    g_free(whole);
     g_free(best);
+}
+
+void
+particle_choose_for_stripes(const GArray *particles, gint n, gint xres,
+                            gint yres, gint *chosen)
+{
+    particle_choose_for_stripes_by(particles, n, xres, yres,
+                                   PARTICLE_CHOICE_CLOSEST, chosen);
 }

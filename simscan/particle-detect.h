@@ -45,12 +45,39 @@ GArray*     particle_detect              (GwyDataField *field,
                                           gdouble *substrate,
                                           gdouble *threshold);
 
-/* The paper's choice: for each of the n stripes, the index of the particle
- * (not touching the border) whose centre row lies in the stripe and whose
- * centre is closest to the stripe centre ((xres-1)/2, (first+last)/2); -1 for
- * a stripe without one.  Particles clear of the stripe's first and last rows
- * go first: one cut by a stripe boundary may be a sheared fragment whose centre
- * is off by a pixel when the stripes' drifts differ.  chosen gets n values. */
+/* How a stripe with several particles picks the one to local-scan. */
+typedef enum {
+    /* The paper's rule (shared/spec/paper-mode.md): the particle whose
+     * centre lies closest to the stripe's centre point
+     * ((xres-1)/2, (first_row+last_row)/2), Euclidean distance in px. */
+    PARTICLE_CHOICE_CLOSEST = 0,
+    /* A deviation from the paper, opt-in: particles clear of the stripe's
+     * first and last rows go first, closest to the centre among them.  A
+     * grain cut by a stripe boundary may be a fragment sheared by the two
+     * stripes' different shifts, whose centre is then off by a pixel. */
+    PARTICLE_CHOICE_PREFER_WHOLE,
+} ParticleChoice;
+
+/* For each of the n stripes, the index of the particle (not touching the
+ * image border) whose rounded centre row lies in the stripe, chosen by
+ * choice; -1 for a stripe without one.  On equal distances the particle
+ * earlier in the array wins.  chosen gets n values. */
+void        particle_choose_for_stripes_by (const GArray *particles,
+                                            gint n,
+                                            gint xres,
+                                            gint yres,
+                                            ParticleChoice choice,
+                                            gint *chosen);
+
+/* Whether the grain reaches stripe s's first or last row, so that a stripe
+ * boundary may have cut it. */
+gboolean    particle_touches_stripe_boundary (const DetectedParticle *particle,
+                                              gint s,
+                                              gint n,
+                                              gint yres);
+
+/* The paper's rule: particle_choose_for_stripes_by() with
+ * PARTICLE_CHOICE_CLOSEST. */
 void        particle_choose_for_stripes  (const GArray *particles,
                                           gint n,
                                           gint xres,

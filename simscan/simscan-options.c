@@ -25,6 +25,7 @@ typedef struct {
     gdouble tau, period, phase, jump_time, walk_sigma, walk_dt;
     gint stripes, ls_points;
     gdouble ls_speed, ls_rmax, ls_overhead, ls_delay, ls_threshold;
+    gboolean prefer_whole;
     gint64 seed;
     gchar *output, *table, *json;
     gboolean quiet;
@@ -61,6 +62,7 @@ raw_from_config(RawOptions *raw, const SimscanConfig *config)
     raw->ls_overhead = config->local.line_overhead;
     raw->ls_delay = config->local_delay;
     raw->ls_threshold = config->local.threshold_fraction;
+    raw->prefer_whole = (config->local.choice == PARTICLE_CHOICE_PREFER_WHOLE);
     raw->seed = config->seed;
 }
 
@@ -159,6 +161,13 @@ make_entries(RawOptions *raw)
           "S" },
         { "ls-threshold", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_threshold,
           N_("chord threshold, fraction of the particle height (0.75)"), "F" },
+        { "prefer-whole-particles", 0, 0, G_OPTION_ARG_NONE,
+          &raw->prefer_whole,
+          N_("deviate from the paper's rule (the particle closest to the "
+             "stripe's centre): prefer particles clear of the stripe's first "
+             "and last rows, since one cut by a stripe boundary may be "
+             "sheared by the two stripes' different drifts and measured a "
+             "pixel off"), NULL },
         { "seed", 0, 0, G_OPTION_ARG_INT64, &raw->seed,
           N_("random seed, 0 to 4294967295 (1)"), "N" },
         { "output", 'o', 0, G_OPTION_ARG_FILENAME, &raw->output,
@@ -378,6 +387,8 @@ raw_to_config(const RawOptions *raw, SimscanConfig *config, GError **error)
     config->local.r_max = raw->ls_rmax*NM;
     config->local.line_overhead = raw->ls_overhead;
     config->local.threshold_fraction = raw->ls_threshold;
+    config->local.choice = raw->prefer_whole ? PARTICLE_CHOICE_PREFER_WHOLE
+                                             : PARTICLE_CHOICE_CLOSEST;
     config->local_delay = raw->ls_delay;
     if (raw->sample && !parse_sample(raw->sample, config, error))
         return FALSE;

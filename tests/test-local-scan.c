@@ -259,6 +259,207 @@ START_TEST(test_empty_stripes_filled)
 }
 END_TEST
 
+/* The spec's rule written out plainly, stripe by stripe: among the
+ * particles off the border whose rounded centre row lies in the stripe, the
+ * lowest index at the least Euclidean distance from the stripe's centre
+ * point; with prefer_whole, among those clear of the boundary rows if any. */
+static gint
+reference_choice(const GArray *particles, gint s, gint n, gint xres,
+                 gint yres, gboolean prefer_whole)
+{
+    gint first = s*yres/n, last = (s + 1)*yres/n - 1, pass, best_k = -1;
+    gdouble cx = (xres - 1)/2.0, cy = (first + last)/2.0, best = INFINITY;
+    guint k;
+
+    for (pass = prefer_whole ? 0 : 1; pass < 2 && best_k < 0; pass++) {
+        for (k = 0; k < particles->len; k++) {
+            const DetectedParticle *p = &g_array_index(particles,
+                                                       DetectedParticle, k);
+            gint row = (gint)floor(p->y + 0.5);
+            gdouble d = hypot(p->x - cx, p->y - cy);
+
+            if (p->on_edge || row < first || row > last)
+                continue;
+            if (pass == 0 && (p->row_min <= first || p->row_max >= last))
+                continue;
+            if (d < best) {
+                best = d;
+                best_k = (gint)k;
+            }
+        }
+    }
+    return best_k;
+}
+
+/* Random particles on a quarter-pixel grid (distances are exact, so mirror
+ * images and repeats make true ties); grains extend a few rows either way,
+ * so many touch a stripe's first or last row. */
+static GArray*
+random_particles(GRand *rng, gint count, gint xres, gint yres)
+{
+    GArray *particles = g_array_new(FALSE, TRUE, sizeof(DetectedParticle));
+    gint k;
+
+    for (k = 0; k < count; k++) {
+        DetectedParticle p = { 0 };
+
+        if (k && g_rand_int_range(rng, 0, 4) == 0) {
+            /* A tie: the mirror image of an earlier particle through the
+             * centre column, or the same place again. */
+            p = g_array_index(particles, DetectedParticle,
+                              g_rand_int_range(rng, 0, k));
+            if (g_rand_boolean(rng))
+                p.x = (xres - 1) - p.x;
+        }
+        else {
+            p.x = 0.25*g_rand_int_range(rng, 0, 4*(xres - 1) + 1);
+            p.y = 0.25*g_rand_int_range(rng, 0, 4*(yres - 1) + 1);
+            p.row_min = (gint)floor(p.y) - g_rand_int_range(rng, 0, 4);
+            p.row_max = (gint)ceil(p.y) + g_rand_int_range(rng, 0, 4);
+            p.on_edge = (g_rand_int_range(rng, 0, 10) == 0);
+            p.area = 1;
+        }
+        g_array_append_val(particles, p);
+    }
+    return particles;
+}
+
+/* The default choice is exactly the spec's: the particle closest to the
+ * stripe's centre point, ties to the earlier one; particle_choose_for_stripes
+ * and the CLOSEST choice agree.  500 seeded random sets of particles over
+ * random image sizes and stripe counts. */
+START_TEST(test_choice_closest_is_spec)
+{
+    GRand *rng = g_rand_new_with_seed(test_seed + 3);
+    gint trial, n_cut_chosen = 0, n_ties = 0, n_checked = 0;
+
+    for (trial = 0; trial < 500; trial++) {
+        gint xres = g_rand_int_range(rng, 8, 300);
+        gint yres = g_rand_int_range(rng, 8, 300);
+        gint n = g_rand_int_range(rng, 1, MIN(yres, 40) + 1);
+        GArray *particles = random_particles(rng, g_rand_int_range(rng, 0, 60),
+                                             xres, yres);
+        gint *chosen = g_new(gint, n), *chosen_by = g_new(gint, n);
+        gint s;
+
+        particle_choose_for_stripes(particles, n, xres, yres, chosen);
+        particle_choose_for_stripes_by(particles, n, xres, yres,
+                                       PARTICLE_CHOICE_CLOSEST, chosen_by);
+        for (s = 0; s < n; s++) {
+            gint expected = reference_choice(particles, s, n, xres, yres,
+                                             FALSE);
+            const DetectedParticle *p;
+            guint k;
+
+            ck_assert_msg(chosen[s] == expected,
+                          "trial %d (%d x %d, %d stripes) stripe %d: chose %d, "
+                          "the spec's rule gives %d", trial, xres, yres, n, s,
+                          chosen[s], expected);
+            ck_assert_int_eq(chosen_by[s], chosen[s]);
+            n_checked++;
+            if (expected < 0)
+                continue;
+            p = &g_array_index(particles, DetectedParticle, expected);
+            if (p->row_min <= stripe_first_row(s, n, yres)
+                || p->row_max >= stripe_end_row(s, n, yres) - 1)
+                n_cut_chosen++;
+            for (k = expected + 1; k < particles->len; k++) {
+                const DetectedParticle *q = &g_array_index(particles,
+                                                           DetectedParticle,
+                                                           k);
+                gdouble ey = stripe_centre_row(s, n, yres);
+
+                if (!q->on_edge && (gint)floor(q->y + 0.5) >= 0
+                    && stripe_of_row((gint)floor(q->y + 0.5), n, yres) == s
+                    && hypot(q->x - 0.5*(xres - 1), q->y - ey)
+                       == hypot(p->x - 0.5*(xres - 1), p->y - ey))
+                    n_ties++;
+            }
+        }
+        g_free(chosen);
+        g_free(chosen_by);
+        g_array_free(particles, TRUE);
+    }
+    g_printerr("closest choice: %d stripes agree with the spec's rule, %d "
+               "chosen grains touch a boundary row, %d ties resolved\n",
+               n_checked, n_cut_chosen, n_ties);
+    /* The sets must exercise what distinguishes the rules. */
+    ck_assert_int_gt(n_cut_chosen, 100);
+    ck_assert_int_gt(n_ties, 20);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* The opt-in choice agrees with its own plain reference on the same random
+ * sets, and differs from the spec's rule in some stripes. */
+START_TEST(test_choice_prefer_whole_random)
+{
+    GRand *rng = g_rand_new_with_seed(test_seed + 4);
+    gint trial, n_differ = 0;
+
+    for (trial = 0; trial < 500; trial++) {
+        gint xres = g_rand_int_range(rng, 8, 300);
+        gint yres = g_rand_int_range(rng, 8, 300);
+        gint n = g_rand_int_range(rng, 1, MIN(yres, 40) + 1);
+        GArray *particles = random_particles(rng, g_rand_int_range(rng, 0, 60),
+                                             xres, yres);
+        gint *whole = g_new(gint, n), *closest = g_new(gint, n);
+        gint s;
+
+        particle_choose_for_stripes_by(particles, n, xres, yres,
+                                       PARTICLE_CHOICE_PREFER_WHOLE, whole);
+        particle_choose_for_stripes(particles, n, xres, yres, closest);
+        for (s = 0; s < n; s++) {
+            ck_assert_int_eq(whole[s], reference_choice(particles, s, n, xres,
+                                                        yres, TRUE));
+            if (whole[s] != closest[s])
+                n_differ++;
+        }
+        g_free(whole);
+        g_free(closest);
+        g_array_free(particles, TRUE);
+    }
+    g_printerr("prefer-whole choice: differs from the spec's rule in %d "
+               "stripes\n", n_differ);
+    ck_assert_int_gt(n_differ, 50);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* One stripe (rows 16-31 of 64, 4 stripes): a grain touching row 16 lies
+ * nearer the centre point (31.5, 23.5) than a whole one.  The spec's rule
+ * takes the cut grain, the opt-in the whole one; alone, the cut grain is
+ * taken by both. */
+START_TEST(test_choice_boundary_grain)
+{
+    DetectedParticle cut = { 31.5, 19.0, 12, 1.0, FALSE, 16, 22 };
+    DetectedParticle whole = { 40.0, 24.0, 12, 1.0, FALSE, 21, 27 };
+    GArray *particles = g_array_new(FALSE, TRUE, sizeof(DetectedParticle));
+    gint chosen[4];
+
+    g_array_append_val(particles, whole);
+    g_array_append_val(particles, cut);
+    particle_choose_for_stripes(particles, 4, 64, 64, chosen);
+    ck_assert_int_eq(chosen[1], 1);
+    ck_assert_int_eq(chosen[0], -1);
+    ck_assert_int_eq(chosen[2], -1);
+    particle_choose_for_stripes_by(particles, 4, 64, 64,
+                                   PARTICLE_CHOICE_PREFER_WHOLE, chosen);
+    ck_assert_int_eq(chosen[1], 0);
+    /* Touching the last row (31) counts as cut too. */
+    g_array_index(particles, DetectedParticle, 1).row_min = 17;
+    g_array_index(particles, DetectedParticle, 1).row_max = 31;
+    particle_choose_for_stripes_by(particles, 4, 64, 64,
+                                   PARTICLE_CHOICE_PREFER_WHOLE, chosen);
+    ck_assert_int_eq(chosen[1], 0);
+    g_array_remove_index(particles, 0);
+    particle_choose_for_stripes_by(particles, 4, 64, 64,
+                                   PARTICLE_CHOICE_PREFER_WHOLE, chosen);
+    ck_assert_int_eq(chosen[1], 0);
+    g_array_free(particles, TRUE);
+}
+END_TEST
+
 /* The paper's Figure 6 drift, stripe s (1-based) dx = -s, dy by fours. */
 static void
 figure6_drift(gdouble *dx, gdouble *dy)
@@ -435,6 +636,9 @@ local_scan_suite(void)
     tcase_add_test(tc, test_displaced_found);
     tcase_add_test(tc, test_beyond_reach);
     tcase_add_test(tc, test_empty_stripes_filled);
+    tcase_add_test(tc, test_choice_closest_is_spec);
+    tcase_add_test(tc, test_choice_prefer_whole_random);
+    tcase_add_test(tc, test_choice_boundary_grain);
     tcase_add_test(tc, test_figure6_measured);
     tcase_add_test(tc, test_true_drift_recovers_truth);
     suite_add_tcase(suite, tc);

@@ -97,11 +97,33 @@ for opt in preset sample radius radius-spread count density spacing \
         roughness correlation xres yres size line-time direction noise \
         tip-radius drift velocity offset settle-velocity tau amplitude \
         period phase jump-time jump-step walk-sigma walk-dt stripes \
-        ls-points ls-speed ls-rmax ls-overhead ls-delay ls-threshold seed \
-        output table json quiet; do
+        ls-points ls-speed ls-rmax ls-overhead ls-delay ls-threshold \
+        prefer-whole-particles seed output table json quiet; do
     check
     grep -q -- "--$opt" "$tmp/help" || fail "--help does not list --$opt"
 done
+
+# --prefer-whole-particles reaches the local scans.  Figure 6 with seed 31
+# (fixed: a layout where the rules differ) has grains cut by stripe
+# boundaries nearest some stripes' centres: the paper's rule (the default)
+# scans them and marks them '*', the option scans other particles.
+"$simscan" --preset figure6 --seed 31 --table "$tmp/f6-closest.csv" \
+    >"$tmp/f6-closest.out" || fail "figure6 seed 31 exited non-zero"
+"$simscan" --preset figure6 --seed 31 --prefer-whole-particles -q \
+    --table "$tmp/f6-whole.csv" || fail "--prefer-whole-particles exited non-zero"
+check
+grep -q "closest to the stripe's centre (the paper's rule)" "$tmp/f6-closest.out" \
+    || fail "the report does not name the paper's particle choice"
+check
+[ "$(grep -c '  \*$' "$tmp/f6-closest.out")" -ge 1 ] \
+    || fail "no stripe marked as measured on a cut grain: $(cat "$tmp/f6-closest.out")"
+check
+# Columns x, y (8 and 9) are the scanned particle's displayed centre.
+differ=$(paste -d '|' "$tmp/f6-closest.csv" "$tmp/f6-whole.csv" | grep '^[0-9]' \
+    | awk -F'|' '{ split($1, a, ","); split($2, b, ",");
+                   if (a[8] != b[8] || a[9] != b[9]) n++ } END { print n+0 }')
+[ "$differ" -ge 1 ] && [ "$differ" -le 8 ] \
+    || fail "--prefer-whole-particles changed the particle of $differ stripes"
 
 # The sweep runs and plots.
 "$simscan" sweep $small --n-list 1,4 --plot "$tmp/s.png" >"$tmp/sweep" \
