@@ -6,6 +6,7 @@
  */
 #include "config.h"
 #include <string.h>
+#include <math.h>
 #include <libintl.h>
 #include <gtk/gtk.h>
 #include <libgwyddion/gwymacros.h>
@@ -15,6 +16,8 @@
 #include <app/gwyapp.h>
 #include <app/gwymoduleutils.h>
 #include "localscan-channel.h"
+#include "stripe-registration.h"
+#include "stripe-geometry.h"
 
 /* Our strings live in our own domain, not in Gwyddion's. */
 #undef _
@@ -23,6 +26,7 @@
 #define FUNC_NAME "localscan_drift"
 #define RUN_MODES (GWY_RUN_INTERACTIVE | GWY_RUN_IMMEDIATE)
 #define PREVIEW_SIZE 480
+#define DRIFT_GRAPH_HEIGHT 170
 
 enum {
     PARAM_SOURCE,
@@ -36,9 +40,21 @@ enum {
     PARAM_ADD_MASK,
     PARAM_PLOT_DRIFT,
     PARAM_MASK_COLOR,
+    PARAM_REFERENCE_CHANNEL,
     WIDGET_TABLE_FILE,
     MESSAGE_STATUS,
 };
+
+/* The drift measured against a reference (whole table or the error), kept
+ * because registration is slow on large images and depends only on the
+ * reference and the stripe count. */
+typedef struct {
+    gboolean valid;
+    GwyAppDataId reference;
+    gint stripes;
+    DriftTable *table;     /* px, exact (not rounded) */
+    GError *error;
+} MeasuredDrift;
 
 typedef struct {
     GwyParams *params;
@@ -51,6 +67,7 @@ typedef struct {
     LocalscanApplied applied;
     gdouble line_time;
     gboolean line_time_known;
+    MeasuredDrift measured;
 } ModuleArgs;
 
 typedef struct {
@@ -59,6 +76,7 @@ typedef struct {
     GwyParamTable *table;
     GtkWidget *file_button;
     GwyContainer *data;
+    GwyGraphModel *drift_gmodel;
 } ModuleGUI;
 
 static gboolean         module_register     (void);
@@ -66,6 +84,9 @@ static GwyParamDef*     define_module_params(void);
 static void             localscan_drift     (GwyContainer *data,
                                              GwyRunType runtype,
                                              const gchar *name);
+static void             use_reference_channel_setting(ModuleArgs *args,
+                                                      GwyRunType runtype);
+static void             remember_reference_channel   (ModuleArgs *args);
 static gboolean         execute             (ModuleArgs *args,
                                              GError **error);
 static void             create_outputs      (ModuleArgs *args);
@@ -73,6 +94,7 @@ static void             add_drift_graph     (ModuleArgs *args);
 static void             report_error        (ModuleArgs *args,
                                              const GError *error);
 static GwyDialogOutcome run_gui             (ModuleArgs *args);
+static GtkWidget*       create_drift_graph  (ModuleGUI *gui);
 static GtkWidget*       create_file_chooser (gpointer user_data);
 static void             table_file_chosen   (ModuleGUI *gui);
 static gboolean         reference_filter    (GwyContainer *data,
@@ -81,6 +103,7 @@ static gboolean         reference_filter    (GwyContainer *data,
 static void             param_changed       (ModuleGUI *gui,
                                              gint id);
 static void             preview             (gpointer user_data);
+static void             measured_drift_clear(MeasuredDrift *measured);
 
 static GwyModuleInfo module_info = {
     GWY_MODULE_ABI_VERSION,
@@ -175,6 +198,10 @@ define_module_params(void)
     gwy_param_def_add_boolean(paramdef, PARAM_ADD_MASK, "add-mask", _("_Mask filled pixels"), TRUE);
     gwy_param_def_add_boolean(paramdef, PARAM_PLOT_DRIFT, "plot-drift", _("_Plot drift graph"), FALSE);
     gwy_param_def_add_mask_color(paramdef, PARAM_MASK_COLOR, NULL, NULL);
+    /* The reference by its channel id in the image's own file, for batch
+     * callers: an image id parameter is remembered only in the running
+     * session's memory, never in the settings. */
+    gwy_param_def_add_int(paramdef, PARAM_REFERENCE_CHANNEL, "reference-channel", NULL, -1, G_MAXINT32, -1);
     return paramdef;
 }
 
@@ -195,15 +222,20 @@ localscan_drift(GwyContainer *data, GwyRunType runtype, G_GNUC_UNUSED const gcha
     args.result = gwy_data_field_new_alike(args.field, TRUE);
     args.mask = gwy_data_field_new_alike(args.field, TRUE);
     args.params = gwy_params_new_from_settings(define_module_params());
+    use_reference_channel_setting(&args, runtype);
 
     if (runtype == GWY_RUN_INTERACTIVE) {
         outcome = run_gui(&args);
+        remember_reference_channel(&args);
         gwy_params_save_to_settings(args.params);
         if (outcome == GWY_DIALOG_CANCEL)
             goto end;
     }
     /* Computed again even after a preview: it is cheap, and so the GUI and
-     * IMMEDIATE runs take exactly the same path to the result. */
+     * IMMEDIATE runs take exactly the same path to the result.  Only the
+     * registration against a reference is slow; its table is reused when
+     * the reference and the stripe count are still those it was measured
+     * with. */
     if (execute(&args, &error))
         create_outputs(&args);
     else
@@ -214,9 +246,149 @@ end:
     if (args.table)
         drift_table_free(args.table);
     localscan_applied_clear(&args.applied);
+    measured_drift_clear(&args.measured);
     g_object_unref(args.mask);
     g_object_unref(args.result);
     g_object_unref(args.params);
+}
+
+/* A reference given as reference-channel (batch callers) names a channel of
+ * the image's own file and is used as given: a bad one is reported.  In the
+ * dialog it only preselects the chooser, and only a channel it offers. */
+static void
+use_reference_channel_setting(ModuleArgs *args, GwyRunType runtype)
+{
+    gint channel = gwy_params_get_int(args->params, PARAM_REFERENCE_CHANNEL);
+    GwyAppDataId refid;
+
+    if (channel < 0)
+        return;
+    if (runtype == GWY_RUN_INTERACTIVE && !reference_filter(args->data, channel, args))
+        return;
+    refid.datano = gwy_app_data_browser_get_number(args->data);
+    refid.id = channel;
+    gwy_params_set_image_id(args->params, PARAM_REFERENCE, refid);
+}
+
+/* So that the settings (and the log, which records them) name the chosen
+ * reference, and a repeated IMMEDIATE run uses it; a reference in another
+ * file cannot be named there. */
+static void
+remember_reference_channel(ModuleArgs *args)
+{
+    GwyAppDataId refid = gwy_params_get_data_id(args->params, PARAM_REFERENCE);
+    gint channel = -1;
+
+    if (refid.id >= 0 && refid.datano == gwy_app_data_browser_get_number(args->data))
+        channel = refid.id;
+    gwy_params_set_int(args->params, PARAM_REFERENCE_CHANNEL, channel);
+}
+
+static gchar*
+format_field_size(GwyDataField *field)
+{
+    GwySIValueFormat *vf = gwy_data_field_get_value_format_xy(field, GWY_SI_UNIT_FORMAT_PLAIN, NULL);
+    gchar *text;
+
+    text = g_strdup_printf("%d x %d px, %.*f x %.*f%s%s",
+                           gwy_data_field_get_xres(field), gwy_data_field_get_yres(field),
+                           vf->precision, gwy_data_field_get_xreal(field)/vf->magnitude,
+                           vf->precision, gwy_data_field_get_yreal(field)/vf->magnitude,
+                           *vf->units ? " " : "", vf->units);
+    gwy_si_unit_value_format_free(vf);
+    return text;
+}
+
+static GwyDataField*
+find_reference(ModuleArgs *args, GwyAppDataId *refid, GError **error)
+{
+    GwyDataField *reference;
+    gchar *refsize, *size;
+
+    *refid = gwy_params_get_data_id(args->params, PARAM_REFERENCE);
+    if (refid->id < 0) {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE, "%s",
+                    _("No reference image is chosen (another channel of the same pixel and physical size)."));
+        return NULL;
+    }
+    if (!(reference = gwy_params_get_image(args->params, PARAM_REFERENCE))) {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE,
+                    _("The reference channel %d does not exist."), refid->id);
+        return NULL;
+    }
+    if (reference == args->field) {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE, "%s",
+                    _("The reference must be another channel than the image itself."));
+        return NULL;
+    }
+    if (!reference_filter(gwy_app_data_browser_get(refid->datano), refid->id, args)) {
+        refsize = format_field_size(reference);
+        size = format_field_size(args->field);
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE,
+                    _("The reference channel %d (%s) is not a scan of the image's size (%s)."),
+                    refid->id, refsize, size);
+        g_free(refsize);
+        g_free(size);
+        return NULL;
+    }
+    return reference;
+}
+
+static void
+measured_drift_clear(MeasuredDrift *measured)
+{
+    if (measured->table)
+        drift_table_free(measured->table);
+    g_clear_error(&measured->error);
+    gwy_clear(measured, 1);
+}
+
+/* The exact measured table, from the last registration when it had the same
+ * reference and stripe count (its failure is kept just as well). */
+static const DriftTable*
+measure_reference_drift(ModuleArgs *args, GError **error)
+{
+    MeasuredDrift *measured = &args->measured;
+    gint n = gwy_params_get_int(args->params, PARAM_STRIPES), yres = gwy_data_field_get_yres(args->field);
+    GwyDataField *reference;
+    GwyAppDataId refid;
+
+    if (!(reference = find_reference(args, &refid, error)))
+        return NULL;
+    if (n > yres) {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_STRIPES,
+                    _("%d stripes do not fit an image of %d rows."), n, yres);
+        return NULL;
+    }
+    if (!measured->valid || measured->stripes != n
+        || measured->reference.datano != refid.datano || measured->reference.id != refid.id) {
+        measured_drift_clear(measured);
+        g_debug("%s: registering %d stripes against channel %d", FUNC_NAME, n, refid.id);
+        measured->table = stripe_registration_table_for_fields(args->field, reference, n, 0.0, FALSE,
+                                                               &measured->error);
+        measured->valid = TRUE;
+        measured->reference = refid;
+        measured->stripes = n;
+    }
+    if (measured->error) {
+        g_propagate_error(error, g_error_copy(measured->error));
+        return NULL;
+    }
+    return measured->table;
+}
+
+/* Paper mode shifts by whole pixels; the exact columns stay for continuous
+ * mode and for the record. */
+static DriftTable*
+reference_drift_table(ModuleArgs *args, GError **error)
+{
+    const DriftTable *measured;
+
+    if (!(measured = measure_reference_drift(args, error)))
+        return NULL;
+    if (gwy_params_get_enum(args->params, PARAM_MODE) == LOCALSCAN_MODE_PAPER)
+        return localscan_table_round_px(measured);
+    return drift_table_copy(measured);
 }
 
 static DriftTable*
@@ -236,10 +408,7 @@ load_drift_table(ModuleArgs *args, GError **error)
         }
         return drift_table_load(filename, error);
     }
-    /* LOCALSCAN_SOURCE_REFERENCE: stripe registration is not built in yet. */
-    g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_UNAVAILABLE,
-                "%s", _("Drift from registration to a reference image is not available in this version."));
-    return NULL;
+    return reference_drift_table(args, error);
 }
 
 static gboolean
@@ -363,7 +532,7 @@ run_gui(ModuleArgs *args)
 {
     GwyDialogOutcome outcome;
     GwyParamTable *table;
-    GtkWidget *hbox, *dataview;
+    GtkWidget *hbox, *vbox, *alignment, *dataview;
     GwyDialog *dialog;
     ModuleGUI gui;
 
@@ -382,8 +551,18 @@ run_gui(ModuleArgs *args)
     dialog = GWY_DIALOG(gui.dialog);
     gwy_dialog_add_buttons(dialog, GWY_RESPONSE_RESET, GTK_RESPONSE_CANCEL, GTK_RESPONSE_OK, 0);
 
+    /* The usual preview box, with the drift graph under the preview. */
+    hbox = gwy_hbox_new(8);
+    gtk_container_set_border_width(GTK_CONTAINER(hbox), 4);
+    gwy_dialog_add_content(dialog, hbox, FALSE, FALSE, 0);
+    vbox = gwy_vbox_new(4);
+    gtk_box_pack_start(GTK_BOX(hbox), vbox, FALSE, FALSE, 0);
     dataview = gwy_create_preview(gui.data, 0, PREVIEW_SIZE, TRUE);
-    hbox = gwy_create_dialog_preview_hbox(GTK_DIALOG(dialog), GWY_DATA_VIEW(dataview), FALSE);
+    alignment = gtk_alignment_new(0.0, 0.0, 0.0, 0.0);
+    gtk_widget_set_size_request(alignment, PREVIEW_SIZE, -1);
+    gtk_container_add(GTK_CONTAINER(alignment), dataview);
+    gtk_box_pack_start(GTK_BOX(vbox), alignment, FALSE, FALSE, 0);
+    gtk_box_pack_start(GTK_BOX(vbox), create_drift_graph(&gui), TRUE, TRUE, 0);
 
     table = gui.table = gwy_param_table_new(args->params);
     gwy_param_table_append_header(table, -1, _("Drift"));
@@ -392,6 +571,7 @@ run_gui(ModuleArgs *args)
     gwy_param_table_append_image_id(table, PARAM_REFERENCE);
     gwy_param_table_data_id_set_filter(table, PARAM_REFERENCE, reference_filter, args, NULL);
     gwy_param_table_append_slider(table, PARAM_STRIPES);
+    gwy_param_table_slider_restrict_range(table, PARAM_STRIPES, 1, MIN(4096, gwy_data_field_get_yres(args->field)));
     gwy_param_table_append_header(table, -1, _("Compensation"));
     gwy_param_table_append_radio(table, PARAM_MODE);
     gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
@@ -410,9 +590,77 @@ run_gui(ModuleArgs *args)
     gwy_dialog_set_preview_func(dialog, GWY_PREVIEW_IMMEDIATE, preview, &gui, NULL);
 
     outcome = gwy_dialog_run(dialog);
+    g_object_unref(gui.drift_gmodel);
     g_object_unref(gui.data);
 
     return outcome;
+}
+
+/* The drift each stripe of the table states (measured, for a reference),
+ * in the lateral unit; stripes without a drift have no point. */
+static GtkWidget*
+create_drift_graph(ModuleGUI *gui)
+{
+    static const gchar *names[2] = { "dx", "dy" };
+    GwySIUnit *unit = gwy_data_field_get_si_unit_xy(gui->args->field);
+    GwyGraphCurveModel *gcmodel;
+    GtkWidget *graph;
+    gint i;
+
+    gui->drift_gmodel = gwy_graph_model_new();
+    g_object_set(gui->drift_gmodel,
+                 "axis-label-bottom", "y",
+                 "axis-label-left", _("drift"),
+                 "si-unit-x", unit,
+                 "si-unit-y", unit,
+                 NULL);
+    for (i = 0; i < 2; i++) {
+        gcmodel = gwy_graph_curve_model_new();
+        g_object_set(gcmodel,
+                     "description", names[i],
+                     "mode", GWY_GRAPH_CURVE_LINE_POINTS,
+                     "color", gwy_graph_get_preset_color(i),
+                     NULL);
+        gwy_graph_model_add_curve(gui->drift_gmodel, gcmodel);
+        g_object_unref(gcmodel);
+    }
+    graph = gwy_graph_new(gui->drift_gmodel);
+    gwy_graph_enable_user_input(GWY_GRAPH(graph), FALSE);
+    gtk_widget_set_size_request(graph, PREVIEW_SIZE, DRIFT_GRAPH_HEIGHT);
+    return graph;
+}
+
+/* Fills ypos, dx, dy (physical) with the stated drift; returns the count. */
+static gint
+stated_drift(ModuleArgs *args, gdouble *ypos, gdouble *dx, gdouble *dy)
+{
+    GwyDataField *field = args->field;
+    gint n = args->table->n_stripes, yres = gwy_data_field_get_yres(field), count, k;
+    gint *stripes = g_new(gint, n);
+
+    count = localscan_table_stated_px(args->table, field, stripes, dx, dy, NULL);
+    for (k = 0; k < count; k++) {
+        ypos[k] = gwy_data_field_get_yoffset(field)
+                  + (stripe_centre_row(stripes[k], n, yres) + 0.5)*gwy_data_field_get_dy(field);
+        dx[k] *= gwy_data_field_get_dx(field);
+        dy[k] *= gwy_data_field_get_dy(field);
+    }
+    g_free(stripes);
+    return MAX(count, 0);
+}
+
+static void
+update_drift_graph(ModuleGUI *gui, gboolean ok)
+{
+    ModuleArgs *args = gui->args;
+    gint n = ok ? args->table->n_stripes : 0, count = 0;
+    gdouble *ypos = g_new(gdouble, 3*MAX(n, 1)), *dx = ypos + n, *dy = dx + n;
+
+    if (ok)
+        count = stated_drift(args, ypos, dx, dy);
+    gwy_graph_curve_model_set_data(gwy_graph_model_get_curve(gui->drift_gmodel, 0), ypos, dx, count);
+    gwy_graph_curve_model_set_data(gwy_graph_model_get_curve(gui->drift_gmodel, 1), ypos, dy, count);
+    g_free(ypos);
 }
 
 static GtkWidget*
@@ -469,7 +717,8 @@ reference_filter(GwyContainer *data, gint id, gpointer user_data)
     if (!gwy_container_gis_object(data, gwy_app_get_data_key_for_id(id), &other))
         return FALSE;
     return !gwy_data_field_check_compatibility(args->field, other,
-                                               GWY_DATA_COMPATIBILITY_RES | GWY_DATA_COMPATIBILITY_REAL);
+                                               GWY_DATA_COMPATIBILITY_RES | GWY_DATA_COMPATIBILITY_REAL
+                                               | GWY_DATA_COMPATIBILITY_LATERAL);
 }
 
 static void
@@ -493,13 +742,45 @@ param_changed(ModuleGUI *gui, gint id)
         gwy_dialog_invalidate(GWY_DIALOG(gui->dialog));
 }
 
+/* What registration found: stripes accepted and the range of their drift. */
+static gchar*
+format_registration(ModuleArgs *args)
+{
+    const DriftTable *table = args->table;
+    gint n = table->n_stripes, count, k;
+    gint *stripes = g_new(gint, n);
+    gdouble *dx = g_new(gdouble, 2*n), *dy = dx + n;
+    gdouble xmin = G_MAXDOUBLE, xmax = -G_MAXDOUBLE, ymin = G_MAXDOUBLE, ymax = -G_MAXDOUBLE;
+    gchar *text;
+
+    count = localscan_table_stated_px(table, args->field, stripes, dx, dy, NULL);
+    for (k = 0; k < count; k++) {
+        xmin = fmin(xmin, dx[k]);
+        xmax = fmax(xmax, dx[k]);
+        ymin = fmin(ymin, dy[k]);
+        ymax = fmax(ymax, dy[k]);
+    }
+    text = g_strdup_printf(_("Registered %d of %d stripes: dx %.2f to %.2f px, dy %.2f to %.2f px."),
+                           count, n, xmin, xmax, ymin, ymax);
+    g_free(stripes);
+    g_free(dx);
+    return text;
+}
+
 static gchar*
 format_status(ModuleArgs *args)
 {
     gboolean continuous = (gwy_params_get_enum(args->params, PARAM_MODE) == LOCALSCAN_MODE_CONTINUOUS);
-    gchar *stripes, *status;
+    gchar *stripes, *status, *registration;
 
     stripes = g_strdup_printf(_("%d stripes, %d filled pixels."), args->applied.n_stripes, args->applied.n_filled);
+    if (gwy_params_get_enum(args->params, PARAM_SOURCE) == LOCALSCAN_SOURCE_REFERENCE) {
+        registration = format_registration(args);
+        status = g_strconcat(registration, " ", stripes, NULL);
+        g_free(registration);
+        g_free(stripes);
+        stripes = status;
+    }
     if (!continuous)
         return stripes;
     if (args->line_time_known)
@@ -521,7 +802,10 @@ preview(gpointer user_data)
     gboolean ok;
     gchar *text;
 
+    gwy_app_wait_cursor_start(GTK_WINDOW(gui->dialog));
     ok = execute(args, &error);
+    gwy_app_wait_cursor_finish(GTK_WINDOW(gui->dialog));
+    update_drift_graph(gui, ok);
     if (ok) {
         text = format_status(args);
         gwy_param_table_message_set_type(gui->table, MESSAGE_STATUS, GTK_MESSAGE_INFO);

@@ -272,3 +272,47 @@ localscan_applied_to_physical(const LocalscanApplied *applied, GwyDataField *fie
         dy[s] = applied->dy_px[s]*ystep;
     }
 }
+
+DriftTable*
+localscan_table_round_px(const DriftTable *table)
+{
+    DriftTable *rounded;
+    gint s;
+
+    g_return_val_if_fail(table && table->unit == DRIFT_UNIT_PX, NULL);
+    rounded = drift_table_copy(table);
+    for (s = 0; s < rounded->n_stripes; s++) {
+        DriftTableRow *row = rounded->rows + s;
+
+        if (row->has_drift) {
+            row->dx = floor(row->dx + 0.5);
+            row->dy = floor(row->dy + 0.5);
+        }
+    }
+    return rounded;
+}
+
+gint
+localscan_table_stated_px(const DriftTable *table, GwyDataField *field,
+                          gint *stripes, gdouble *dx_px, gdouble *dy_px, GError **error)
+{
+    gint n = table->n_stripes, s, count = 0;
+    gdouble *filled_dx = g_new(gdouble, 2*n), *filled_dy = filled_dx + n;
+
+    if (!localscan_table_to_field_pixels(table, field, FALSE, filled_dx, filled_dy, error)) {
+        g_free(filled_dx);
+        return -1;
+    }
+    for (s = 0; s < n; s++) {
+        if (!table->rows[s].has_drift)
+            continue;
+        stripes[count] = s;
+        if (!drift_table_get_extra(table, s, "dx_exact", dx_px + count))
+            dx_px[count] = filled_dx[s];
+        if (!drift_table_get_extra(table, s, "dy_exact", dy_px + count))
+            dy_px[count] = filled_dy[s];
+        count++;
+    }
+    g_free(filled_dx);
+    return count;
+}

@@ -29,6 +29,8 @@ typedef enum {
     LOCALSCAN_CHANNEL_ERROR_NO_TABLE,     /* no table stored with the channel */
     LOCALSCAN_CHANNEL_ERROR_UNITS,        /* physical table, non-metre image */
     LOCALSCAN_CHANNEL_ERROR_UNAVAILABLE,  /* option not built into this version */
+    LOCALSCAN_CHANNEL_ERROR_REFERENCE,    /* no usable reference image */
+    LOCALSCAN_CHANNEL_ERROR_STRIPES,      /* more stripes than image rows */
 } LocalscanChannelError;
 
 /* The values are stored in the settings: never renumber them. */
@@ -112,6 +114,23 @@ gboolean     localscan_compensate_field      (GwyDataField *field,
                                               LocalscanApplied *applied,
                                               GError **error);
 void         localscan_applied_clear         (LocalscanApplied *applied);
+
+/* A copy of a px table with dx, dy rounded to whole pixels as
+ * stripe_registration_to_table() rounds them (floor(v + 0.5)), extra columns
+ * kept: the paper-mode form of a measured table, made without measuring
+ * again. */
+DriftTable*  localscan_table_round_px        (const DriftTable *table);
+
+/* The drift the table states for each stripe that has one, in px of field:
+ * dx_exact, dy_exact preferred, blank stripes left out (no nearest-stripe
+ * filling).  stripes[], dx_px[], dy_px[] need room for table->n_stripes.
+ * Returns how many stripes were written, or -1 with error set. */
+gint         localscan_table_stated_px       (const DriftTable *table,
+                                              GwyDataField *field,
+                                              gint *stripes,
+                                              gdouble *dx_px,
+                                              gdouble *dy_px,
+                                              GError **error);
 
 /* Stripe drift as curves in physical units: ypos[s] the stripe's centre
  * (lateral unit, with the field's y offset), dx[s], dy[s] the drift. */
