@@ -530,6 +530,14 @@ gint
 drift_fit_select(const DriftMeasurement *meas, gint n,
                  const DriftFitOptions *options, DriftFit *fits)
 {
+    return drift_fit_select_kept(meas, n, options, fits, NULL);
+}
+
+gint
+drift_fit_select_kept(const DriftMeasurement *meas, gint n,
+                      const DriftFitOptions *options, DriftFit *fits,
+                      gboolean *kept)
+{
     DriftFitOptions defaults;
     gint n_types, i, best, chosen, inone = -1;
     const DriftModelType *types = drift_fit_candidates(&n_types);
@@ -545,6 +553,8 @@ drift_fit_select(const DriftMeasurement *meas, gint n,
         fit_prepared(&pm, types[i], options, fits + i);
     prepared_free(&pm);
     if ((best = lowest_bic(fits, n_types)) < 0) {
+        if (kept)
+            memset(kept, 0, n*sizeof(gboolean));
         g_free(mask);
         return -1;
     }
@@ -553,6 +563,8 @@ drift_fit_select(const DriftMeasurement *meas, gint n,
     if (options->outlier_sigmas > 0.0)
         mark_outliers(meas, n, fits + best, options->outlier_sigmas, mask);
 
+    if (kept)
+        memcpy(kept, mask, n*sizeof(gboolean));
     prepare(meas, n, mask, &pm);
     for (i = 0; i < n_types; i++) {
         fit_prepared(&pm, types[i], options, fits + i);

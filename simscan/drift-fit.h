@@ -91,6 +91,14 @@ gint           drift_fit_select       (const DriftMeasurement *meas,
                                        const DriftFitOptions *options,
                                        DriftFit *fits);
 
+/* The same; kept (n entries, may be NULL) says which measurements survived
+ * the outlier cut. */
+gint           drift_fit_select_kept  (const DriftMeasurement *meas,
+                                       gint n,
+                                       const DriftFitOptions *options,
+                                       DriftFit *fits,
+                                       gboolean *kept);
+
 /* p(t) of a fit, metres (p(0) = 0). */
 void           drift_fit_eval         (const DriftFit *fit,
                                        gdouble t,

@@ -21,12 +21,22 @@ fit_report_compute(const FrameSeries *series,
                    const DisplacementOptions *doptions,
                    const DriftFitOptions *foptions, FitReport *report)
 {
+    gboolean *kept;
+    gint i;
+
     memset(report, 0, sizeof(FitReport));
     report->meas = displacement_measure_series(series, doptions,
                                                &report->n_meas);
     drift_fit_candidates(&report->n_fits);
-    report->chosen = drift_fit_select(report->meas, report->n_meas, foptions,
-                                      report->fits);
+    kept = g_new(gboolean, MAX(report->n_meas, 1));
+    report->chosen = drift_fit_select_kept(report->meas, report->n_meas,
+                                           foptions, report->fits, kept);
+    /* Gross outliers (failed registrations) count as unused from here on. */
+    for (i = 0; i < report->n_meas; i++) {
+        if (!kept[i])
+            report->meas[i].weight = 0.0;
+    }
+    g_free(kept);
     return report->chosen >= 0;
 }
 

@@ -16,210 +16,10 @@
 #include <libgwyddion/gwyddion.h>
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
-#include "scanner.h"
-#include "sim-random.h"
-#include "fit-command.h"
+#include "hidden-effect-cases.h"
 
 #define N_CASES 20
-#define N_FRAMES 4
-#define RES 128
-#define LINE_TIME 0.5
-#define FRAME_TIME (RES*LINE_TIME)
-#define FIELD 1e-6
-#define MARGIN 0.3e-6
-
-/*
- * Parameter ranges (large enough to be seen at 7.8 nm per pixel):
- *   velocity:    |v| <= 0.1 nm/s, any direction
- *   settling:    tau 20..60 s, |u| tau 30..60 nm
- *   oscillation: period 20..60 s, |a| 15..30 nm, any direction and phase;
- *                not within 0.15 cycles per frame of a whole number
- *   jump:        t_s 30..230 s, |step| 25..50 nm
- * Tolerances: tau within 40 %; period within 10 % and |a| within 35 %;
- * t_s within 8 s (two blocks) and the step within 30 % + 4 nm; with no
- * effect, "none" and v within 0.02 nm/s.
- */
 static guint32 base_seed;
-
-typedef struct {
-    DriftModel model;
-    gchar *dir;
-} HiddenCase;
-
-static gdouble
-uniform(SimRandom *rng, gdouble lo, gdouble hi)
-{
-    return lo + (hi - lo)*sim_random_uniform(rng);
-}
-
-static void
-random_vector(SimRandom *rng, gdouble length, gdouble *v)
-{
-    gdouble angle = uniform(rng, 0.0, 2.0*G_PI);
-
-    v[0] = length*cos(angle);
-    v[1] = length*sin(angle);
-}
-
-static void
-draw_case(gint i, DriftModel *model)
-{
-    SimRandom rng;
-    DriftModelType type = (DriftModelType)(i % 4);
-    gdouble cycles;
-
-    sim_random_init(&rng, base_seed, 100 + i);
-    drift_model_init(model, type);
-    random_vector(&rng, uniform(&rng, 0.0, 0.1e-9), model->v);
-    switch (type) {
-        case DRIFT_MODEL_SETTLING:
-        model->tau = uniform(&rng, 20.0, 60.0);
-        random_vector(&rng, uniform(&rng, 30e-9, 60e-9)/model->tau, model->u);
-        break;
-
-        case DRIFT_MODEL_OSCILLATION:
-        /* A period that divides the frame time puts the same distortion
-         * into every frame: it cancels between frames and no frame series
-         * can see it.  Such periods are not drawn. */
-        do {
-            model->period = uniform(&rng, 20.0, 60.0);
-            cycles = FRAME_TIME/model->period;
-        } while (fabs(cycles - floor(cycles + 0.5)) < 0.15);
-        model->phase = uniform(&rng, 0.0, 2.0*G_PI);
-        random_vector(&rng, uniform(&rng, 15e-9, 30e-9), model->a);
-        break;
-
-        case DRIFT_MODEL_JUMP:
-        model->t_jump = uniform(&rng, 30.0, 230.0);
-        random_vector(&rng, uniform(&rng, 25e-9, 50e-9), model->step);
-        break;
-
-        default:
-        break;
-    }
-}
-
-/* Scans the frames and saves them as .gwy files (no timing inside: the
- * fit gets the timing from options, as a user would give it). */
-static gchar**
-make_frames(gint i, const DriftModel *model, const gchar *dir)
-{
-    SimParticleParams pp;
-    SimScanParams sp;
-    SimSample *sample;
-    gchar **files = g_new0(gchar*, N_FRAMES + 1);
-    GError *error = NULL;
-    gint k;
-
-    sim_particle_params_init(&pp);
-    pp.xreal = pp.yreal = FIELD + 2.0*MARGIN;
-    pp.radius = 20e-9;
-    pp.count = 90;
-    sample = sim_sample_new_particles(&pp, base_seed + 1000*i);
-    ck_assert(sample != NULL);
-    for (k = 0; k < N_FRAMES; k++) {
-        GwyContainer *data = gwy_container_new();
-        GwyDataField *field;
-
-        sim_scan_params_init(&sp, sample, RES, RES);
-        sp.xreal = sp.yreal = FIELD;
-        sp.xoff = sp.yoff = MARGIN;
-        sp.line_time = LINE_TIME;
-        sp.frame_start = k*FRAME_TIME;
-        sp.noise_rms = 0.2e-9;
-        sp.noise_seed = base_seed + 1000*i + k;
-        field = sim_scan_frame(sample, model, &sp);
-        ck_assert(field != NULL);
-        gwy_container_set_object_by_name(data, "/0/data", field);
-        files[k] = g_strdup_printf("%s/frame%d.gwy", dir, k);
-        ck_assert_msg(gwy_file_save(data, files[k], GWY_RUN_NONINTERACTIVE,
-                                    &error), "cannot save %s", files[k]);
-        g_object_unref(field);
-        g_object_unref(data);
-    }
-    sim_sample_free(sample);
-    return files;
-}
-
-static JsonObject*
-run_blind_fit(gchar **files, const gchar *dir, JsonParser *parser)
-{
-    gchar *json = g_build_filename(dir, "fit.json", NULL);
-    gchar *times = g_strdup_printf("%g,%g,%g,%g", 0.0, FRAME_TIME,
-                                   2*FRAME_TIME, 3*FRAME_TIME);
-    gchar *argv[16] = {
-        "fit", "--json", json, "--line-time", "0.5", "--frame-times", times,
-        "--direction", "down", NULL,
-    };
-    gint argc = 9, k, status;
-    GError *error = NULL;
-
-    for (k = 0; k < N_FRAMES; k++)
-        argv[argc++] = files[k];
-    argv[argc] = NULL;
-    status = simscan_fit_main(argc, argv);
-    ck_assert_int_eq(status, 0);
-    ck_assert_msg(json_parser_load_from_file(parser, json, &error),
-                  "bad JSON from simscan fit");
-    g_free(times);
-    g_unlink(json);
-    g_free(json);
-    return json_node_get_object(json_parser_get_root(parser));
-}
-
-static gdouble
-member_pair(JsonObject *obj, const gchar *name, gint i)
-{
-    JsonArray *a = json_object_get_array_member(obj, name);
-
-    return json_array_get_double_element(a, i);
-}
-
-static void
-check_parameters(gint i, const DriftModel *m, JsonObject *result)
-{
-    JsonObject *p = json_object_get_object_member(result, "parameters");
-    gdouble err, len;
-
-    switch (m->type) {
-        case DRIFT_MODEL_NONE:
-        err = hypot(member_pair(result, "velocity_nm_per_s", 0) - 1e9*m->v[0],
-                    member_pair(result, "velocity_nm_per_s", 1) - 1e9*m->v[1]);
-        ck_assert_msg(err < 0.02, "case %d: velocity off by %g nm/s", i, err);
-        break;
-
-        case DRIFT_MODEL_SETTLING:
-        err = json_object_get_double_member(p, "tau_s")/m->tau - 1.0;
-        ck_assert_msg(fabs(err) < 0.4, "case %d: tau %g s, true %g s", i,
-                      json_object_get_double_member(p, "tau_s"), m->tau);
-        break;
-
-        case DRIFT_MODEL_OSCILLATION:
-        err = json_object_get_double_member(p, "period_s")/m->period - 1.0;
-        ck_assert_msg(fabs(err) < 0.1, "case %d: period %g s, true %g s", i,
-                      json_object_get_double_member(p, "period_s"), m->period);
-        len = hypot(member_pair(p, "amplitude_nm", 0),
-                    member_pair(p, "amplitude_nm", 1));
-        ck_assert_msg(fabs(len/(1e9*hypot(m->a[0], m->a[1])) - 1.0) < 0.35,
-                      "case %d: |a| %g nm, true %g nm", i, len,
-                      1e9*hypot(m->a[0], m->a[1]));
-        break;
-
-        case DRIFT_MODEL_JUMP:
-        err = json_object_get_double_member(p, "t_s") - m->t_jump;
-        ck_assert_msg(fabs(err) < 8.0, "case %d: t_s %g s, true %g s", i,
-                      json_object_get_double_member(p, "t_s"), m->t_jump);
-        err = hypot(member_pair(p, "step_nm", 0) - 1e9*m->step[0],
-                    member_pair(p, "step_nm", 1) - 1e9*m->step[1]);
-        len = 1e9*hypot(m->step[0], m->step[1]);
-        ck_assert_msg(err < 0.3*len + 4.0, "case %d: step off by %g nm of %g",
-                      i, err, len);
-        break;
-
-        default:
-        break;
-    }
-}
 
 static void
 print_models(JsonObject *result)
@@ -245,18 +45,20 @@ START_TEST(test_hidden_effect)
     DriftModel model;
     JsonObject *result;
     const gchar *effect;
-    gchar **files;
+    gchar **files, *why;
     gint k;
 
     ck_assert(dir != NULL);
-    draw_case(_i, &model);
-    files = make_frames(_i, &model, dir);
-    result = run_blind_fit(files, dir, parser);
+    hidden_case_draw(base_seed, _i, &model);
+    files = hidden_case_make_frames(base_seed, _i, &model, dir);
+    ck_assert(files != NULL);
+    result = hidden_case_fit(files, dir, parser);
+    ck_assert_msg(result != NULL, "simscan fit failed");
     effect = json_object_get_string_member(result, "effect");
     printf("case %2d: hidden %-11s found %-11s (v %.3f, %.3f nm/s)\n", _i,
            drift_model_type_name(model.type), effect,
-           member_pair(result, "velocity_nm_per_s", 0),
-           member_pair(result, "velocity_nm_per_s", 1));
+           hidden_case_pair(result, "velocity_nm_per_s", 0),
+           hidden_case_pair(result, "velocity_nm_per_s", 1));
     printf("    truth: tau %.1f s, u %.3f %.3f nm/s; period %.1f s, a %.1f %.1f nm; "
            "t_s %.1f s, step %.1f %.1f nm\n", model.tau, 1e9*model.u[0],
            1e9*model.u[1], model.period, 1e9*model.a[0], 1e9*model.a[1],
@@ -266,8 +68,9 @@ START_TEST(test_hidden_effect)
     ck_assert_msg(strcmp(effect, drift_model_type_name(model.type)) == 0,
                   "case %d (seed %u): hidden %s, found %s", _i, base_seed,
                   drift_model_type_name(model.type), effect);
-    check_parameters(_i, &model, result);
-    for (k = 0; k < N_FRAMES; k++)
+    why = hidden_case_check(_i, &model, result);
+    ck_assert_msg(why == NULL, "%s", why);
+    for (k = 0; k < HIDDEN_CASE_FRAMES; k++)
         g_unlink(files[k]);
     g_rmdir(dir);
     g_strfreev(files);
