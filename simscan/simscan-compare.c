@@ -61,13 +61,13 @@ find_compensated(GwyContainer *data)
 static gint
 read_particles(GwyContainer *data, gdouble **truth, gdouble **shown)
 {
-    const guchar *text;
+    const gchar *text = simscan_output_particles(data);
     gchar **lines;
     gint n = 0, i;
 
-    if (!gwy_container_gis_string_by_name(data, SIMSCAN_PARTICLES_KEY, &text))
+    if (!text)
         return 0;
-    lines = g_strsplit((const gchar*)text, "\n", -1);
+    lines = g_strsplit(text, "\n", -1);
     *truth = g_new(gdouble, 2*g_strv_length(lines));
     *shown = g_new(gdouble, 2*g_strv_length(lines));
     for (i = 1; lines[i]; i++) {
@@ -155,7 +155,7 @@ compare_file(const gchar *filename, const CompareOptions *options,
     else if (!n)
         g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL,
                     _("%s holds no simulated particle list (%s)"), filename,
-                    SIMSCAN_PARTICLES_KEY);
+                    SIMSCAN_META_PARTICLES);
     else
         ok = write_pngs(data, comp_id, options, error);
     if (ok) {

@@ -12,6 +12,7 @@
 #include <glib/gstdio.h>
 #include <json-glib/json-glib.h>
 #include <libgwyddion/gwyserializable.h>
+#include "localscan-channel.h"
 #include "simscan-output.h"
 #include "simscan-i18n.h"
 
@@ -102,23 +103,33 @@ simscan_output_container(const SimscanScene *scene,
 {
     GwyContainer *data = gwy_container_new();
     GwyContainer *meta = make_meta(scene, m);
-    gchar key[64];
 
+    if (m->n_particles)
+        gwy_container_set_string_by_name(meta, SIMSCAN_META_PARTICLES,
+                                         (const guchar*)particles_text(m));
     gwy_container_set_object_by_name(data, "/0/data", scene->image);
     gwy_container_set_const_string_by_name(data, "/0/data/title",
                                            (const guchar*)SIMSCAN_TITLE_IMAGE);
-    g_snprintf(key, sizeof(key), DRIFT_TABLE_KEY_FORMAT, 0);
-    gwy_container_set_string_by_name(data, key, (const guchar*)
-                                     drift_table_to_string(m->table));
     gwy_container_set_object_by_name(data, "/0/meta", meta);
-    if (m->n_particles)
-        gwy_container_set_string_by_name(data, SIMSCAN_PARTICLES_KEY,
-                                         (const guchar*)particles_text(m));
+    localscan_channel_store_table(data, 0, m->table);
     gwy_container_set_object_by_name(data, "/1/data", scene->truth);
     gwy_container_set_const_string_by_name(data, "/1/data/title",
                                            (const guchar*)SIMSCAN_TITLE_TRUTH);
     g_object_unref(meta);
     return data;
+}
+
+const gchar*
+simscan_output_particles(GwyContainer *data)
+{
+    GwyContainer *meta = NULL;
+    const guchar *text = NULL;
+
+    if (!gwy_container_gis_object_by_name(data, "/0/meta", &meta)
+        || !GWY_IS_CONTAINER(meta))
+        return NULL;
+    gwy_container_gis_string_by_name(meta, SIMSCAN_META_PARTICLES, &text);
+    return (const gchar*)text;
 }
 
 static void

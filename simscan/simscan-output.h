@@ -22,12 +22,17 @@ G_BEGIN_DECLS
 #define SIMSCAN_META_SLOW_SCAN   "Slow scan"
 #define SIMSCAN_META_FRAME_START "Frame start (s)"
 /* True particle positions, px, CSV "x,y,x_shown,y_shown": where each
- * particle belongs in a compensated image and where the scan shows it. */
-#define SIMSCAN_PARTICLES_KEY    "/0/simscan/particles"
+ * particle belongs in a compensated image and where the scan shows it.  An
+ * item of the contaminated channel's metadata (like its drift table), so
+ * that Gwyddion's validator accepts the file. */
+#define SIMSCAN_META_PARTICLES   "Simulated particles (px)"
 
 /* The container written to the .gwy file (new reference). */
 GwyContainer*  simscan_output_container  (const SimscanScene *scene,
                                           const SimscanMeasurement *m);
+/* The particle list of a simulator file (SIMSCAN_META_PARTICLES of
+ * channel 0), or NULL. */
+const gchar*   simscan_output_particles  (GwyContainer *data);
 gchar*         simscan_output_json       (const SimscanScene *scene,
                                           const SimscanMeasurement *m);
 

@@ -19,6 +19,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "drift-table.h"
+#include "localscan-channel.h"
 #include "paper-compensate.h"
 
 #define FUNC_NAME "localscan_drift"
@@ -113,7 +114,8 @@ make_data(DriftTable **table)
         }
     }
     text = drift_table_to_string(*table);
-    gwy_container_set_string_by_name(data, "/0/localscan/drift-table", (const guchar*)text);
+    localscan_channel_store_table_text(data, 0, text);
+    g_free(text);
     g_object_unref(field);
     g_rand_free(rng);
     return data;

@@ -48,6 +48,7 @@ typedef struct {
     gint n;
     gchar *title;
     gchar *table_text;      /* the table the new channel must carry */
+    gint source_id;         /* >= 0: its other metadata must be carried too */
 } Expected;
 
 /************************************************************************
@@ -269,26 +270,58 @@ random_field(GRand *rng, gint xres, gint yres, gdouble dx, gdouble dy)
     return field;
 }
 
-static gchar*
-table_key(gint id)
+/* The channel's metadata container, made when asked to and absent. */
+static GwyContainer*
+channel_meta(GwyContainer *data, gint id, gboolean create)
 {
-    return g_strdup_printf(DRIFT_TABLE_KEY_FORMAT, id);
+    GQuark key = gwy_app_get_data_meta_key_for_id(id);
+    GObject *meta = NULL;
+
+    if (gwy_container_gis_object(data, key, &meta)) {
+        ck_assert(GWY_IS_CONTAINER(meta));
+        return GWY_CONTAINER(meta);
+    }
+    if (!create)
+        return NULL;
+    meta = G_OBJECT(gwy_container_new());
+    gwy_container_set_object(data, key, meta);
+    g_object_unref(meta);
+    return GWY_CONTAINER(meta);
+}
+
+/* The drift table stored with a channel: an item of its metadata. */
+static const gchar*
+stored_table_text(GwyContainer *data, gint id)
+{
+    GwyContainer *meta = channel_meta(data, id, FALSE);
+    const guchar *text = NULL;
+
+    if (meta)
+        gwy_container_gis_string_by_name(meta, DRIFT_TABLE_META_KEY, &text);
+    return (const gchar*)text;
 }
 
 static void
 add_channel(GwyContainer *data, gint id, GwyDataField *field, const gchar *title,
             const gchar *table_text)
 {
-    gchar *key;
-
     gwy_container_set_object(data, gwy_app_get_data_key_for_id(id), field);
     gwy_container_set_const_string(data, gwy_app_get_data_title_key_for_id(id),
                                    (const guchar*)title);
     if (table_text) {
-        key = table_key(id);
-        gwy_container_set_const_string_by_name(data, key, (const guchar*)table_text);
-        g_free(key);
+        gwy_container_set_const_string_by_name(channel_meta(data, id, TRUE), DRIFT_TABLE_META_KEY,
+                                               (const guchar*)table_text);
     }
+}
+
+/* Metadata a channel may carry besides its drift table. */
+static void
+add_other_metadata(GwyContainer *data, gint id, const gchar *comment)
+{
+    GwyContainer *meta = channel_meta(data, id, TRUE);
+
+    gwy_container_set_const_string_by_name(meta, "Comment", (const guchar*)comment);
+    gwy_container_set_const_string_by_name(meta, "Operator", (const guchar*)"test-gwy-localscan");
 }
 
 static void
@@ -351,6 +384,7 @@ expected_init(Expected *exp, GwyDataField *source, const gchar *title, const Dri
     expected_drift(table, exp->dx, exp->dy);
     exp->title = g_strconcat(title, TITLE_SUFFIX, NULL);
     exp->table_text = drift_table_to_string(table);
+    exp->source_id = -1;
 }
 
 static void
@@ -406,6 +440,32 @@ get_string(GwyContainer *data, const gchar *key)
     return (const gchar*)s;
 }
 
+/* Every string item of metadata a is in b with the same value, except the
+ * drift table (not compared); returns how many were compared. */
+static guint
+check_meta_contained(GwyContainer *a, GwyContainer *b)
+{
+    const gchar **keys;
+    const guchar *va, *vb;
+    guint i, n = 0, nkeys;
+
+    if (!a)
+        return 0;
+    ck_assert_msg(b, "metadata missing");
+    keys = gwy_container_keys_by_name(a);
+    nkeys = gwy_container_get_n_items(a);
+    for (i = 0; i < nkeys; i++) {
+        if (gwy_strequal(keys[i], DRIFT_TABLE_META_KEY))
+            continue;
+        ck_assert(gwy_container_gis_string_by_name(a, keys[i], &va));
+        ck_assert_msg(gwy_container_gis_string_by_name(b, keys[i], &vb), "metadata item '%s' lost", keys[i]);
+        ck_assert_str_eq((const gchar*)vb, (const gchar*)va);
+        n++;
+    }
+    g_free(keys);
+    return n;
+}
+
 /* Every item of every channel of in is in out unchanged, and out has
  * exactly one channel more; returns its id. */
 static gint
@@ -415,7 +475,6 @@ check_inputs_preserved(GwyContainer *in, GwyContainer *out)
     gint *out_ids = gwy_app_data_browser_get_data_ids(out);
     gint i, j, n_in = 0, n_out = 0, newid = -1;
     GwyDataField *a, *b;
-    gchar *key;
 
     for (i = 0; in_ids[i] != -1; i++) {
         n_in++;
@@ -429,9 +488,9 @@ check_inputs_preserved(GwyContainer *in, GwyContainer *out)
         ck_assert(!a || fields_identical(a, b));
         ck_assert_str_eq(get_string(out, g_quark_to_string(gwy_app_get_data_title_key_for_id(in_ids[i]))),
                          get_string(in, g_quark_to_string(gwy_app_get_data_title_key_for_id(in_ids[i]))));
-        key = table_key(in_ids[i]);
-        ck_assert_pstr_eq(get_string(out, key), get_string(in, key));
-        g_free(key);
+        ck_assert_pstr_eq(stored_table_text(out, in_ids[i]), stored_table_text(in, in_ids[i]));
+        check_meta_contained(channel_meta(in, in_ids[i], FALSE), channel_meta(out, in_ids[i], FALSE));
+        check_meta_contained(channel_meta(out, in_ids[i], FALSE), channel_meta(in, in_ids[i], FALSE));
     }
     for (j = 0; out_ids[j] != -1; j++) {
         n_out++;
@@ -455,7 +514,6 @@ check_compensated(GwyContainer *out, gint newid, const Expected *exp)
     const gdouble *a = gwy_data_field_get_data_const(src);
     gdouble *want = g_new(gdouble, xres*yres), *want_mask = g_new(gdouble, xres*yres);
     gint i, n_filled = 0;
-    gchar *key;
 
     paper_compensate(a, xres, yres, exp->n, exp->dx, exp->dy, paper_image_mean(a, xres, yres),
                      want, want_mask);
@@ -480,9 +538,11 @@ check_compensated(GwyContainer *out, gint newid, const Expected *exp)
 
     ck_assert_str_eq(get_string(out, g_quark_to_string(gwy_app_get_data_title_key_for_id(newid))),
                      exp->title);
-    key = table_key(newid);
-    ck_assert_pstr_eq(get_string(out, key), exp->table_text);
-    g_free(key);
+    ck_assert_pstr_eq(stored_table_text(out, newid), exp->table_text);
+    if (exp->source_id >= 0) {
+        ck_assert_uint_gt(check_meta_contained(channel_meta(out, exp->source_id, FALSE),
+                                               channel_meta(out, newid, FALSE)), 0);
+    }
     g_free(want);
     g_free(want_mask);
 }
@@ -521,7 +581,8 @@ run_and_check(GwyContainer *data, const gchar *input, const gchar *const *args, 
  ************************************************************************/
 
 /* Three channels with ids 3, 1, 6 (the first channel is the lowest id, 1),
- * each with its own stored table; channel 3 has a mask of its own. */
+ * each with its own stored table and other metadata; channel 3 has a mask
+ * of its own. */
 typedef struct {
     GwyContainer *data;
     GwyDataField *fields[3];
@@ -547,6 +608,7 @@ three_channels_init(ThreeChannels *tc, GRand *rng)
         text = drift_table_to_string(tc->tables[i]);
         add_channel(tc->data, three_ids[i], tc->fields[i], three_titles[i], text);
         g_free(text);
+        add_other_metadata(tc->data, three_ids[i], three_titles[i]);
     }
     mask = gwy_data_field_new_alike(tc->fields[0], TRUE);
     gwy_data_field_area_fill(mask, 2, 3, 5, 4, 1.0);
@@ -579,6 +641,7 @@ START_TEST(test_stored_table_first_channel)
     three_channels_init(&tc, rng);
     output = out_path("out.gwy");
     expected_init(&exp, tc.fields[1], three_titles[1], tc.tables[1]);
+    exp.source_id = three_ids[1];
     run_and_check(tc.data, tc.input, (const gchar *const[]){ "-o", output, tc.input, NULL }, &exp);
     expected_clear(&exp);
     g_free(output);
@@ -597,6 +660,7 @@ START_TEST(test_channel_option)
     three_channels_init(&tc, rng);
     output = out_path("out.gwy");
     expected_init(&exp, tc.fields[2], three_titles[2], tc.tables[2]);
+    exp.source_id = three_ids[2];
     run_and_check(tc.data, tc.input,
                   (const gchar *const[]){ "-c", "6", "-m", "paper", "-o", output, tc.input, NULL }, &exp);
     expected_clear(&exp);
@@ -626,6 +690,7 @@ START_TEST(test_table_file_physical_units)
 
     text = drift_table_to_string(stored);
     add_channel(data, 0, field, "Topo", text);
+    add_other_metadata(data, 0, "Topo");
     g_free(text);
     save_gwy(data, input);
 
@@ -645,6 +710,7 @@ START_TEST(test_table_file_physical_units)
     expected_init(&exp, field, "Topo", px);
     g_free(exp.table_text);
     exp.table_text = drift_table_to_string(loaded);
+    exp.source_id = 0;
     run_and_check(data, input, (const gchar *const[]){ "-o", output, "-d", csv, input, NULL }, &exp);
 
     expected_clear(&exp);
@@ -916,10 +982,13 @@ static const ErrorCase error_cases[] = {
     { "negative channel", GOOD_TABLE, NULL, { "-c", "-1", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: @IN has no channel -1 (its channels: 0)" },
     { "no stored table", NULL, NULL, { "-o", "@OUT", "@IN", }, 1,
-      "gwy-localscan: @IN: channel 0 has no stored drift table (/0/localscan/drift-table); "
+      "gwy-localscan: @IN: channel 0 has no stored drift table (metadata item 'Local-scan drift table'); "
       "give one with -d TABLE.csv" },
     { "malformed stored table", "stripe,dx,dy\n0,1,0\n1,x,0\n", NULL, { "-o", "@OUT", "@IN", }, 1,
-      "gwy-localscan: @IN:/0/localscan/drift-table:3: bad number 'x' for dx" },
+      "gwy-localscan: @IN, channel 0 drift table:3: bad number 'x' for dx" },
+    { "stored table does not fit", "stripe,dx,dy\n0,0,0\n1,0,0\n2,0,0\n3,0,0\n4,0,0\n5,0,0\n6,0,0\n", NULL,
+      { "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN, channel 0 drift table:8: the table has 7 stripes but the image has only 6 rows" },
     { "missing table file", GOOD_TABLE, NULL, { "-d", "@CSV", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: @CSV: cannot read: No such file or directory" },
     { "NaN in table file", GOOD_TABLE, "stripe,dx,dy\n0,1,0\n1,nan,0\n",

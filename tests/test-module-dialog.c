@@ -17,6 +17,7 @@
 #include <libgwydgets/gwydgets.h>
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
+#include "localscan-channel.h"
 
 #define FUNC_NAME "localscan_drift"
 #define SETTINGS_PREFIX "/module/localscan_drift/"
@@ -58,7 +59,7 @@ make_container(const gchar *table_text)
     gwy_container_set_object(data, gwy_app_get_data_key_for_id(0), field);
     g_object_unref(field);
     gwy_container_set_const_string_by_name(data, "/0/data/title", (const guchar*)"Height");
-    gwy_container_set_const_string_by_name(data, "/0/localscan/drift-table", (const guchar*)table_text);
+    localscan_channel_store_table_text(data, 0, table_text);
     gwy_app_data_browser_add(data);
     gwy_app_data_browser_select_data_field(data, 0);
     return data;
@@ -154,7 +155,7 @@ run_dialog(GwyContainer *data, DialogProbe *probe)
 START_TEST(test_bad_table_disables_ok)
 {
     GwyContainer *data = make_container("stripe,dx,dy\n0,abc,1\n");
-    DialogProbe probe = { "/0/localscan/drift-table:2", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, TRUE, FALSE };
+    DialogProbe probe = { "channel 0 drift table:2", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, TRUE, FALSE };
 
     set_stored_table_settings();
     run_dialog(data, &probe);

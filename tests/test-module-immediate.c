@@ -129,7 +129,7 @@ make_container(GwyDataField *field, const gchar *table_text)
     set_string(data, "/0/data/title", TITLE);
     set_string(data, "/0/base/palette", "Gray");
     if (table_text)
-        set_string(data, "/0/localscan/drift-table", table_text);
+        localscan_channel_store_table_text(data, 0, table_text);
     gwy_app_data_browser_add(data);
     gwy_app_data_browser_select_data_field(data, 0);
     return data;
@@ -251,7 +251,6 @@ check_worked_example(gint k, gboolean nm_table)
     GwyDataField *field = make_worked_example(k, xstep, ystep, "m"), *source_copy, *result, *mask;
     GwyContainer *data;
     GString *table = g_string_new(NULL);
-    gchar key[64];
     gint newid, s;
     static const gint dx[3] = { 1, -1, 0 }, dy[3] = { 1, 0, -1 };
 
@@ -276,8 +275,7 @@ check_worked_example(gint k, gboolean nm_table)
     assert_field_values(mask, worked_mask, 4, 6, k);
     assert_mask_geometry(mask, field);
     ck_assert_str_eq(get_string(data, "/1/data/title"), RESULT_TITLE);
-    g_snprintf(key, sizeof(key), DRIFT_TABLE_KEY_FORMAT, newid);
-    ck_assert_str_eq(get_string(data, key), table->str);
+    ck_assert_str_eq(localscan_channel_stored_table_text(data, newid), table->str);
     assert_same_field_bits(get_field(data, gwy_app_get_data_key_for_id(0)), source_copy);
 
     g_object_unref(source_copy);
@@ -409,6 +407,7 @@ START_TEST(test_result_channel_items)
     set_string(meta, "Scan rate", "2 Hz");
     gwy_container_set_object_by_name(data, "/0/meta", meta);
     g_object_unref(meta);
+    localscan_channel_store_table_text(data, 0, worked_table);
     set_module_settings(&default_settings);
 
     newid = run_module(data, NULL);
@@ -447,7 +446,7 @@ START_TEST(test_csv_file_source)
     ck_assert_int_eq(newid, 1);
     assert_field_values(get_field(data, gwy_app_get_data_key_for_id(newid)), worked_c, 4, 6, 2);
     assert_field_values(get_field(data, gwy_app_get_mask_key_for_id(newid)), worked_mask, 4, 6, 2);
-    ck_assert_str_eq(get_string(data, "/1/localscan/drift-table"), "stripe,dx,dy\n0,2,2\n1,-2,0\n2,0,-2\n");
+    ck_assert_str_eq(localscan_channel_stored_table_text(data, 1), "stripe,dx,dy\n0,2,2\n1,-2,0\n2,0,-2\n");
 
     g_unlink(filename);
     g_free(filename);
@@ -590,6 +589,7 @@ START_TEST(test_continuous_mode_passes_timing)
         set_string(meta, "Scan rate", "2 Hz");
         gwy_container_set_object_by_name(data, "/0/meta", meta);
         g_object_unref(meta);
+        localscan_channel_store_table_text(data, 0, table_text);
         ms.mode = LOCALSCAN_MODE_CONTINUOUS;
         ms.interpolation = GWY_INTERPOLATION_OMOMS;
         ms.direction = directions[k];
@@ -641,11 +641,11 @@ START_TEST(test_bad_sources_refused)
     gchar *missing = g_build_filename(g_get_home_dir(), "no-such-table.csv", NULL);
 
     ms.plot_drift = TRUE;
-    check_refused(field, NULL, &ms, "/0/localscan/drift-table");
-    check_refused(field, "stripe,dx,dy\n0,abc,1\n", &ms, "/0/localscan/drift-table:2");
-    check_refused(field, "stripe,dx,dy\n0,0.5,0\n", &ms, "/0/localscan/drift-table:2");
+    check_refused(field, NULL, &ms, "Channel 0 has no stored drift table");
+    check_refused(field, "stripe,dx,dy\n0,abc,1\n", &ms, "channel 0 drift table:2");
+    check_refused(field, "stripe,dx,dy\n0,0.5,0\n", &ms, "channel 0 drift table:2");
     check_refused(field, "stripe,dx,dy\n0,0,0\n1,0,0\n2,0,0\n3,0,0\n4,0,0\n5,0,0\n6,0,0\n", &ms,
-                  "/0/localscan/drift-table");
+                  "channel 0 drift table:8");
     check_refused(pixel_field, "# units: nm\nstripe,dx,dy\n0,1,1\n", &ms, "metres");
 
     ms.source = LOCALSCAN_SOURCE_FILE;

@@ -41,7 +41,7 @@ cmp -s "$tmp/a.gwy" "$tmp/c.gwy" && fail "another seed gave the same .gwy"
 check
 [ "$(head -c 4 "$tmp/a.gwy")" = "GWYP" ] || fail ".gwy lacks the GWYP magic"
 check
-grep -q "/0/localscan/drift-table" "$tmp/a.gwy" || fail "no stored drift table"
+grep -q "Local-scan drift table" "$tmp/a.gwy" || fail "no stored drift table"
 check
 grep -qF "$(sed -n 2p "$tmp/a.csv")" "$tmp/a.gwy" \
     || fail "the stored table differs from the CSV"

@@ -219,32 +219,26 @@ pick_channel(GwyContainer *data, const gchar *filename, gint wanted,
     return id;
 }
 
-static gchar*
-stored_table_key(gint id)
-{
-    return g_strdup_printf(DRIFT_TABLE_KEY_FORMAT, id);
-}
-
 static DriftTable*
 load_stored_table(GwyContainer *data, const gchar *filename, gint id,
                   GError **error)
 {
-    const guchar *text = NULL;
-    gchar *key = stored_table_key(id), *source;
+    const gchar *text = localscan_channel_stored_table_text(data, id);
     DriftTable *table = NULL;
+    gchar *label;
 
-    if (!gwy_container_gis_string_by_name(data, key, &text)) {
+    if (!text) {
         g_set_error(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_IO,
-                    _("%s: channel %d has no stored drift table (%s); "
-                      "give one with -d TABLE.csv"), filename, id, key);
+                    _("%s: channel %d has no stored drift table (metadata "
+                      "item '%s'); give one with -d TABLE.csv"),
+                    filename, id, DRIFT_TABLE_META_KEY);
     }
     else {
-        /* Messages then read "in.gwy:/0/localscan/drift-table:LINE: ...". */
-        source = g_strconcat(filename, ":", key, NULL);
-        table = drift_table_parse((const gchar*)text, -1, source, error);
-        g_free(source);
+        /* Messages then read "in.gwy, channel 0 drift table:LINE: ...". */
+        label = localscan_channel_table_label(filename, id);
+        table = drift_table_parse(text, -1, label, error);
+        g_free(label);
     }
-    g_free(key);
     return table;
 }
 

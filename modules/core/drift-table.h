@@ -12,8 +12,11 @@
 G_BEGIN_DECLS
 
 /* Where a drift table is stored with a channel in a GwyContainer: the CSV
- * text as a string item.  Format with the channel id. */
-#define DRIFT_TABLE_KEY_FORMAT "/%d/localscan/drift-table"
+ * text as the string item of this name in the channel's metadata container
+ * "/<id>/meta".  Gwyddion's file validator knows only its own keys, and the
+ * metadata is where it keeps a channel's extra information for users to see
+ * (the metadata browser). */
+#define DRIFT_TABLE_META_KEY "Local-scan drift table"
 
 #define DRIFT_TABLE_ERROR drift_table_error_quark()
 

@@ -26,30 +26,73 @@ localscan_channel_result_title(const gchar *source_title)
     return g_strconcat(source_title, LOCALSCAN_TITLE_SUFFIX, NULL);
 }
 
+gchar*
+localscan_channel_table_label(const gchar *filename, gint id)
+{
+    if (filename)
+        return g_strdup_printf("%s, channel %d drift table", filename, id);
+    return g_strdup_printf("channel %d drift table", id);
+}
+
+static GwyContainer*
+channel_meta(GwyContainer *data, gint id, gboolean create)
+{
+    GwyContainer *meta = NULL;
+    gchar key[32];
+
+    g_snprintf(key, sizeof(key), "/%d/meta", id);
+    if (gwy_container_gis_object_by_name(data, key, &meta) && GWY_IS_CONTAINER(meta))
+        return meta;
+    if (!create)
+        return NULL;
+    meta = gwy_container_new();
+    gwy_container_set_object_by_name(data, key, meta);
+    g_object_unref(meta);
+    return meta;
+}
+
+const gchar*
+localscan_channel_stored_table_text(GwyContainer *data, gint id)
+{
+    GwyContainer *meta = channel_meta(data, id, FALSE);
+    const guchar *text = NULL;
+
+    if (meta && gwy_container_gis_string_by_name(meta, DRIFT_TABLE_META_KEY, &text))
+        return (const gchar*)text;
+    return NULL;
+}
+
 DriftTable*
 localscan_channel_stored_table(GwyContainer *data, gint id, GError **error)
 {
-    gchar *key = g_strdup_printf(DRIFT_TABLE_KEY_FORMAT, id);
-    const guchar *text = NULL;
+    const gchar *text = localscan_channel_stored_table_text(data, id);
     DriftTable *table = NULL;
+    gchar *label;
 
-    if (gwy_container_gis_string_by_name(data, key, &text))
-        table = drift_table_parse((const gchar*)text, -1, key, error);
+    if (text) {
+        label = localscan_channel_table_label(NULL, id);
+        table = drift_table_parse(text, -1, label, error);
+        g_free(label);
+    }
     else {
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE,
-                    "The channel has no stored drift table (%s).", key);
+                    "Channel %d has no stored drift table (metadata item '%s').", id, DRIFT_TABLE_META_KEY);
     }
-    g_free(key);
     return table;
+}
+
+void
+localscan_channel_store_table_text(GwyContainer *data, gint id, const gchar *text)
+{
+    gwy_container_set_string_by_name(channel_meta(data, id, TRUE), DRIFT_TABLE_META_KEY,
+                                     (const guchar*)g_strdup(text));
 }
 
 void
 localscan_channel_store_table(GwyContainer *data, gint id, const DriftTable *table)
 {
-    gchar *key = g_strdup_printf(DRIFT_TABLE_KEY_FORMAT, id);
-
-    gwy_container_set_string_by_name(data, key, (const guchar*)drift_table_to_string(table));
-    g_free(key);
+    gwy_container_set_string_by_name(channel_meta(data, id, TRUE), DRIFT_TABLE_META_KEY,
+                                     (const guchar*)drift_table_to_string(table));
 }
 
 /* A metadata value such as "2.325 Hz", "0.5 s" or "0.413": the number in

@@ -35,7 +35,7 @@ typedef enum {
 
 /* The values are stored in the settings: never renumber them. */
 typedef enum {
-    LOCALSCAN_SOURCE_STORED    = 0,   /* DRIFT_TABLE_KEY_FORMAT of the channel */
+    LOCALSCAN_SOURCE_STORED    = 0,   /* DRIFT_TABLE_META_KEY of the channel */
     LOCALSCAN_SOURCE_FILE      = 1,   /* a CSV file */
     LOCALSCAN_SOURCE_REFERENCE = 2,   /* registration against a reference image */
 } LocalscanSource;
@@ -73,15 +73,28 @@ GQuark       localscan_channel_error_quark   (void);
 
 gchar*       localscan_channel_result_title  (const gchar *source_title);
 
-/* The table stored with channel id (DRIFT_TABLE_KEY_FORMAT), parsed; the
- * key is the source name in messages. */
+/* How messages name the table stored with channel id: "FILE, channel ID
+ * drift table" ("channel ID drift table" without filename), followed by
+ * ":LINE: problem". */
+gchar*       localscan_channel_table_label   (const gchar *filename,
+                                              gint id);
+/* The text stored with channel id (item DRIFT_TABLE_META_KEY of its
+ * metadata "/<id>/meta"), or NULL. */
+const gchar* localscan_channel_stored_table_text(GwyContainer *data,
+                                                 gint id);
+/* The table stored with channel id, parsed; the label without file name is
+ * the source name in messages. */
 DriftTable*  localscan_channel_stored_table  (GwyContainer *data,
                                               gint id,
                                               GError **error);
-/* Stores the table's text with channel id. */
+/* Store the table (its text) with channel id, in its metadata, which is
+ * created if absent; other metadata items are kept. */
 void         localscan_channel_store_table   (GwyContainer *data,
                                               gint id,
                                               const DriftTable *table);
+void         localscan_channel_store_table_text(GwyContainer *data,
+                                                gint id,
+                                                const gchar *text);
 
 /* Seconds per scan line from the channel's metadata ("Line time",
  * "Scan rate"/"Scan Rate" in Hz, or "Frame time (s)" over the rows), else
