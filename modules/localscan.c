@@ -67,6 +67,7 @@ typedef struct {
     LocalscanApplied applied;
     gdouble line_time;
     gboolean line_time_known;
+    gint batch_reference;     /* reference-channel of an IMMEDIATE run, or -1 */
     MeasuredDrift measured;
 } ModuleArgs;
 
@@ -258,15 +259,23 @@ end:
 static void
 use_reference_channel_setting(ModuleArgs *args, GwyRunType runtype)
 {
+    static const GwyAppDataId none = GWY_APP_DATA_ID_NONE;
     gint channel = gwy_params_get_int(args->params, PARAM_REFERENCE_CHANNEL);
     GwyAppDataId refid;
 
+    args->batch_reference = -1;
     if (channel < 0)
         return;
     if (runtype == GWY_RUN_INTERACTIVE && !reference_filter(args->data, channel, args))
         return;
     refid.datano = gwy_app_data_browser_get_number(args->data);
     refid.id = channel;
+    if (runtype != GWY_RUN_INTERACTIVE) {
+        args->batch_reference = channel;
+        /* Never the session's remembered choice instead of a missing one. */
+        if (!gwy_app_data_id_verify_channel(&refid))
+            refid = none;
+    }
     gwy_params_set_image_id(args->params, PARAM_REFERENCE, refid);
 }
 
@@ -306,6 +315,11 @@ find_reference(ModuleArgs *args, GwyAppDataId *refid, GError **error)
     gchar *refsize, *size;
 
     *refid = gwy_params_get_data_id(args->params, PARAM_REFERENCE);
+    if (refid->id < 0 && args->batch_reference >= 0) {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE,
+                    _("The reference channel %d does not exist."), args->batch_reference);
+        return NULL;
+    }
     if (refid->id < 0) {
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE, "%s",
                     _("No reference image is chosen (another channel of the same pixel and physical size)."));
