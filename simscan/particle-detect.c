@@ -5,18 +5,36 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include <stdlib.h>
 #include <math.h>
+#include <libgwyddion/gwymath.h>
 #include <libprocess/stats.h>
+#include <libprocess/level.h>
 #include <libprocess/grains.h>
 #include "stripe-geometry.h"
 #include "particle-detect.h"
 
+/* Automatic threshold on a levelled image: this many noise sigmas ... */
+#define AUTO_NOISE_SIGMAS 10.0
+/* ... and at least this fraction of the highest particle. */
+#define AUTO_RANGE_FRACTION 0.1
+/* Pixels this many noise sigmas above the substrate are left out of the
+ * levelling fits as (parts of) particles. */
+#define LEVEL_MASK_SIGMAS 3.0
+/* A particle's top: above this fraction of its height (the local scan's
+ * default chord threshold).  A sphere of radius R is cut there in a disc of
+ * radius sqrt(1 - (2 TOP_FRACTION - 1)^2) R. */
+#define TOP_FRACTION 0.75
+#define TOP_CUT_RADIUS 0.8660254037844386
+
 typedef struct {
     gdouble sw, swx, swy;
     gint area;
-    gdouble peak;
+    gdouble peak;          /* in the field's own values */
+    gdouble level_peak;    /* in the values grains were found on */
     gboolean on_edge;
     gint row_min, row_max;
+    gint top_area;
 } GrainSums;
 
 void
@@ -25,6 +43,7 @@ particle_detect_params_init(ParticleDetectParams *params)
     params->height = 0.0;
     params->min_area = 1;
     params->max_area = 0;
+    params->level = TRUE;
 }
 
 gdouble
@@ -33,18 +52,117 @@ particle_detect_substrate(GwyDataField *field)
     return gwy_data_field_get_median(field);
 }
 
+gdouble
+particle_detect_noise(GwyDataField *field, gdouble median)
+{
+    gint n = gwy_data_field_get_xres(field)*gwy_data_field_get_yres(field);
+    const gdouble *d = gwy_data_field_get_data_const(field);
+    gdouble *dev = g_new(gdouble, n), mad;
+    gint k;
+
+    for (k = 0; k < n; k++)
+        dev[k] = fabs(d[k] - median);
+    mad = gwy_math_median(n, dev);
+    g_free(dev);
+    /* The MAD of a Gaussian is 0.6745 sigma. */
+    return mad/0.6745;
+}
+
+/* Pixels clearly above the substrate of a roughly levelled field. */
+static GwyDataField*
+particle_mask(GwyDataField *field)
+{
+    GwyDataField *mask = gwy_data_field_new_alike(field, FALSE);
+    gdouble median = gwy_data_field_get_median(field);
+    gdouble above = median + LEVEL_MASK_SIGMAS*particle_detect_noise(field,
+                                                                     median);
+    const gdouble *d = gwy_data_field_get_data_const(field);
+    gdouble *m = gwy_data_field_get_data(mask);
+    gint k, n = gwy_data_field_get_xres(field)*gwy_data_field_get_yres(field);
+
+    for (k = 0; k < n; k++)
+        m[k] = (d[k] > above) ? 1.0 : 0.0;
+    return mask;
+}
+
 static void
-sum_grains(GwyDataField *field, const gint *grains, gdouble threshold,
-           GrainSums *sums)
+subtract_row_medians(GwyDataField *field, GwyDataField *mask)
+{
+    gint xres = gwy_data_field_get_xres(field);
+    gint yres = gwy_data_field_get_yres(field);
+    GwyDataLine *medians = gwy_data_line_new(yres, yres, FALSE);
+    gdouble *d = gwy_data_field_get_data(field);
+    const gdouble *m;
+    gint i, j;
+
+    /* A row that is all particle keeps its plain median. */
+    gwy_data_field_get_line_stats_mask(field, mask, GWY_MASK_EXCLUDE, medians,
+                                       NULL, 0, 0, xres, yres,
+                                       GWY_LINE_STAT_MEDIAN,
+                                       GWY_ORIENTATION_HORIZONTAL);
+    m = gwy_data_line_get_data_const(medians);
+    for (i = 0; i < yres; i++) {
+        gdouble z = isfinite(m[i]) ? m[i]
+                    : gwy_data_field_area_get_median(field, NULL, 0, i,
+                                                     xres, 1);
+
+        for (j = 0; j < xres; j++)
+            d[i*xres + j] -= z;
+    }
+    g_object_unref(medians);
+}
+
+GwyDataField*
+particle_detect_level(GwyDataField *field)
+{
+    GwyDataField *levelled = gwy_data_field_duplicate(field), *mask;
+    gint xres = gwy_data_field_get_xres(field);
+    gint yres = gwy_data_field_get_yres(field);
+    gdouble a, bx, by;
+
+    /* A plain plane first, so particles stand out for the mask; then the
+     * plane of the substrate alone, fitted to the original values. */
+    gwy_data_field_fit_plane(levelled, &a, &bx, &by);
+    gwy_data_field_plane_level(levelled, a, bx, by);
+    mask = particle_mask(levelled);
+    gwy_data_field_copy(field, levelled, FALSE);
+    gwy_data_field_area_fit_plane_mask(levelled, mask, GWY_MASK_EXCLUDE,
+                                       0, 0, xres, yres, &a, &bx, &by);
+    gwy_data_field_plane_level(levelled, a, bx, by);
+    /* Median line correction: the offsets a measured image's lines have. */
+    subtract_row_medians(levelled, mask);
+    g_object_unref(mask);
+    gwy_data_field_add(levelled, -gwy_data_field_get_median(levelled));
+    return levelled;
+}
+
+gdouble
+particle_detect_auto_height(GwyDataField *field, gdouble substrate,
+                            gboolean levelled)
+{
+    gdouble range = gwy_data_field_get_max(field) - substrate;
+
+    if (!levelled)
+        return 0.5*range;
+    return fmax(AUTO_NOISE_SIGMAS*particle_detect_noise(field, substrate),
+                AUTO_RANGE_FRACTION*range);
+}
+
+/* Grains are numbered on work (the levelled copy or field itself); centres
+ * and areas come from work, peaks from field. */
+static void
+sum_grains(GwyDataField *field, GwyDataField *work, const gint *grains,
+           gdouble threshold, GrainSums *sums)
 {
     gint xres = gwy_data_field_get_xres(field);
     gint yres = gwy_data_field_get_yres(field);
     const gdouble *d = gwy_data_field_get_data_const(field);
+    const gdouble *w = gwy_data_field_get_data_const(work);
     gint i, j, g;
 
     for (i = 0; i < yres; i++) {
         for (j = 0; j < xres; j++) {
-            gdouble z = d[i*xres + j], w;
+            gdouble z = w[i*xres + j], weight;
             GrainSums *s;
 
             if (!(g = grains[i*xres + j]))
@@ -52,16 +170,18 @@ sum_grains(GwyDataField *field, const gint *grains, gdouble threshold,
             s = sums + g;
             /* A tiny floor keeps a grain of pixels exactly at the threshold
              * (flat tops) from having zero total weight. */
-            w = fmax(z - threshold, 1e-30);
-            s->sw += w;
-            s->swx += w*j;
-            s->swy += w*i;
+            weight = fmax(z - threshold, 1e-30);
+            s->sw += weight;
+            s->swx += weight*j;
+            s->swy += weight*i;
             s->area++;
             if (s->area == 1) {
-                s->peak = z;
+                s->peak = d[i*xres + j];
+                s->level_peak = z;
                 s->row_min = i;
             }
-            s->peak = fmax(s->peak, z);
+            s->peak = fmax(s->peak, d[i*xres + j]);
+            s->level_peak = fmax(s->level_peak, z);
             s->row_max = i;
             if (i == 0 || j == 0 || i == yres-1 || j == xres-1)
                 s->on_edge = TRUE;
@@ -69,15 +189,33 @@ sum_grains(GwyDataField *field, const gint *grains, gdouble threshold,
     }
 }
 
+static void
+count_top_areas(GwyDataField *work, const gint *grains, gdouble base,
+                GrainSums *sums)
+{
+    gint k, n = gwy_data_field_get_xres(work)*gwy_data_field_get_yres(work);
+    const gdouble *w = gwy_data_field_get_data_const(work);
+
+    for (k = 0; k < n; k++) {
+        GrainSums *s;
+
+        if (!grains[k])
+            continue;
+        s = sums + grains[k];
+        if (w[k] - base > TOP_FRACTION*(s->level_peak - base))
+            s->top_area++;
+    }
+}
+
 GArray*
 particle_detect(GwyDataField *field, const ParticleDetectParams *params,
                 gdouble *substrate, gdouble *threshold)
 {
-    GwyDataField *mask;
+    GwyDataField *mask, *work;
     GArray *particles;
     GrainSums *sums;
     gint *grains;
-    gdouble base, thr, height;
+    gdouble base, work_base, thr, height;
     gint xres, yres, ngrains, g, k;
     const gdouble *d;
     gdouble *m;
@@ -85,13 +223,15 @@ particle_detect(GwyDataField *field, const ParticleDetectParams *params,
     xres = gwy_data_field_get_xres(field);
     yres = gwy_data_field_get_yres(field);
     base = particle_detect_substrate(field);
+    work = params->level ? particle_detect_level(field) : g_object_ref(field);
+    work_base = params->level ? 0.0 : base;
     height = params->height;
     if (height <= 0.0)
-        height = 0.5*(gwy_data_field_get_max(field) - base);
-    thr = base + height;
+        height = particle_detect_auto_height(work, work_base, params->level);
+    thr = work_base + height;
 
-    mask = gwy_data_field_new_alike(field, FALSE);
-    d = gwy_data_field_get_data_const(field);
+    mask = gwy_data_field_new_alike(work, FALSE);
+    d = gwy_data_field_get_data_const(work);
     m = gwy_data_field_get_data(mask);
     for (k = 0; k < xres*yres; k++)
         m[k] = (d[k] > thr) ? 1.0 : 0.0;
@@ -99,7 +239,8 @@ particle_detect(GwyDataField *field, const ParticleDetectParams *params,
     grains = g_new0(gint, xres*yres);
     ngrains = gwy_data_field_number_grains(mask, grains);
     sums = g_new0(GrainSums, ngrains + 1);
-    sum_grains(field, grains, thr, sums);
+    sum_grains(field, work, grains, thr, sums);
+    count_top_areas(work, grains, work_base, sums);
 
     particles = g_array_new(FALSE, FALSE, sizeof(DetectedParticle));
     for (g = 1; g <= ngrains; g++) {
@@ -115,17 +256,51 @@ particle_detect(GwyDataField *field, const ParticleDetectParams *params,
         p.on_edge = sums[g].on_edge;
         p.row_min = sums[g].row_min;
         p.row_max = sums[g].row_max;
+        p.top_area = sums[g].top_area;
         g_array_append_val(particles, p);
     }
 
     g_free(sums);
     g_free(grains);
     g_object_unref(mask);
+    g_object_unref(work);
     if (substrate)
         *substrate = base;
     if (threshold)
-        *threshold = thr;
+        *threshold = base + height;
     return particles;
+}
+
+static gint
+compare_doubles(gconstpointer a, gconstpointer b)
+{
+    gdouble x = *(const gdouble*)a, y = *(const gdouble*)b;
+
+    return (x > y) - (x < y);
+}
+
+gdouble
+particle_typical_radius(const GArray *particles, gdouble dx, gdouble dy)
+{
+    gdouble *radii, r;
+    guint k, n = particles->len;
+
+    if (!n)
+        return 0.0;
+    radii = g_new(gdouble, n);
+    for (k = 0; k < n; k++) {
+        const DetectedParticle *p = &g_array_index(particles,
+                                                   DetectedParticle, k);
+
+        radii[k] = sqrt(p->top_area*dx*dy/G_PI)/TOP_CUT_RADIUS;
+    }
+    qsort(radii, n, sizeof(gdouble), compare_doubles);
+    /* The lower quartile, a radius that some particle really has: the
+     * search must not step over the smaller particles' tops, and a single
+     * speck must not set it. */
+    r = radii[(n - 1)/4];
+    g_free(radii);
+    return r;
 }
 
 gboolean

@@ -1,7 +1,8 @@
 /*
- *  Finding particles in a (drift-contaminated) image: threshold above the
- *  substrate, grain numbering, weighted centres; and choosing one particle
- *  per stripe by the paper's rule (shared/spec/paper-mode.md).
+ *  Finding particles in a (drift-contaminated) image: a levelled copy,
+ *  threshold above the substrate, grain numbering, weighted centres, typical
+ *  size; and choosing one particle per stripe by the paper's rule
+ *  (shared/spec/paper-mode.md).
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -22,16 +23,40 @@ typedef struct {
     gboolean on_edge;      /* the grain touches the image border */
     gint row_min;          /* first and last row of the grain */
     gint row_max;
+    gint top_area;         /* pixels above three quarters of its height
+                              over the substrate, where the local scan cuts
+                              it by default */
 } DetectedParticle;
 
 typedef struct {
-    gdouble height;        /* threshold above the substrate, z units;
-                              <= 0: half way from substrate to image maximum */
+    gdouble height;        /* threshold above the substrate, z units; <= 0:
+                              automatic (see particle_detect_auto_height) */
     gint min_area;         /* smaller grains are dropped (px) */
     gint max_area;         /* larger grains are dropped (px); <= 0: no limit */
+    gboolean level;        /* find grains on a levelled copy (a measured
+                              image's tilt and line offsets) */
 } ParticleDetectParams;
 
+/* Automatic threshold, levelling on, no area limits. */
 void        particle_detect_params_init  (ParticleDetectParams *params);
+
+/* A copy of field with a plane and then each row's median subtracted, both
+ * fitted to the pixels off the particles, so the substrate lies at 0. */
+GwyDataField* particle_detect_level      (GwyDataField *field);
+
+/* The substrate's noise: the median absolute deviation of field from
+ * median, scaled to a Gaussian's standard deviation. */
+gdouble     particle_detect_noise        (GwyDataField *field,
+                                          gdouble median);
+
+/* The automatic threshold above the substrate.  On a levelled field: ten
+ * times the noise and at least a tenth of the highest particle, so a film of
+ * real particles of mixed heights is found whole, not only its tallest
+ * ones.  Without levelling (the old rule): half way from the substrate to
+ * the maximum. */
+gdouble     particle_detect_auto_height  (GwyDataField *field,
+                                          gdouble substrate,
+                                          gboolean levelled);
 
 /* The substrate level: the median of the image (particles cover little). */
 gdouble     particle_detect_substrate    (GwyDataField *field);
@@ -39,11 +64,26 @@ gdouble     particle_detect_substrate    (GwyDataField *field);
 /* Returns a GArray of DetectedParticle, in grain-number order (top to
  * bottom, left to right).  The centre is the centroid of the grain's pixels
  * weighted by their height above the threshold, which is far less sensitive
- * to the pixel grid than the plain centroid of a small grain. */
+ * to the pixel grid than the plain centroid of a small grain.  With
+ * params->level the grains are found on particle_detect_level()'s copy;
+ * substrate, threshold and each peak are in field's own z values all the
+ * same (the levelled substrate put at field's median). */
 GArray*     particle_detect              (GwyDataField *field,
                                           const ParticleDetectParams *params,
                                           gdouble *substrate,
                                           gdouble *threshold);
+
+/* The typical particle radius for the local scans, m: the lower quartile
+ * over the particles of the radius of the sphere whose cut at three
+ * quarters of its height is as large as the particle's top_area (pixel size
+ * dx by dy); 0 without particles.  For equal spheres it is their radius.  A
+ * real particle is more peaked than a sphere: measured by its top it comes
+ * out smaller than its half-height width, so the local scans' search, which
+ * moves its line by 1.5 radii, does not step over the top that its chords
+ * need, on the smaller particles either. */
+gdouble     particle_typical_radius      (const GArray *particles,
+                                          gdouble dx,
+                                          gdouble dy);
 
 /* How a stripe with several particles picks the one to local-scan. */
 typedef enum {

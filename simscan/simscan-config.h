@@ -8,6 +8,7 @@
 #define SIMSCAN_CONFIG_H
 
 #include <glib.h>
+#include <libprocess/datafield.h>
 #include "scan-timing.h"
 #include "drift-model.h"
 #include "sample.h"
@@ -49,6 +50,14 @@ typedef struct {
     gboolean quiet;
 } SimscanConfig;
 
+/* Options the user gave, which a measured sample's defaults leave alone. */
+typedef enum {
+    SIMSCAN_GIVEN_RADIUS     = 1 << 0,     /* --radius */
+    SIMSCAN_GIVEN_RESOLUTION = 1 << 1,     /* --xres or --yres */
+    SIMSCAN_GIVEN_VELOCITY   = 1 << 2,     /* --velocity */
+    SIMSCAN_GIVEN_RMAX       = 1 << 3,     /* --ls-rmax */
+} SimscanGiven;
+
 /* The paper's setting (Section IV): 256 x 256 px over 5 um, 50 nm latex
  * particles, 300 s per image scanning down, v = (0.08, 0.02) nm/s, 16
  * stripes, seed 1. */
@@ -60,6 +69,18 @@ void         simscan_config_clear         (SimscanConfig *config);
 void         simscan_figure6_drift        (gint n, gdouble *dx, gdouble *dy);
 
 const gchar* simscan_preset_name          (SimscanPreset preset);
+
+/* Defaults taken from a measured sample for what the user did not give
+ * (given: SimscanGiven flags): the scan covers the sample's own size at its
+ * own resolution; the local scans' particle radius is the typical radius of
+ * the particles found on the levelled sample (particle_typical_radius); the
+ * drift velocity and the largest drift expected are the paper's (Section
+ * IV) scaled by the ratio of pixel sizes, so the image is contaminated by as
+ * many pixels as in the paper.  Fails when the sample shows no particle. */
+gboolean     simscan_config_adopt_sample  (SimscanConfig *config,
+                                           GwyDataField *sample,
+                                           guint given,
+                                           GError **error);
 
 G_END_DECLS
 

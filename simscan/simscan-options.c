@@ -8,6 +8,7 @@
 #include <string.h>
 #include <math.h>
 #include "simscan-presets.h"
+#include "simscan-sample-file.h"
 #include "simscan-options.h"
 #include "simscan-i18n.h"
 
@@ -91,9 +92,12 @@ make_entries(RawOptions *raw)
              "later options override it"), "NAME" },
         { "sample", 0, 0, G_OPTION_ARG_FILENAME, &raw->sample,
           N_("measured image used as the sample (channel ID, default the "
-             "first)"), "FILE[:ID]" },
+             "first), scanned over its own size and by default at its own "
+             "resolution, with the paper's drift scaled to its pixel size"),
+          "FILE[:ID]" },
         { "radius", 0, 0, G_OPTION_ARG_DOUBLE, &raw->radius,
-          N_("particle radius, nm (25)"), "NM" },
+          N_("particle radius, nm (25; with --sample: the typical radius of "
+             "the particles found on it)"), "NM" },
         { "radius-spread", 0, 0, G_OPTION_ARG_DOUBLE, &raw->radius_spread,
           N_("relative RMS spread of the radii (0)"), "F" },
         { "count", 0, 0, G_OPTION_ARG_INT, &raw->count,
@@ -111,7 +115,8 @@ make_entries(RawOptions *raw)
         { "yres", 0, 0, G_OPTION_ARG_INT, &raw->yres,
           N_("lines per image (256)"), "N" },
         { "size", 0, 0, G_OPTION_ARG_STRING, &raw->size,
-          N_("scan size, um, square or width,height (5)"), "UM[,UM]" },
+          N_("scan size, um, square or width,height (5; not with --sample)"),
+          "UM[,UM]" },
         { "line-time", 0, 0, G_OPTION_ARG_DOUBLE, &raw->line_time,
           N_("seconds per line, trace and retrace (300/256)"), "S" },
         { "direction", 0, 0, G_OPTION_ARG_STRING, &raw->direction,
@@ -124,7 +129,8 @@ make_entries(RawOptions *raw)
           N_("none (constant velocity), settling, oscillation, jump, "
              "random-walk, or figure6 (per-stripe shifts)"), "MODEL" },
         { "velocity", 0, 0, G_OPTION_ARG_STRING, &raw->velocity,
-          N_("constant drift velocity, nm/s (0.08,0.02)"), "VX,VY" },
+          N_("constant drift velocity, nm/s (0.08,0.02; with --sample "
+             "scaled by its pixel size against the paper's)"), "VX,VY" },
         { "offset", 0, 0, G_OPTION_ARG_STRING, &raw->offset,
           N_("drift at t = 0, nm (0,0)"), "X,Y" },
         { "settle-velocity", 0, 0, G_OPTION_ARG_STRING, &raw->settle_velocity,
@@ -152,8 +158,8 @@ make_entries(RawOptions *raw)
         { "ls-speed", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_speed,
           N_("tip speed along a local-scan line, um/s (4)"), "UM_S" },
         { "ls-rmax", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_rmax,
-          N_("largest drift expected, nm; lines are 2(R + rmax) long (100)"),
-          "NM" },
+          N_("largest drift expected, nm; lines are 2(R + rmax) long (100; "
+             "with --sample scaled like the velocity)"), "NM" },
         { "ls-overhead", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_overhead,
           N_("extra time per local-scan line, s (0)"), "S" },
         { "ls-delay", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_delay,
@@ -399,6 +405,63 @@ raw_to_config(const RawOptions *raw, SimscanConfig *config, GError **error)
     return TRUE;
 }
 
+/* Options whose defaults a measured sample replaces start out as these
+ * markers, so that what the user gave is known after parsing. */
+#define NOT_GIVEN_INT G_MININT
+
+static void
+mark_not_given(RawOptions *raw)
+{
+    raw->radius = NAN;
+    raw->ls_rmax = NAN;
+    raw->xres = raw->yres = NOT_GIVEN_INT;
+}
+
+/* Which options the user gave; the others get back their defaults. */
+static guint
+restore_not_given(RawOptions *raw, const RawOptions *defaults)
+{
+    guint given = 0;
+
+    if (isnan(raw->radius))
+        raw->radius = defaults->radius;
+    else
+        given |= SIMSCAN_GIVEN_RADIUS;
+    if (isnan(raw->ls_rmax))
+        raw->ls_rmax = defaults->ls_rmax;
+    else
+        given |= SIMSCAN_GIVEN_RMAX;
+    if (raw->xres != NOT_GIVEN_INT || raw->yres != NOT_GIVEN_INT)
+        given |= SIMSCAN_GIVEN_RESOLUTION;
+    if (raw->xres == NOT_GIVEN_INT)
+        raw->xres = defaults->xres;
+    if (raw->yres == NOT_GIVEN_INT)
+        raw->yres = defaults->yres;
+    if (raw->velocity)
+        given |= SIMSCAN_GIVEN_VELOCITY;
+    return given;
+}
+
+/* A measured sample sets the defaults of what the user did not give. */
+static gboolean
+adopt_sample(SimscanConfig *config, const RawOptions *raw, guint given,
+             GError **error)
+{
+    GwyDataField *field;
+    gboolean ok;
+
+    if (raw->size)
+        return bad_value(error, "size", _("a measured sample is scanned "
+                                          "over its own size"));
+    field = simscan_load_channel(config->sample_file, config->sample_channel,
+                                 error);
+    if (!field)
+        return FALSE;
+    ok = simscan_config_adopt_sample(config, field, given, error);
+    g_object_unref(field);
+    return ok;
+}
+
 /* The preset is applied before the other options are parsed, so it must be
  * found first. */
 static gboolean
@@ -429,15 +492,18 @@ simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
     GOptionContext *context;
     GOptionEntry *entries;
     SimscanPreset preset;
-    RawOptions raw;
+    RawOptions raw, defaults;
     gchar **args;
     gboolean ok;
+    guint given = 0;
     gint i;
 
     if (!find_preset(argc, argv, &preset, error))
         return FALSE;
     simscan_preset_apply(config, preset);
     raw_from_config(&raw, config);
+    defaults = raw;
+    mark_not_given(&raw);
     entries = make_entries(&raw);
     context = g_option_context_new(usage);
     g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
@@ -454,7 +520,10 @@ simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
                     _("unexpected argument %s"), args[1]);
         ok = FALSE;
     }
+    if (ok)
+        given = restore_not_given(&raw, &defaults);
     ok = ok && raw_to_config(&raw, config, error);
+    ok = ok && (!config->sample_file || adopt_sample(config, &raw, given, error));
     g_strfreev(args);
     raw_clear(&raw);
     g_free(entries);

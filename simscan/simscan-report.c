@@ -97,7 +97,10 @@ simscan_report_print(FILE *fh, const SimscanScene *scene,
                   "%.3f to %.3f s (%.3f s, %d lines)\n"),
             scan_timing_frame_end(&scene->timing), scene->particles->len,
             m->t_start, m->t_end, m->t_end - m->t_start, m->lines);
-    fprintf(fh, _("local scan per stripe on %s\n"),
+    fprintf(fh, _("local scans: particle radius %.1f nm, lines %.0f nm long, "
+                  "per stripe on %s\n"),
+            1e9*config->local.radius,
+            1e9*local_scan_line_length(&config->local),
             particle_choice_text(config->local.choice));
     print_stripes(fh, scene, m);
     if (!m->have_errors)

@@ -31,6 +31,12 @@ typedef struct {
 
 static guint32 test_seed;
 
+/* Detection as the simulator's scenes on flat substrates had it: no
+ * levelling, threshold half way up to the highest particle. */
+static const ParticleDetectParams half_way_detect = {
+    .height = 0.0, .min_area = 1, .max_area = 0, .level = FALSE,
+};
+
 static gdouble
 ideal_probe(gpointer user_data, gdouble x, gdouble y, gdouble t)
 {
@@ -219,7 +225,7 @@ START_TEST(test_empty_stripes_filled)
     sample.vx = 4.0*pxs;
     scan_timing_init(&timing, 64, 64, 0.0, 0.1, SCAN_DIRECTION_DOWN);
 
-    particles = particle_detect(field, &(ParticleDetectParams){ 0, 1, 0 },
+    particles = particle_detect(field, &half_way_detect,
                                 &substrate, NULL);
     ck_assert_int_eq(particles->len, 3);
     table = local_scan_run(field, &timing, particles, substrate, 8, &params,
@@ -432,8 +438,10 @@ END_TEST
  * taken by both. */
 START_TEST(test_choice_boundary_grain)
 {
-    DetectedParticle cut = { 31.5, 19.0, 12, 1.0, FALSE, 16, 22 };
-    DetectedParticle whole = { 40.0, 24.0, 12, 1.0, FALSE, 21, 27 };
+    DetectedParticle cut = { .x = 31.5, .y = 19.0, .area = 12, .peak = 1.0,
+                             .row_min = 16, .row_max = 22 };
+    DetectedParticle whole = { .x = 40.0, .y = 24.0, .area = 12, .peak = 1.0,
+                               .row_min = 21, .row_max = 27 };
     GArray *particles = g_array_new(FALSE, TRUE, sizeof(DetectedParticle));
     gint chosen[4];
 
@@ -525,7 +533,7 @@ START_TEST(test_figure6_measured)
     local_scan_params_init(&params);
     /* Stripe 16 is 16 px = 312 nm off. */
     params.r_max = 400e-9;
-    particles = particle_detect(frame, &(ParticleDetectParams){ 0, 1, 0 },
+    particles = particle_detect(frame, &half_way_detect,
                                 &substrate, NULL);
     table = local_scan_run(frame, &timing, particles, substrate, 16, &params,
                            sim_probe, &probe, 300.0, NULL, NULL);

@@ -125,6 +125,26 @@ differ=$(paste -d '|' "$tmp/f6-closest.csv" "$tmp/f6-whole.csv" | grep '^[0-9]' 
 [ "$differ" -ge 1 ] && [ "$differ" -le 8 ] \
     || fail "--prefer-whole-particles changed the particle of $differ stripes"
 
+# A measured sample: its own size and resolution, a radius from its
+# particles, local scans that find them; --size does not apply to it.
+measured=${LOCALSCAN_MEASURED_DIR:-}/particles-film/PTO_110_Virgin0001.gwy
+if [ -n "${LOCALSCAN_MEASURED_DIR:-}" ] && [ -r "$measured" ]; then
+    "$simscan" --sample "$measured:0" --table "$tmp/m.csv" >"$tmp/m.out" \
+        || fail "--sample exited non-zero"
+    check
+    grep -q "256 x 256 px over 10 x 10 um" "$tmp/m.out" \
+        || fail "--sample: not scanned over the sample: $(head -n 1 "$tmp/m.out")"
+    check
+    grep -q "particle radius 6[0-9]\.[0-9] nm" "$tmp/m.out" \
+        || fail "--sample: radius not from the particles: $(grep radius "$tmp/m.out")"
+    check
+    [ "$(grep -c '^[0-9]*,-\{0,1\}[0-9]' "$tmp/m.csv")" -ge 10 ] \
+        || fail "--sample: fewer than 10 stripes measured: $(cat "$tmp/m.csv")"
+    bad_case --sample "$measured" --size 5
+else
+    echo "test-simscan-cli: SKIPPED the --sample checks: measured data absent ($measured)"
+fi
+
 # The sweep runs and plots.
 "$simscan" sweep $small --n-list 1,4 --plot "$tmp/s.png" >"$tmp/sweep" \
     || fail "sweep exited non-zero"
