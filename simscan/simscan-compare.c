@@ -23,6 +23,8 @@
 #define MAX_CHANNEL_ID 4096
 /* Particles this close to the border are left out, px. */
 #define BORDER_MARGIN 4.0
+/* Pictures are enlarged by whole pixels to at least this size. */
+#define PICTURE_SIZE 512
 
 typedef struct {
     gchar *before_png, *after_png, *truth_png;
@@ -119,18 +121,83 @@ measure(GwyDataField *field, const gdouble *search, const gdouble *truth,
     g_array_free(found, TRUE);
 }
 
+static GwyDataField*
+channel_mask(GwyContainer *data, gint id)
+{
+    GwyDataField *mask = NULL;
+    gchar key[32];
+
+    g_snprintf(key, sizeof(key), "/%d/mask", id);
+    gwy_container_gis_object_by_name(data, key, &mask);
+    return mask;
+}
+
+/* One picture; the caption is its title line, then what all share. */
+static gboolean
+write_picture(GwyDataField *field, ChannelPngStyle *style, const gchar *title,
+              const gchar *what, const gchar *filename, GError **error)
+{
+    gchar *caption = g_strdup_printf("%s\n%s\n"
+                                     "%s", title, what,
+                                     style->caption);
+    const gchar *shared = style->caption;
+    gboolean ok;
+
+    style->caption = caption;
+    ok = channel_png_write_styled(field, style, filename, error);
+    style->caption = shared;
+    g_free(caption);
+    return ok;
+}
+
+/* Before, after and truth on one grey scale (the truth's, substrate to
+ * highest particle), enlarged to PICTURE_SIZE, with rings where the
+ * particles belong, so the drift and its removal can be seen. */
 static gboolean
 write_pngs(GwyContainer *data, gint comp_id, const CompareOptions *options,
-           GError **error)
+           const gdouble *truth, gint n, GError **error)
 {
-    return ((!options->before_png
-             || channel_png_write(channel(data, 0), options->before_png, error))
-            && (!options->after_png
-                || channel_png_write(channel(data, comp_id),
-                                     options->after_png, error))
-            && (!options->truth_png || !channel(data, 1)
-                || channel_png_write(channel(data, 1), options->truth_png,
-                                     error)));
+    GwyDataField *before = channel(data, 0), *after = channel(data, comp_id);
+    GwyDataField *drift_free = channel(data, 1);
+    gint res = MAX(gwy_data_field_get_xres(before),
+                   gwy_data_field_get_yres(before));
+    ChannelPngStyle style;
+    gchar *shared;
+    gboolean ok;
+
+    channel_png_style_init(&style, drift_free ? drift_free : before);
+    style.scale = MAX(1, (PICTURE_SIZE + res - 1)/res);
+    shared = g_strdup_printf(_("black %.1f nm to white %.1f nm in all three "
+                               "pictures"),
+                             1e9*style.low, 1e9*style.high);
+    style.caption = shared;
+    style.rings = truth;
+    style.n_rings = n;
+    ok = ((!options->before_png
+           || write_picture(before, &style,
+                            _("Before: the drift-contaminated scan"),
+                            _("red rings: where the particles truly are"),
+                            options->before_png, error))
+          && (!options->after_png
+              || (style.mask = channel_mask(data, comp_id),
+                  write_picture(after, &style,
+                                _("After: compensated by gwy-localscan "
+                                  "(paper mode)"),
+                                _("red rings: true places; blue: filled "
+                                  "pixels (no data)"),
+                                options->after_png, error))));
+    style.mask = NULL;
+    style.n_rings = 0;
+    ok = ok && (!options->truth_png || !drift_free
+                || write_picture(drift_free, &style,
+                                 _("Truth: the sample scanned without drift"),
+                                 _("(the local scans saw it shifted by the "
+                                   "drift at their time)"),
+                                 options->truth_png, error));
+    if (options->before_png || options->after_png || options->truth_png)
+        channel_png_release_fonts();
+    g_free(shared);
+    return ok;
 }
 
 static gboolean
@@ -157,7 +224,7 @@ compare_file(const gchar *filename, const CompareOptions *options,
                     _("%s holds no simulated particle list (%s)"), filename,
                     SIMSCAN_META_PARTICLES);
     else
-        ok = write_pngs(data, comp_id, options, error);
+        ok = write_pngs(data, comp_id, options, truth, n, error);
     if (ok) {
         radius = match_radius(truth, n);
         measure(channel(data, 0), shown, truth, n, radius, &before);
