@@ -757,15 +757,14 @@ param_changed(ModuleGUI *gui, gint id)
 }
 
 /* What registration found: stripes accepted and the range of their drift. */
-static gchar*
-format_registration(ModuleArgs *args)
+static void
+append_registration(GString *status, ModuleArgs *args)
 {
     const DriftTable *table = args->table;
     gint n = table->n_stripes, count, k;
     gint *stripes = g_new(gint, n);
     gdouble *dx = g_new(gdouble, 2*n), *dy = dx + n;
     gdouble xmin = G_MAXDOUBLE, xmax = -G_MAXDOUBLE, ymin = G_MAXDOUBLE, ymax = -G_MAXDOUBLE;
-    gchar *text;
 
     count = localscan_table_stated_px(table, args->field, stripes, dx, dy, NULL);
     for (k = 0; k < count; k++) {
@@ -774,35 +773,35 @@ format_registration(ModuleArgs *args)
         ymin = fmin(ymin, dy[k]);
         ymax = fmax(ymax, dy[k]);
     }
-    text = g_strdup_printf(_("Registered %d of %d stripes: dx %.2f to %.2f px, dy %.2f to %.2f px."),
-                           count, n, xmin, xmax, ymin, ymax);
+    g_string_append_printf(status, _("Registered %d of %d stripes,"), count, n);
+    g_string_append_c(status, '\n');
+    g_string_append_printf(status, _("dx %.2f to %.2f px, dy %.2f to %.2f px."), xmin, xmax, ymin, ymax);
+    g_string_append_c(status, '\n');
+    g_string_append_printf(status, _("%d filled pixels."), args->applied.n_filled);
     g_free(stripes);
     g_free(dx);
-    return text;
 }
 
+/* Short lines: the message must not widen the dialog. */
 static gchar*
 format_status(ModuleArgs *args)
 {
-    gboolean continuous = (gwy_params_get_enum(args->params, PARAM_MODE) == LOCALSCAN_MODE_CONTINUOUS);
-    gchar *stripes, *status, *registration;
+    GString *status = g_string_new(NULL);
 
-    stripes = g_strdup_printf(_("%d stripes, %d filled pixels."), args->applied.n_stripes, args->applied.n_filled);
-    if (gwy_params_get_enum(args->params, PARAM_SOURCE) == LOCALSCAN_SOURCE_REFERENCE) {
-        registration = format_registration(args);
-        status = g_strconcat(registration, " ", stripes, NULL);
-        g_free(registration);
-        g_free(stripes);
-        stripes = status;
+    if (gwy_params_get_enum(args->params, PARAM_SOURCE) == LOCALSCAN_SOURCE_REFERENCE)
+        append_registration(status, args);
+    else {
+        g_string_append_printf(status, _("%d stripes, %d filled pixels."),
+                               args->applied.n_stripes, args->applied.n_filled);
     }
-    if (!continuous)
-        return stripes;
+    if (gwy_params_get_enum(args->params, PARAM_MODE) != LOCALSCAN_MODE_CONTINUOUS)
+        return g_string_free(status, FALSE);
+    g_string_append_c(status, '\n');
     if (args->line_time_known)
-        status = g_strdup_printf(_("%s Line time %g s (from metadata)."), stripes, args->line_time);
+        g_string_append_printf(status, _("Line time %g s (from metadata)."), args->line_time);
     else
-        status = g_strdup_printf(_("%s Line time %g s (assumed: none in metadata)."), stripes, args->line_time);
-    g_free(stripes);
-    return status;
+        g_string_append_printf(status, _("Line time %g s (assumed: none in metadata)."), args->line_time);
+    return g_string_free(status, FALSE);
 }
 
 /* An unusable drift source leaves the source image in the preview, the

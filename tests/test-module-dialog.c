@@ -18,11 +18,14 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "localscan-channel.h"
+#include "registration-frames.h"
 
 #define FUNC_NAME "localscan_drift"
 #define SETTINGS_PREFIX "/module/localscan_drift/"
 #define RERUN_GUARD "LOCALSCAN_TEST_UNDER_XVFB"
 #define MAX_TICKS 100
+
+static guint32 test_seed;
 
 static const gchar worked_table[] = "stripe,dx,dy\n0,1,1\n1,-1,0\n2,0,-1\n";
 static const gdouble worked_c[6*4] = {
@@ -194,6 +197,264 @@ START_TEST(test_good_table_ok_makes_channel)
 }
 END_TEST
 
+/************************************************************************
+ * The reference source in the dialog
+ ************************************************************************/
+
+#define REF_SIZE 256
+#define REF_STEP 4e-9
+#define SCREENSHOT TEST_BUILDDIR "/tests/module-dialog-reference.png"
+
+/* What the reference dialog run saw, step by step. */
+typedef enum {
+    STEP_REGISTERED,      /* first preview: 16 stripes registered */
+    STEP_CONTINUOUS,      /* mode switched: the measured table reused */
+    STEP_EIGHT_STRIPES,   /* stripe count changed: measured again */
+    STEP_DONE,
+} ReferenceStep;
+
+typedef struct {
+    ReferenceStep step;
+    gint ticks;
+    gint registrations[STEP_DONE];
+    gint offered;             /* channels the reference chooser offers */
+    gboolean offers_other_size;
+    gboolean offers_other_real;
+    gboolean offers_itself;
+    gint chosen;              /* the chooser's channel */
+    gboolean ok_sensitive;
+    gint graph_points;        /* dx points in the dialog's drift graph */
+    gboolean saved;
+    gboolean answered;
+    GwyContainer *data;
+} ReferenceProbe;
+
+static gint registrations;
+
+/* The module says when it registers (g_debug); the cache is seen here. */
+static void
+count_registrations(G_GNUC_UNUSED const gchar *domain, G_GNUC_UNUSED GLogLevelFlags level,
+                    const gchar *message, G_GNUC_UNUSED gpointer user_data)
+{
+    if (strstr(message, "registering"))
+        registrations++;
+}
+
+static GtkWidget*
+find_widget(GtkWidget *widget, GType type, const gchar *button_label)
+{
+    GList *children, *l;
+    GtkWidget *found = NULL;
+
+    if (G_TYPE_CHECK_INSTANCE_TYPE(widget, type)
+        && (!button_label || !g_strcmp0(gtk_button_get_label(GTK_BUTTON(widget)), button_label)))
+        return widget;
+    if (!GTK_IS_CONTAINER(widget))
+        return NULL;
+    children = gtk_container_get_children(GTK_CONTAINER(widget));
+    for (l = children; l && !found; l = g_list_next(l))
+        found = find_widget(GTK_WIDGET(l->data), type, button_label);
+    g_list_free(children);
+    return found;
+}
+
+/* The spin button of the labelled slider. */
+static GtkWidget*
+find_labelled_spin(GtkWidget *widget, const gchar *label_text)
+{
+    GList *children, *l;
+    GtkWidget *found = NULL, *target;
+
+    if (GTK_IS_LABEL(widget) && !g_strcmp0(gtk_label_get_text(GTK_LABEL(widget)), label_text)) {
+        target = gtk_label_get_mnemonic_widget(GTK_LABEL(widget));
+        return GTK_IS_SPIN_BUTTON(target) ? target : NULL;
+    }
+    if (!GTK_IS_CONTAINER(widget))
+        return NULL;
+    children = gtk_container_get_children(GTK_CONTAINER(widget));
+    for (l = children; l && !found; l = g_list_next(l))
+        found = find_labelled_spin(GTK_WIDGET(l->data), label_text);
+    g_list_free(children);
+    return found;
+}
+
+static void
+inspect_reference_chooser(GtkWidget *dialog, ReferenceProbe *probe)
+{
+    GtkWidget *chooser = find_widget(dialog, GWY_TYPE_DATA_CHOOSER, NULL);
+
+    ck_assert_msg(chooser, "no reference chooser in the dialog");
+    probe->offered = gtk_tree_model_iter_n_children(gtk_combo_box_get_model(GTK_COMBO_BOX(chooser)), NULL);
+    gwy_data_chooser_get_active(GWY_DATA_CHOOSER(chooser), &probe->chosen);
+    /* set_active finds only offered channels; none of these may be. */
+    probe->offers_other_size = gwy_data_chooser_set_active(GWY_DATA_CHOOSER(chooser), probe->data, 2);
+    probe->offers_other_real = gwy_data_chooser_set_active(GWY_DATA_CHOOSER(chooser), probe->data, 3);
+    probe->offers_itself = gwy_data_chooser_set_active(GWY_DATA_CHOOSER(chooser), probe->data, 1);
+}
+
+static gint
+graph_points(GtkWidget *dialog)
+{
+    GtkWidget *graph = find_widget(dialog, GWY_TYPE_GRAPH, NULL);
+    GwyGraphModel *gmodel;
+
+    if (!graph || !(gmodel = gwy_graph_get_model(GWY_GRAPH(graph))) || gwy_graph_model_get_n_curves(gmodel) < 1)
+        return -1;
+    return gwy_graph_curve_model_get_ndata(gwy_graph_model_get_curve(gmodel, 0));
+}
+
+static gboolean
+save_screenshot(GtkWidget *dialog, const gchar *filename)
+{
+    GdkWindow *window = gtk_widget_get_window(dialog);
+    GdkPixbuf *pixbuf;
+    gint width, height, i;
+    gboolean ok;
+
+    for (i = 0; i < 50 && gtk_events_pending(); i++)
+        gtk_main_iteration_do(FALSE);
+    gdk_window_process_all_updates();
+    gdk_flush();
+    gdk_drawable_get_size(GDK_DRAWABLE(window), &width, &height);
+    pixbuf = gdk_pixbuf_get_from_drawable(NULL, GDK_DRAWABLE(window), NULL, 0, 0, 0, 0, width, height);
+    if (!pixbuf)
+        return FALSE;
+    ok = gdk_pixbuf_save(pixbuf, filename, "png", NULL, NULL);
+    g_object_unref(pixbuf);
+    printf("test-module-dialog: the reference dialog (%d x %d) in %s\n", width, height, filename);
+    return ok;
+}
+
+/* Each step waits for the preview's status line, records, and makes the
+ * next change; the last answers OK. */
+static gboolean
+probe_reference_dialog(gpointer user_data)
+{
+    static const gchar *wait_for[STEP_DONE] = {
+        "Registered ", "Line time", "of 8 stripes",
+    };
+    ReferenceProbe *probe = (ReferenceProbe*)user_data;
+    GtkWidget *dialog = find_module_dialog(), *ok_button, *widget;
+
+    if (!dialog)
+        return TRUE;
+    if (!widget_shows_text(dialog, wait_for[probe->step]) && ++probe->ticks < MAX_TICKS)
+        return TRUE;
+    probe->ticks = 0;
+    probe->registrations[probe->step] = registrations;
+    if (probe->step == STEP_REGISTERED) {
+        inspect_reference_chooser(dialog, probe);
+        ok_button = gtk_dialog_get_widget_for_response(GTK_DIALOG(dialog), GTK_RESPONSE_OK);
+        probe->ok_sensitive = ok_button && gtk_widget_is_sensitive(ok_button);
+        probe->graph_points = graph_points(dialog);
+        probe->saved = save_screenshot(dialog, SCREENSHOT);
+        widget = find_widget(dialog, GTK_TYPE_RADIO_BUTTON, "Continuous (line by line)");
+        ck_assert_msg(widget, "no Continuous radio button");
+        gtk_toggle_button_set_active(GTK_TOGGLE_BUTTON(widget), TRUE);
+    }
+    else if (probe->step == STEP_CONTINUOUS) {
+        widget = find_labelled_spin(dialog, "Stripes:");
+        ck_assert_msg(widget, "no stripes slider");
+        gtk_spin_button_set_value(GTK_SPIN_BUTTON(widget), 8);
+    }
+    else {
+        gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_OK);
+        probe->answered = TRUE;
+        return FALSE;
+    }
+    probe->step++;
+    return TRUE;
+}
+
+/* Channel 0 the reference, 1 the drifting image (selected), 2 another
+ * pixel size, 3 the same pixels but another physical size. */
+static GwyContainer*
+make_reference_container(void)
+{
+    FramePairSpec spec;
+    FramePair *pair;
+    GwyContainer *data = gwy_container_new();
+    GwyDataField *field;
+    const gdouble *values[2];
+    gint i;
+
+    frame_pair_spec_init(&spec);
+    spec.xres = spec.yres = REF_SIZE;
+    pair = frame_pair_generate(&spec, test_seed);
+    values[0] = pair->reference;
+    values[1] = pair->image;
+    for (i = 0; i < 4; i++) {
+        field = gwy_data_field_new(i == 2 ? REF_SIZE/2 : REF_SIZE, REF_SIZE,
+                                   (i == 3 ? 2 : 1)*REF_SIZE*REF_STEP, REF_SIZE*REF_STEP, TRUE);
+        if (i < 2)
+            memcpy(gwy_data_field_get_data(field), values[i], REF_SIZE*REF_SIZE*sizeof(gdouble));
+        gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+        gwy_container_set_object(data, gwy_app_get_data_key_for_id(i), field);
+        g_object_unref(field);
+    }
+    gwy_container_set_const_string_by_name(data, "/0/data/title", (const guchar*)"Reference");
+    gwy_container_set_const_string_by_name(data, "/1/data/title", (const guchar*)"Height");
+    gwy_container_set_const_string_by_name(data, "/1/base/palette", (const guchar*)"Gray");
+    gwy_app_data_browser_add(data);
+    gwy_app_data_browser_select_data_field(data, 1);
+    frame_pair_free(pair);
+    return data;
+}
+
+START_TEST(test_reference_chooser_and_cache)
+{
+    GwyContainer *settings = gwy_app_settings_get();
+    ReferenceProbe probe;
+    DriftTable *table;
+    guint timeout, handler;
+    gint32 channel = -2;
+
+    gwy_clear(&probe, 1);
+    probe.data = make_reference_container();
+    set_stored_table_settings();
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "source", 2);
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "stripes", 16);
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "reference-channel", -1);
+    registrations = 0;
+    handler = g_log_set_handler(NULL, G_LOG_LEVEL_DEBUG, count_registrations, NULL);
+    timeout = g_timeout_add(50, probe_reference_dialog, &probe);
+    gwy_process_func_run(FUNC_NAME, probe.data, GWY_RUN_INTERACTIVE);
+    if (!probe.answered)
+        g_source_remove(timeout);
+    g_log_remove_handler(NULL, handler);
+
+    printf("test-module-dialog: chooser offers %d channel(s), chose %d; registrations after each step: "
+           "%d, %d, %d, after OK %d; drift graph %d points\n",
+           probe.offered, probe.chosen, probe.registrations[0], probe.registrations[1], probe.registrations[2],
+           registrations, probe.graph_points);
+    ck_assert_msg(probe.answered, "the dialog never reached step %d", probe.step);
+    ck_assert_int_eq(probe.offered, 1);
+    ck_assert_int_eq(probe.chosen, 0);
+    ck_assert(!probe.offers_other_size && !probe.offers_other_real && !probe.offers_itself);
+    ck_assert(probe.ok_sensitive);
+    ck_assert_int_ge(probe.graph_points, 12);
+    ck_assert_int_le(probe.graph_points, 16);
+    ck_assert(probe.saved);
+    /* Registered once for 16 stripes, not again for the mode, once more
+     * for 8 stripes, and OK's final run reused that. */
+    ck_assert_int_eq(probe.registrations[STEP_REGISTERED], 1);
+    ck_assert_int_eq(probe.registrations[STEP_CONTINUOUS], 1);
+    ck_assert_int_eq(probe.registrations[STEP_EIGHT_STRIPES], 2);
+    ck_assert_int_eq(registrations, 2);
+
+    ck_assert_int_eq(count_channels(probe.data), 5);
+    table = localscan_channel_stored_table(probe.data, 4, NULL);
+    ck_assert(table);
+    ck_assert_int_eq(table->n_stripes, 8);
+    drift_table_free(table);
+    ck_assert(gwy_container_gis_int32_by_name(settings, SETTINGS_PREFIX "reference-channel", &channel));
+    ck_assert_int_eq(channel, 0);
+
+    gwy_app_data_browser_remove(probe.data);
+    g_object_unref(probe.data);
+}
+END_TEST
+
 /* Without a display the test starts itself again under xvfb-run, once. */
 static void
 ensure_display(gchar **argv)
@@ -205,7 +466,7 @@ ensure_display(gchar **argv)
         exit(77);
     }
     g_setenv(RERUN_GUARD, "1", TRUE);
-    execlp("xvfb-run", "xvfb-run", "-a", argv[0], (gchar*)NULL);
+    execlp("xvfb-run", "xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", argv[0], (gchar*)NULL);
     printf("test-module-dialog: SKIPPED: cannot run xvfb-run\n");
     exit(77);
 }
@@ -225,6 +486,7 @@ main(int argc, char **argv)
         fprintf(stderr, "test-module-dialog: LOCALSCAN_MODULE is not set.\n");
         return 1;
     }
+    test_seed = frame_pair_test_seed("test-module-dialog");
     gtk_init(&argc, &argv);
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     gwy_stock_register_stock_items();
@@ -237,6 +499,7 @@ main(int argc, char **argv)
     tc = tcase_create("dialog");
     tcase_add_test(tc, test_bad_table_disables_ok);
     tcase_add_test(tc, test_good_table_ok_makes_channel);
+    tcase_add_test(tc, test_reference_chooser_and_cache);
     suite_add_tcase(suite, tc);
     sr = srunner_create(suite);
     /* One X connection, one process. */
