@@ -17,8 +17,10 @@ typedef struct {
     gint n;
     gdouble *ta, *tb, *d[2], *w;
     gint n_used;
+    gdouble t_min;         /* earliest time */
     gdouble t_max;         /* latest time */
     gdouble t_resolution;  /* typical spacing of distinct times */
+    gdouble longest_gap;   /* longest stretch without a measured time */
 } Prepared;
 
 static const DriftModelType candidate_types[] = {
@@ -42,6 +44,7 @@ drift_fit_options_init(DriftFitOptions *options)
     options->cv_gain = 0.1;
     options->min_explained = 1.5;
     options->outlier_sigmas = 5.0;
+    options->min_cycles = 1.5;
 }
 
 /* Basis functions of the trajectory at t for nonlinear parameter theta. */
@@ -130,6 +133,7 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
     pm->d[1] = g_new(gdouble, n);
     pm->w = g_new(gdouble, n);
     pm->n_used = 0;
+    pm->t_min = G_MAXDOUBLE;
     pm->t_max = 0.0;
     for (i = 0; i < n; i++) {
         const DriftMeasurement *m = meas + i;
@@ -146,20 +150,25 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
         if (usable) {
             wsum += m->weight;
             pm->n_used++;
+            pm->t_min = MIN(pm->t_min, MIN(m->t_a, m->t_b));
             pm->t_max = MAX(pm->t_max, MAX(m->t_a, m->t_b));
         }
     }
     for (i = 0; i < n; i++)
         pm->w[i] *= (wsum > 0.0) ? pm->n_used/wsum : 0.0;
 
+    if (!pm->n_used)
+        pm->t_min = 0.0;
     nt = distinct_times(pm, &times);
     pm->t_resolution = pm->t_max/MAX(nt, 1);
+    pm->longest_gap = pm->t_max - pm->t_min;
     if (nt > 2) {
         gaps = g_new(gdouble, nt - 1);
         for (i = 0; i+1 < nt; i++)
             gaps[i] = times[i+1] - times[i];
         qsort(gaps, nt - 1, sizeof(gdouble), compare_doubles);
         pm->t_resolution = MAX(gaps[(nt - 1)/2], 1e-9);
+        pm->longest_gap = gaps[nt - 2];
         g_free(gaps);
     }
     g_free(times);
@@ -259,13 +268,34 @@ solve_fixed(const Prepared *pm, DriftModelType type, gdouble theta,
     return rss;
 }
 
-/* Candidate values of the nonlinear parameter. */
+/* The periods an oscillation can be seen with in these measurements.  At
+ * least min_cycles cycles must fit into the measured time span, or no
+ * periodicity is seen: the fit merely bends the trajectory.  And a period
+ * shorter than twice the longest stretch of time without measurements
+ * aliases: the phase is free across the gap, so a whole comb of periods fits
+ * alike (a frame series scanned in short bursts far apart cannot tell a fast
+ * oscillation from a distortion repeated in every frame).  FALSE when no
+ * period is left. */
+static gboolean
+observable_periods(const Prepared *pm, const DriftFitOptions *options,
+                   gdouble *shortest, gdouble *longest)
+{
+    gdouble cycles = (options->min_cycles > 0.0) ? options->min_cycles : 1.5;
+
+    *shortest = MAX(MAX(2.0*pm->t_resolution, options->min_period),
+                    2.0*pm->longest_gap);
+    *longest = (pm->t_max - pm->t_min)/cycles;
+    return pm->n_used >= 3 && *shortest < *longest;
+}
+
+/* Candidate values of the nonlinear parameter; 0 when there are none. */
 static gint
 parameter_grid(const Prepared *pm, DriftModelType type,
                const DriftFitOptions *options, gdouble **grid)
 {
     gdouble tmin = MAX(2.0*pm->t_resolution, options->min_period);
     gdouble tmax = MAX(pm->t_max, 2.0*tmin), *g, *times;
+    gdouble pshort, plong;
     gint i, m, nt;
 
     if (type == DRIFT_MODEL_SETTLING) {
@@ -276,8 +306,14 @@ parameter_grid(const Prepared *pm, DriftModelType type,
     }
     else if (type == DRIFT_MODEL_OSCILLATION) {
         /* Uniform in frequency, fine enough that no alias is missed. */
-        gdouble fmin = 0.5/tmax, fmax = 1.0/tmin, df = 0.125/tmax;
+        gdouble fmin, fmax, df = 0.125/tmax;
 
+        if (!observable_periods(pm, options, &pshort, &plong)) {
+            *grid = NULL;
+            return 0;
+        }
+        fmin = 1.0/plong;
+        fmax = 1.0/pshort;
         m = CLAMP((gint)ceil((fmax - fmin)/df) + 1, 8, MAX_GRID);
         g = g_new(gdouble, m);
         for (i = 0; i < m; i++)
@@ -349,7 +385,10 @@ fit_prepared(const Prepared *pm, DriftModelType type,
         return FALSE;
 
     if (model_has_nonlinear(type)) {
-        m = parameter_grid(pm, type, options, &grid);
+        if (!(m = parameter_grid(pm, type, options, &grid)))
+            return FALSE;
+        fit->range[0] = MIN(grid[0], grid[m-1]);
+        fit->range[1] = MAX(grid[0], grid[m-1]);
         best = G_MAXDOUBLE;
         for (i = 0; i < m; i++) {
             rss = solve_fixed(pm, type, grid[i], coef, &k);
@@ -359,6 +398,7 @@ fit_prepared(const Prepared *pm, DriftModelType type,
             }
         }
         theta = grid[ibest];
+        fit->at_limit = (theta == fit->range[1]) ? 1 : (theta == fit->range[0]) ? -1 : 0;
         if (type != DRIFT_MODEL_JUMP && m > 2)
             best = refine_golden(pm, type, grid[MAX(ibest - 1, 0)],
                                  grid[MIN(ibest + 1, m - 1)],
@@ -462,6 +502,25 @@ cross_validate_masked(const DriftMeasurement *meas, gint n,
     }
     g_free(train);
     return count ? sqrt(sum/wsum) : NAN;
+}
+
+gboolean
+drift_fit_observable_periods(const DriftMeasurement *meas, gint n,
+                             const DriftFitOptions *options,
+                             gdouble *shortest, gdouble *longest)
+{
+    DriftFitOptions defaults;
+    Prepared pm;
+    gboolean ok;
+
+    if (!options) {
+        drift_fit_options_init(&defaults);
+        options = &defaults;
+    }
+    prepare(meas, n, NULL, &pm);
+    ok = observable_periods(&pm, options, shortest, longest);
+    prepared_free(&pm);
+    return ok;
 }
 
 gdouble
@@ -580,6 +639,10 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
     chosen = inone;
     for (i = 0; i < n_types; i++) {
         if (i == inone || !fits[i].ok)
+            continue;
+        /* An oscillation that wants the longest observable period wants a
+         * longer one still: it bends the trajectory, it does not repeat. */
+        if (types[i] == DRIFT_MODEL_OSCILLATION && fits[i].at_limit > 0)
             continue;
         if (inone >= 0 && fits[inone].ok
             && (fits[inone].bic - fits[i].bic < options->bic_margin

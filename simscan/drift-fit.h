@@ -35,6 +35,10 @@ typedef struct {
     gint n_basis;          /* basis functions per axis */
     gdouble coef[2][4];    /* nm and s based: nm/s for the velocity */
     gdouble nonlinear;     /* tau, period or t_jump (s); 0 for none */
+    gdouble range[2];      /* the interval the nonlinear parameter was
+                              searched in (s) */
+    gint at_limit;         /* the best grid value was the lowest (-1) or the
+                              highest (+1) of that range, else 0 */
     gint n_params;         /* free parameters counted by the criterion */
     gint n_used;           /* scalar measurements used (2 per measurement) */
     gdouble rms_nm;        /* weighted RMS residual of the fit */
@@ -58,6 +62,8 @@ typedef struct {
     gdouble min_period;     /* s, shortest period/tau searched; <= 0: from the
                                measurement times */
     gboolean no_jump_at_frame_gap; /* unused, reserved */
+    gdouble min_cycles;     /* an oscillation must show this many cycles
+                               over the measured time span (default 1.5) */
 } DriftFitOptions;
 
 void           drift_fit_options_init (DriftFitOptions *options);
@@ -74,6 +80,17 @@ gboolean       drift_fit_model        (const DriftMeasurement *meas,
                                        const DriftFitOptions *options,
                                        DriftFit *fit);
 
+/* The periods an oscillation can be observed with (s): at least
+ * min_cycles cycles over the time span of the measurements, and no shorter
+ * than twice the longest gap between measured times (shorter periods alias
+ * across the gap), nor than min_period.  Only these are searched; FALSE
+ * (and no oscillation fitted) when the interval is empty. */
+gboolean       drift_fit_observable_periods(const DriftMeasurement *meas,
+                                            gint n,
+                                            const DriftFitOptions *options,
+                                            gdouble *shortest,
+                                            gdouble *longest);
+
 /* Cross-validated RMS prediction error (nm): groups split into folds, each
  * fold predicted by the model fitted to the others. */
 gdouble        drift_fit_cross_validate(const DriftMeasurement *meas,
@@ -84,8 +101,10 @@ gdouble        drift_fit_cross_validate(const DriftMeasurement *meas,
 /* Fits every candidate (fits gets drift_fit_candidates' count of entries),
  * drops gross outliers (weights set to 0 in a private copy) and returns the
  * index into fits of the chosen model: the lowest BIC, but an effect only
- * when it beats "none" by bic_margin and also predicts held-out groups
- * better by the fraction cv_gain.  Returns -1 when nothing could be fitted. */
+ * when it beats "none" by bic_margin, predicts held-out groups better by
+ * the fraction cv_gain and explains min_explained times its residual; an
+ * oscillation only with a period inside the observable range, not at its
+ * long end (drift_fit_observable_periods).  Returns -1 when nothing could be fitted. */
 gint           drift_fit_select       (const DriftMeasurement *meas,
                                        gint n,
                                        const DriftFitOptions *options,

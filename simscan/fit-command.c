@@ -25,12 +25,17 @@ fit_report_compute(const FrameSeries *series,
     gint i;
 
     memset(report, 0, sizeof(FitReport));
+    if (foptions)
+        report->fit_options = *foptions;
+    else
+        drift_fit_options_init(&report->fit_options);
     report->meas = displacement_measure_series(series, doptions,
                                                &report->n_meas);
     drift_fit_candidates(&report->n_fits);
     kept = g_new(gboolean, MAX(report->n_meas, 1));
     report->chosen = drift_fit_select_kept(report->meas, report->n_meas,
-                                           foptions, report->fits, kept);
+                                           &report->fit_options, report->fits,
+                                           kept);
     /* Gross outliers (failed registrations) count as unused from here on. */
     for (i = 0; i < report->n_meas; i++) {
         if (!kept[i])
@@ -49,13 +54,19 @@ fit_report_clear(FitReport *report)
 }
 
 static void
-add_pair(JsonBuilder *b, const gchar *name, const gdouble *v)
+add_pair_value(JsonBuilder *b, const gdouble *v)
 {
-    json_builder_set_member_name(b, name);
     json_builder_begin_array(b);
     json_builder_add_double_value(b, v[0]);
     json_builder_add_double_value(b, v[1]);
     json_builder_end_array(b);
+}
+
+static void
+add_pair(JsonBuilder *b, const gchar *name, const gdouble *v)
+{
+    json_builder_set_member_name(b, name);
+    add_pair_value(b, v);
 }
 
 static void
@@ -100,6 +111,22 @@ add_parameters(JsonBuilder *b, const DriftFit *fit)
     add_pair(b, "velocity_nm_per_s", p.velocity_nm_per_s);
 }
 
+/* The periods the series can show an oscillation with; none (null) when
+ * the series is too short for its gaps. */
+static void
+add_period_range(JsonBuilder *b, const FitReport *report)
+{
+    gdouble range[2];
+
+    json_builder_set_member_name(b, "observable_period_s");
+    if (drift_fit_observable_periods(report->meas, report->n_meas,
+                                     &report->fit_options,
+                                     range, range + 1))
+        add_pair_value(b, range);
+    else
+        json_builder_add_null_value(b);
+}
+
 static void
 add_models(JsonBuilder *b, const FitReport *report)
 {
@@ -113,6 +140,10 @@ add_models(JsonBuilder *b, const FitReport *report)
         json_builder_begin_object(b);
         json_builder_set_member_name(b, "name");
         json_builder_add_string_value(b, drift_model_type_name(fit->type));
+        json_builder_set_member_name(b, "fitted");
+        json_builder_add_boolean_value(b, fit->ok);
+        if (fit->type == DRIFT_MODEL_OSCILLATION)
+            add_period_range(b, report);
         add_double(b, "rms_nm", fit->rms_nm);
         /* The score is the Bayesian information criterion: lower is
          * better, and each parameter costs log(n). */

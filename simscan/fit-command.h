@@ -23,6 +23,7 @@ typedef struct {
     gint n_fits;
     DriftFit fits[FIT_REPORT_MAX_MODELS];
     gint chosen;              /* index into fits, -1 when nothing fitted */
+    DriftFitOptions fit_options;  /* the options the fits were made with */
 } FitReport;
 
 /* Measures the displacements of the series and fits every model. */

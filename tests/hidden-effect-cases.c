@@ -31,6 +31,11 @@
  *   oscillation: period 20..60 s, |a| 15..30 nm, any direction and phase;
  *                not within 0.15 cycles per frame of a whole number
  *   jump:        t_s 30..230 s, |step| 25..50 nm
+ * All inside what `simscan fit` can observe in 4 contiguous frames of 64 s
+ * (drift_fit_observable_periods): periods from 3 blocks (12 s) up to 1.5
+ * cycles over the measured span (about 250 s / 1.5 = 167 s), so 20..60 s is
+ * 4 to 12 cycles; tau up to 60 s relaxes well within the series; jumps fall
+ * between the first and the last block.
  * Tolerances: tau within 40 %; period within 10 % and |a| within 35 %;
  * t_s within 8 s (two blocks) and the step within 30 % + 4 nm; with no
  * effect, "none" and v within 0.02 nm/s.

@@ -169,6 +169,84 @@ START_TEST(test_jump)
 }
 END_TEST
 
+/* Half a cycle of a slow oscillation over the series is a bend, not an
+ * observed oscillation: the period search stops at 1.5 cycles over the
+ * measured time span, and the effect named is not "oscillation". */
+START_TEST(test_unobservable_period_not_named)
+{
+    DriftModel model;
+    DriftFit fits[8];
+    DriftMeasurement *meas;
+    const DriftFit *fit;
+    gdouble shortest, longest, span;
+    gint n, i, n_types;
+    const DriftModelType *types = drift_fit_candidates(&n_types);
+
+    drift_model_init(&model, DRIFT_MODEL_OSCILLATION);
+    model.v[0] = 0.02e-9;
+    model.a[0] = 6e-9;
+    model.a[1] = -4e-9;
+    model.period = 600.0;
+    model.phase = 0.3;
+    meas = sample_model(&model, 0.3, 13, &n);
+    /* Block centres from 1/32 to 3 - 1/32 frames. */
+    span = FRAME_TIME*(N_FRAMES - 1.0/N_BLOCKS);
+    ck_assert(drift_fit_observable_periods(meas, n, NULL, &shortest, &longest));
+    ck_assert_msg(fabs(longest - span/1.5) < 1e-6, "longest period %g s, expected %g s",
+                  longest, span/1.5);
+    fit = select_model(meas, n, fits);
+    ck_assert_msg(fit->type != DRIFT_MODEL_OSCILLATION,
+                  "a 600 s period over %g s named oscillation", span);
+    for (i = 0; i < n_types; i++) {
+        if (types[i] == DRIFT_MODEL_OSCILLATION)
+            ck_assert_msg(fits[i].nonlinear <= longest*(1.0 + 1e-9), "period %g s searched beyond %g s",
+                          fits[i].nonlinear, longest);
+    }
+    g_free(meas);
+}
+END_TEST
+
+/* Frames scanned in 1 s bursts 10 s apart: periods shorter than twice the
+ * 9 s gaps alias, and 1.5 cycles of a longer one do not fit into 21 s, so
+ * no oscillation is fitted at all. */
+START_TEST(test_aliased_periods_not_fitted)
+{
+    DriftMeasurement meas[3*16];
+    DriftFit fits[8];
+    gdouble shortest, longest;
+    gint i, k, j, m = 0, n_types;
+    const DriftModelType *types = drift_fit_candidates(&n_types);
+    SimRandom rng;
+
+    sim_random_init(&rng, 17, 1);
+    for (k = 1; k < 3; k++) {
+        for (j = 0; j < k; j++) {
+            for (i = 0; i < 16; i++) {
+                DriftMeasurement *d = meas + m++;
+
+                d->t_a = 10.0*k + i/16.0;
+                d->t_b = 10.0*j + i/16.0;
+                d->dx = 1e-9*(0.3*(d->t_a - d->t_b) + 0.2*sim_random_gaussian(&rng));
+                d->dy = 1e-9*(0.2*sim_random_gaussian(&rng));
+                d->weight = 1.0;
+                d->group = i;
+                d->frame_a = k;
+                d->frame_b = j;
+            }
+        }
+    }
+    ck_assert(!drift_fit_observable_periods(meas, m, NULL, &shortest, &longest));
+    ck_assert_msg(shortest >= 18.0 && longest < 14.0, "observable %g..%g s", shortest, longest);
+    ck_assert_int_ge(drift_fit_select(meas, m, NULL, fits), 0);
+    for (i = 0; i < n_types; i++) {
+        if (types[i] == DRIFT_MODEL_OSCILLATION)
+            ck_assert(!fits[i].ok);
+        if (types[i] == DRIFT_MODEL_NONE)
+            ck_assert(fits[i].ok);
+    }
+}
+END_TEST
+
 START_TEST(test_outlier_dropped)
 {
     DriftModel model;
@@ -236,6 +314,8 @@ drift_fit_suite(void)
     tcase_add_test(tc, test_settling);
     tcase_add_test(tc, test_oscillation);
     tcase_add_test(tc, test_jump);
+    tcase_add_test(tc, test_unobservable_period_not_named);
+    tcase_add_test(tc, test_aliased_periods_not_fitted);
     tcase_add_test(tc, test_outlier_dropped);
     tcase_add_test(tc, test_model_roundtrip);
     suite_add_tcase(s, tc);
