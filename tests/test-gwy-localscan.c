@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <math.h>
 #include <unistd.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -22,6 +23,7 @@
 #include <app/gwyapp.h>
 #include "drift-table.h"
 #include "paper-compensate.h"
+#include "registration-frames.h"
 
 #define TOOL_PATH TEST_BUILDDIR "/tools/gwy-localscan"
 #define DEFAULT_MODULE TEST_BUILDDIR "/modules/.libs/localscan.so"
@@ -910,7 +912,8 @@ START_TEST(test_help_lists_options)
 {
     static const gchar *options[] = {
         "-o, --output=OUT.gwy", "-d, --drift=TABLE.csv", "-c, --channel=ID",
-        "-m, --mode=paper|continuous", "--write-drift=TABLE.csv", "--version", "INPUT",
+        "-m, --mode=paper|continuous", "--reference=FILE[:ID]", "--stripes=N",
+        "--write-drift=TABLE.csv", "--version", "INPUT",
     };
     ToolRun run;
     guint i;
@@ -1193,6 +1196,450 @@ START_TEST(test_german_messages)
 }
 END_TEST
 
+/************************************************************************
+ * Drift measured against a reference (--reference, --stripes)
+ ************************************************************************/
+
+#define REF_SIZE 160
+#define REF_STRIPES 8
+#define REF_STEP 2e-9
+/* Compared with the reference away from the edges, where drift brings in
+ * content the reference does not have. */
+#define REF_MARGIN 12
+/* Registration's stated accuracy on these frames, px (dx_exact, dy_exact). */
+#define REF_EXACT_TOLERANCE 0.25
+
+/* A drift-free reference and a drifted image of one seeded random smooth
+ * surface (tests/registration-frames.c), with the true drift per stripe. */
+typedef struct {
+    GwyDataField *reference;
+    GwyDataField *image;
+    gdouble truth_dx[REF_STRIPES];
+    gdouble truth_dy[REF_STRIPES];
+} RefFrames;
+
+static GwyDataField*
+field_from_values(const gdouble *values)
+{
+    GwyDataField *field = gwy_data_field_new(REF_SIZE, REF_SIZE, REF_SIZE*REF_STEP, REF_SIZE*REF_STEP, FALSE);
+
+    memcpy(gwy_data_field_get_data(field), values, REF_SIZE*REF_SIZE*sizeof(gdouble));
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(field), "m");
+    return field;
+}
+
+static void
+ref_spec_init(FramePairSpec *spec)
+{
+    frame_pair_spec_init(spec);
+    spec->xres = spec->yres = REF_SIZE;
+    spec->noise = 0.02;
+    spec->drift = FALSE;
+}
+
+/* Each stripe drifts by its own constant (dx, dy): the surface is the same
+ * for one seed whatever the shift, so stripe s of the image is taken from
+ * a frame shifted by stripe s's drift. */
+static void
+ref_frames_stripewise(RefFrames *rf, guint32 frame_seed, const gdouble *dx, const gdouble *dy)
+{
+    gdouble *image = g_new(gdouble, REF_SIZE*REF_SIZE);
+    FramePairSpec spec;
+    FramePair *pair;
+    gint s, first, end;
+
+    ref_spec_init(&spec);
+    for (s = 0; s < REF_STRIPES; s++) {
+        spec.shift_x = rf->truth_dx[s] = dx[s];
+        spec.shift_y = rf->truth_dy[s] = dy[s];
+        pair = frame_pair_generate(&spec, frame_seed);
+        first = s*REF_SIZE/REF_STRIPES;
+        end = (s + 1)*REF_SIZE/REF_STRIPES;
+        memcpy(image + first*REF_SIZE, pair->image + first*REF_SIZE, (end - first)*REF_SIZE*sizeof(gdouble));
+        if (!s)
+            rf->reference = field_from_values(pair->reference);
+        frame_pair_free(pair);
+    }
+    rf->image = field_from_values(image);
+    g_free(image);
+}
+
+/* A drift linear in the row, the kind continuous mode follows. */
+static void
+ref_frames_linear(RefFrames *rf, guint32 frame_seed, gdouble shift_x, gdouble shift_y,
+                  gdouble velocity_x, gdouble velocity_y)
+{
+    FramePairSpec spec;
+    FramePair *pair;
+
+    ref_spec_init(&spec);
+    spec.shift_x = shift_x;
+    spec.shift_y = shift_y;
+    spec.velocity_x = velocity_x;
+    spec.velocity_y = velocity_y;
+    pair = frame_pair_generate(&spec, frame_seed);
+    frame_pair_stripe_truth(pair, REF_STRIPES, rf->truth_dx, rf->truth_dy);
+    rf->reference = field_from_values(pair->reference);
+    rf->image = field_from_values(pair->image);
+    frame_pair_free(pair);
+}
+
+static void
+ref_frames_clear(RefFrames *rf)
+{
+    g_object_unref(rf->reference);
+    g_object_unref(rf->image);
+}
+
+/* Drift as a scanner has it: one direction, 3 to 9 px, changing by at most
+ * 1 px from stripe to stripe (registration takes the neighbours' agreement
+ * into account).  Whole pixels, or whole pixels plus a fraction of 0.2 to
+ * 0.3 either way, so that rounding to whole pixels is never a coin toss. */
+static void
+random_stripe_drift(GRand *rng, gboolean subpixel, gdouble *drift)
+{
+    gint s, sign = (g_rand_boolean(rng) ? 1 : -1), v = g_rand_int_range(rng, 3, 10);
+    gdouble fraction;
+
+    for (s = 0; s < REF_STRIPES; s++) {
+        v = CLAMP(v + g_rand_int_range(rng, -1, 2), 3, 9);
+        fraction = g_rand_double_range(rng, 0.2, 0.3);
+        drift[s] = sign*v + (subpixel ? (g_rand_boolean(rng) ? fraction : -fraction) : 0.0);
+    }
+}
+
+/* RMS of (field - reference) over the interior pixels of the stripes the
+ * table has a drift for that mask (may be NULL) leaves unfilled: stripes
+ * without one get a neighbour's drift, which is only an estimate. */
+static gdouble
+interior_rms_difference(GwyDataField *field, GwyDataField *reference, GwyDataField *mask,
+                        const DriftTable *table)
+{
+    const gdouble *d = gwy_data_field_get_data_const(field);
+    const gdouble *ref = gwy_data_field_get_data_const(reference);
+    const gdouble *m = mask ? gwy_data_field_get_data_const(mask) : NULL;
+    gdouble sum = 0.0, e;
+    gint r, c, k, count = 0;
+
+    for (r = REF_MARGIN; r < REF_SIZE - REF_MARGIN; r++) {
+        if (!table->rows[r*REF_STRIPES/REF_SIZE].has_drift)
+            continue;
+        for (c = REF_MARGIN; c < REF_SIZE - REF_MARGIN; c++) {
+            k = r*REF_SIZE + c;
+            if (m && m[k] > 0.5)
+                continue;
+            e = d[k] - ref[k];
+            sum += e*e;
+            count++;
+        }
+    }
+    ck_assert_int_gt(count, (REF_SIZE - 2*REF_MARGIN)*(REF_SIZE - 2*REF_MARGIN)/3);
+    return sqrt(sum/count);
+}
+
+/* The table stored with the new channel is the measured one: every stripe
+ * it accepted within 0.5 px of the truth (exact columns within
+ * REF_EXACT_TOLERANCE), whole pixels in paper mode, and at least 3/4 of the
+ * stripes accepted. */
+static DriftTable*
+check_measured_table(GwyContainer *out, gint newid, const RefFrames *rf, gboolean paper)
+{
+    const gchar *text = stored_table_text(out, newid);
+    DriftTable *table;
+    gdouble ex, ey, worst = 0.0;
+    gint s, accepted = 0;
+
+    ck_assert_msg(text, "the new channel carries no drift table");
+    table = drift_table_parse(text, -1, "stored", NULL);
+    ck_assert_ptr_nonnull(table);
+    ck_assert_int_eq(table->n_stripes, REF_STRIPES);
+    ck_assert_int_eq(table->unit, DRIFT_UNIT_PX);
+    for (s = 0; s < REF_STRIPES; s++) {
+        const DriftTableRow *row = table->rows + s;
+
+        if (!row->has_drift)
+            continue;
+        accepted++;
+        ck_assert(drift_table_get_extra(table, s, "dx_exact", &ex));
+        ck_assert(drift_table_get_extra(table, s, "dy_exact", &ey));
+        ck_assert_msg(fabs(row->dx - rf->truth_dx[s]) <= 0.5 && fabs(row->dy - rf->truth_dy[s]) <= 0.5
+                      && fabs(ex - rf->truth_dx[s]) <= REF_EXACT_TOLERANCE
+                      && fabs(ey - rf->truth_dy[s]) <= REF_EXACT_TOLERANCE,
+                      "stripe %d: table (%g, %g), exact (%.3f, %.3f), truth (%.3f, %.3f) px (seed %u)",
+                      s, row->dx, row->dy, ex, ey, rf->truth_dx[s], rf->truth_dy[s], seed);
+        if (paper)
+            ck_assert(row->dx == floor(row->dx) && row->dy == floor(row->dy));
+        worst = MAX(worst, MAX(fabs(ex - rf->truth_dx[s]), fabs(ey - rf->truth_dy[s])));
+    }
+    printf("reference registration: %d of %d stripes accepted, worst exact error %.3f px\n",
+           accepted, REF_STRIPES, worst);
+    ck_assert_msg(accepted >= REF_STRIPES*3/4, "only %d of %d stripes accepted (seed %u)",
+                  accepted, REF_STRIPES, seed);
+    return table;
+}
+
+/* Runs the tool with a private TMPDIR, which must be empty afterwards. */
+static void
+run_tool_tmpdir(ToolRun *run, const gchar *const *args)
+{
+    gchar *tmpdir = g_build_filename(scratch, "tmp", NULL), *listing;
+    const gchar *env[] = { "TMPDIR", tmpdir, NULL };
+
+    g_mkdir(tmpdir, 0700);
+    run_tool_env(run, module_path(), env, args);
+    listing = folder_listing(tmpdir);
+    ck_assert_msg(!*listing, "temporary files left behind: %s", listing);
+    g_free(listing);
+    g_free(tmpdir);
+}
+
+/* Runs the tool on input (data saved there) and checks the result against
+ * the truth: the stored (and written) table, the bits of the result (paper
+ * mode: exactly paper_compensate() with that table) and how much better
+ * the result lines up with the reference than the image does. */
+static void
+run_reference_case(GwyContainer *data, const gchar *input, gint image_id, const RefFrames *rf,
+                   const gchar *const *args, gboolean paper, gdouble min_improvement)
+{
+    gchar *output = out_path("out.gwy"), *used = out_path("used.csv"), *written = NULL;
+    gchar *sum_before = file_checksum(input), *sum_after;
+    GwyDataField *result, *mask;
+    GwyContainer *out;
+    DriftTable *table;
+    Expected exp;
+    gdouble before, after;
+    ToolRun run;
+    gint newid;
+
+    run_tool_tmpdir(&run, args);
+    assert_success(&run);
+    sum_after = file_checksum(input);
+    ck_assert_str_eq(sum_before, sum_after);
+    out = load_gwy(output);
+    newid = check_inputs_preserved(data, out);
+    table = check_measured_table(out, newid, rf, paper);
+    ck_assert(g_file_get_contents(used, &written, NULL, NULL));
+    ck_assert_str_eq(written, stored_table_text(out, newid));
+    if (paper) {
+        expected_init(&exp, rf->image, get_string(data, g_quark_to_string(
+                          gwy_app_get_data_title_key_for_id(image_id))), table);
+        check_compensated(out, newid, &exp);
+        expected_clear(&exp);
+    }
+
+    result = get_field(out, gwy_app_get_data_key_for_id(newid));
+    mask = get_field(out, gwy_app_get_mask_key_for_id(newid));
+    before = interior_rms_difference(rf->image, rf->reference, mask, table);
+    after = interior_rms_difference(result, rf->reference, mask, table);
+    printf("reference registration, %s mode: interior RMS difference from the reference %.4f before, "
+           "%.4f after: %.1fx better (need %.0fx)\n",
+           paper ? "paper" : "continuous", before, after, before/after, min_improvement);
+    ck_assert_msg(after*min_improvement <= before, "only %.2fx better (seed %u)", before/after, seed);
+
+    drift_table_free(table);
+    g_object_unref(out);
+    tool_run_clear(&run);
+    g_free(written);
+    g_free(sum_before);
+    g_free(sum_after);
+    g_free(used);
+    g_free(output);
+}
+
+/* Whole-pixel drift; the reference is another file (its first channel). */
+START_TEST(test_reference_two_files)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 200);
+    gdouble dx[REF_STRIPES], dy[REF_STRIPES];
+    GwyContainer *data = gwy_container_new(), *refdata = gwy_container_new();
+    gchar *input = in_path("in.gwy"), *reffile = in_path("ref.gwy");
+    gchar *output = out_path("out.gwy"), *used = out_path("used.csv");
+    RefFrames rf;
+
+    random_stripe_drift(rng, FALSE, dx);
+    random_stripe_drift(rng, FALSE, dy);
+    ref_frames_stripewise(&rf, seed + 201, dx, dy);
+    add_channel(data, 0, rf.image, "Drifting", NULL);
+    add_other_metadata(data, 0, "Drifting");
+    save_gwy(data, input);
+    add_channel(refdata, 2, rf.reference, "Reference", NULL);
+    save_gwy(refdata, reffile);
+    run_reference_case(data, input, 0, &rf,
+                       (const gchar *const[]){ "--reference", reffile, "--stripes", "8",
+                                               "--write-drift", used, "-o", output, input, NULL },
+                       TRUE, 4.0);
+
+    ref_frames_clear(&rf);
+    g_object_unref(data);
+    g_object_unref(refdata);
+    g_free(input);
+    g_free(reffile);
+    g_free(output);
+    g_free(used);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* Sub-pixel drift rounded for paper mode; the reference is channel 3 of
+ * the input itself, named as ":3" and as "INPUT:3". */
+START_TEST(test_reference_same_file)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 300 + _i);
+    gdouble dx[REF_STRIPES], dy[REF_STRIPES];
+    GwyContainer *data = gwy_container_new();
+    gchar *input = in_path("in.gwy"), *output = out_path("out.gwy"), *used = out_path("used.csv");
+    gchar *refarg;
+    RefFrames rf;
+
+    random_stripe_drift(rng, TRUE, dx);
+    random_stripe_drift(rng, TRUE, dy);
+    ref_frames_stripewise(&rf, seed + 301 + _i, dx, dy);
+    add_channel(data, 1, rf.image, "Drifting", NULL);
+    add_channel(data, 3, rf.reference, "Reference", NULL);
+    save_gwy(data, input);
+    refarg = g_strconcat(_i ? input : "", ":3", NULL);
+    run_reference_case(data, input, 1, &rf,
+                       (const gchar *const[]){ "-c", "1", "--reference", refarg, "--stripes", "8",
+                                               "--write-drift", used, "-o", output, input, NULL },
+                       TRUE, 3.0);
+
+    ref_frames_clear(&rf);
+    g_object_unref(data);
+    g_free(refarg);
+    g_free(input);
+    g_free(output);
+    g_free(used);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* A drift linear in time, sub-pixel, growing from 2 to 4 px at the top by
+ * 3 to 6 px in x and 2 to 4 px in y to the bottom: continuous mode follows
+ * it with the exact measured values. */
+START_TEST(test_reference_continuous)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 400);
+    GwyContainer *data = gwy_container_new();
+    gchar *input = in_path("in.gwy"), *output = out_path("out.gwy"), *used = out_path("used.csv");
+    gdouble sx, sy;
+    RefFrames rf;
+
+    sx = (g_rand_boolean(rng) ? 1.0 : -1.0);
+    sy = (g_rand_boolean(rng) ? 1.0 : -1.0);
+    ref_frames_linear(&rf, seed + 401,
+                      sx*g_rand_double_range(rng, 2.0, 4.0), sy*g_rand_double_range(rng, 2.0, 4.0),
+                      sx*g_rand_double_range(rng, 3.0, 6.0)/REF_SIZE, sy*g_rand_double_range(rng, 2.0, 4.0)/REF_SIZE);
+    add_channel(data, 0, rf.image, "Drifting", NULL);
+    add_channel(data, 1, rf.reference, "Reference", NULL);
+    save_gwy(data, input);
+    run_reference_case(data, input, 0, &rf,
+                       (const gchar *const[]){ "-m", "continuous", "--reference", ":1", "--stripes", "8",
+                                               "--write-drift", used, "-o", output, input, NULL },
+                       FALSE, 6.0);
+
+    ref_frames_clear(&rf);
+    g_object_unref(data);
+    g_free(input);
+    g_free(output);
+    g_free(used);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* in.gwy: channel 0 the image (a drifting frame, 160 x 160), channel 1
+ * white noise of its size (nothing to match), channel 2 a smaller field. */
+static gchar*
+reference_error_input(void)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 500);
+    GwyContainer *data = gwy_container_new();
+    GwyDataField *noise, *small;
+    gchar *input = in_path("in.gwy");
+    gdouble dx[REF_STRIPES] = { 0 }, dy[REF_STRIPES] = { 0 };
+    RefFrames rf;
+
+    dx[0] = 3.0;
+    ref_frames_stripewise(&rf, seed + 501, dx, dy);
+    noise = random_field(rng, REF_SIZE, REF_SIZE, REF_STEP, REF_STEP);
+    small = random_field(rng, REF_SIZE/2, REF_SIZE, REF_STEP, REF_STEP);
+    add_channel(data, 0, rf.image, "Drifting", NULL);
+    add_channel(data, 1, noise, "Noise", NULL);
+    add_channel(data, 2, small, "Small", NULL);
+    save_gwy(data, input);
+    g_object_unref(noise);
+    g_object_unref(small);
+    ref_frames_clear(&rf);
+    g_object_unref(data);
+    g_rand_free(rng);
+    return input;
+}
+
+typedef struct {
+    const gchar *name;
+    const gchar *args[10];     /* "@IN", "@OUT", "@CSV" are replaced */
+    gint status;
+    const gchar *message;
+} ReferenceErrorCase;
+
+static const ReferenceErrorCase reference_error_cases[] = {
+    { "with -d", { "-d", "@CSV", "--reference", ":1", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: -d and --reference both give the drift: use one of them" },
+    { "stripes alone", { "--stripes", "4", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --stripes needs --reference" },
+    { "no stripes", { "--stripes", "0", "--reference", ":1", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --stripes must be at least 1, not 0" },
+    { "unreadable reference", { "--reference", "@IN.missing", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: cannot read @IN.missing: no such file" },
+    { "reference not SPM data", { "--reference", "@CSV:0", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: cannot read @CSV: *" },
+    { "no such reference channel", { "--reference", "@IN:7", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN has no channel 7 (its channels: 0, 1, 2)" },
+    { "reference is the image", { "--reference", ":0", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: the reference @IN channel 0 is the image itself: "
+      "name another channel with --reference FILE:ID" },
+    { "reference of another size", { "--reference", ":2", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: the reference @IN channel 2 is 80 x 160 px but the image @IN channel 0 is 160 x 160 px" },
+    { "more stripes than rows", { "--reference", ":1", "--stripes", "161", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: --stripes 161 is more than the 160 rows of the image @IN channel 0" },
+    { "nothing matches", { "--reference", ":1", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: no stripe of @IN channel 0 matched the reference @IN channel 1" },
+};
+
+START_TEST(test_reference_errors)
+{
+    const ReferenceErrorCase *ec = reference_error_cases + _i;
+    gchar *input = reference_error_input(), *csv = in_path("drift.csv"), *output = out_path("out.gwy");
+    gchar *sum_before, *sum_after, *message;
+    GPtrArray *args = g_ptr_array_new_with_free_func(g_free);
+    ToolRun run;
+    guint i;
+
+    write_text(csv, GOOD_TABLE);
+    for (i = 0; ec->args[i]; i++)
+        g_ptr_array_add(args, substitute(ec->args[i], input, output, csv));
+    g_ptr_array_add(args, NULL);
+    sum_before = file_checksum(input);
+
+    run_tool_tmpdir(&run, (const gchar *const*)args->pdata);
+    message = substitute(ec->message, input, output, csv);
+    printf("reference error case \"%s\": %s", ec->name, run.err);
+    assert_failure(&run, ec->status, message);
+    ck_assert_str_eq(run.out, "");
+    sum_after = file_checksum(input);
+    ck_assert_str_eq(sum_before, sum_after);
+
+    g_free(message);
+    g_free(sum_before);
+    g_free(sum_after);
+    tool_run_clear(&run);
+    g_ptr_array_free(args, TRUE);
+    g_free(input);
+    g_free(csv);
+    g_free(output);
+}
+END_TEST
+
 static Suite*
 gwy_localscan_suite(void)
 {
@@ -1209,6 +1656,14 @@ gwy_localscan_suite(void)
     tcase_add_test(tc, test_user_settings_do_not_leak);
     tcase_add_test(tc, test_nanoscope_input);
     tcase_add_test(tc, test_continuous_mode_accepts_fractions);
+    suite_add_tcase(suite, tc);
+
+    tc = tcase_create("reference registration");
+    tcase_add_checked_fixture(tc, setup_scratch, teardown_scratch);
+    tcase_add_test(tc, test_reference_two_files);
+    tcase_add_loop_test(tc, test_reference_same_file, 0, 2);
+    tcase_add_test(tc, test_reference_continuous);
+    tcase_add_loop_test(tc, test_reference_errors, 0, G_N_ELEMENTS(reference_error_cases));
     suite_add_tcase(suite, tc);
 
     tc = tcase_create("command line and errors");

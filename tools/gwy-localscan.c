@@ -14,6 +14,7 @@
 #include <libprocess/datafield.h>
 #include <app/gwyapp.h>
 #include "drift-table.h"
+#include "stripe-registration.h"
 #include "headless-run.h"
 #include "localscan-settings.h"
 
@@ -24,6 +25,11 @@
 
 /* No -c given: the channel with the lowest id. */
 #define CHANNEL_FIRST G_MININT
+
+/* Stripes registered against a reference unless --stripes says otherwise
+ * (the module's default). */
+#define DEFAULT_STRIPES 16
+#define STRIPES_UNSET G_MININT
 
 enum {
     EXIT_OK    = 0,
@@ -37,15 +43,22 @@ typedef struct {
     gint channel;
     gchar *mode_name;
     gchar *write_drift;
+    gchar *reference;
+    gint stripes;
     gboolean show_version;
     gchar **inputs;
-    /* Reference registration (interfaces.md section 2, "later options")
-     * adds its fields here, e.g. gchar *reference; gint stripes; */
 } Options;
 
 static Options options = {
     .channel = CHANNEL_FIRST,
+    .stripes = STRIPES_UNSET,
 };
+
+/* --reference FILE[:ID] taken apart. */
+typedef struct {
+    gchar *file;       /* NULL: the INPUT itself */
+    gint channel;      /* CHANNEL_FIRST: the first channel of file */
+} ReferenceSpec;
 
 /* Every option gwy-localscan knows; --help is generated from this table.
  * A new option is one entry here plus its handling in run_batch() (drift
@@ -61,6 +74,14 @@ static const GOptionEntry option_table[] = {
     { "mode", 'm', 0, G_OPTION_ARG_STRING, &options.mode_name,
       N_("Compensation mode: paper (default) or continuous"),
       N_("paper|continuous") },
+    { "reference", 0, 0, G_OPTION_ARG_FILENAME, &options.reference,
+      N_("Measure the drift by registering stripes of the image against "
+         "a drift-free scan of the same area: channel ID of FILE (default "
+         "its first channel); FILE may be INPUT itself, and :ID alone means "
+         "channel ID of INPUT.  Not with -d"), N_("FILE[:ID]") },
+    { "stripes", 0, 0, G_OPTION_ARG_INT, &options.stripes,
+      N_("Register N stripes with --reference (default 16; at most the "
+         "image's rows)"), N_("N") },
     { "write-drift", 0, 0, G_OPTION_ARG_FILENAME, &options.write_drift,
       N_("Also write the drift table used to TABLE.csv"), N_("TABLE.csv") },
     { "version", 0, 0, G_OPTION_ARG_NONE, &options.show_version,
@@ -105,6 +126,7 @@ free_options(void)
     g_free(options.table_file);
     g_free(options.mode_name);
     g_free(options.write_drift);
+    g_free(options.reference);
     g_strfreev(options.inputs);
 }
 
@@ -170,6 +192,24 @@ check_command_line(GError **error)
                     ninputs
                     ? _("exactly one INPUT file is needed, %u were given")
                     : _("no INPUT file given"), ninputs);
+        return NULL;
+    }
+    if (options.reference && options.table_file) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                    _("-d and --reference both give the drift: use one of "
+                      "them"));
+        return NULL;
+    }
+    if (options.stripes != STRIPES_UNSET && !options.reference) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                    _("--stripes needs --reference"));
+        return NULL;
+    }
+    if (options.reference && options.stripes != STRIPES_UNSET
+        && options.stripes < 1) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("--stripes must be at least 1, not %d"),
+                    options.stripes);
         return NULL;
     }
     if (is_same_file(options.inputs[0], options.output)) {
@@ -242,14 +282,148 @@ load_stored_table(GwyContainer *data, const gchar *filename, gint id,
     return table;
 }
 
-/* Where the drift comes from: -d, else the table stored with the channel.
- * Reference registration (--reference) becomes a third source here. */
+/* FILE[:ID]: the ID is what follows the last colon when that is a number;
+ * an empty FILE is the INPUT. */
+static void
+parse_reference(const gchar *arg, ReferenceSpec *spec)
+{
+    const gchar *colon = strrchr(arg, ':');
+    const gchar *p;
+
+    spec->channel = CHANNEL_FIRST;
+    if (colon && colon[1]) {
+        for (p = colon + 1; g_ascii_isdigit(*p); p++)
+            ;
+        if (!*p) {
+            spec->channel = atoi(colon + 1);
+            spec->file = (colon > arg ? g_strndup(arg, colon - arg) : NULL);
+            return;
+        }
+    }
+    spec->file = g_strdup(arg);
+}
+
+static gchar*
+describe_channel(const gchar *filename, gint id)
+{
+    return g_strdup_printf(_("%s channel %d"), filename, id);
+}
+
+static gboolean
+check_reference_fits(GwyDataField *image, const gchar *image_name,
+                     GwyDataField *reference, const gchar *reference_name,
+                     gint n, GError **error)
+{
+    gint xres = gwy_data_field_get_xres(image);
+    gint yres = gwy_data_field_get_yres(image);
+    gint rxres = gwy_data_field_get_xres(reference);
+    gint ryres = gwy_data_field_get_yres(reference);
+
+    if (rxres != xres || ryres != yres) {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR,
+                    STRIPE_REGISTRATION_ERROR_SIZE,
+                    _("the reference %s is %d x %d px but the image %s is "
+                      "%d x %d px"),
+                    reference_name, rxres, ryres, image_name, xres, yres);
+        return FALSE;
+    }
+    if (n > yres) {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR,
+                    STRIPE_REGISTRATION_ERROR_STRIPES,
+                    _("--stripes %d is more than the %d rows of the image %s"),
+                    n, yres, image_name);
+        return FALSE;
+    }
+    return TRUE;
+}
+
+/* Registration's own messages name neither image nor reference; the one
+ * a user meets most often gets both names. */
+static DriftTable*
+register_stripes(GwyDataField *image, const gchar *image_name,
+                 GwyDataField *reference, const gchar *reference_name,
+                 gint n, const CompensationMode *mode, GError **error)
+{
+    GError *err = NULL;
+    DriftTable *table;
+
+    table = stripe_registration_table_for_fields(image, reference, n, 0.0,
+                                                 mode->whole_pixels, &err);
+    if (table)
+        return table;
+    if (g_error_matches(err, STRIPE_REGISTRATION_ERROR,
+                        STRIPE_REGISTRATION_ERROR_NO_MATCH)) {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR,
+                    STRIPE_REGISTRATION_ERROR_NO_MATCH,
+                    _("no stripe of %s matched the reference %s"),
+                    image_name, reference_name);
+        g_error_free(err);
+    }
+    else
+        g_propagate_error(error, err);
+    return NULL;
+}
+
+/* The drift measured by registering the image's stripes against the
+ * reference channel, which may live in the input file itself. */
+static DriftTable*
+measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
+                        const CompensationMode *mode, GError **error)
+{
+    ReferenceSpec spec;
+    GwyContainer *refdata;
+    GwyDataField *image, *reference;
+    gchar *image_name, *reference_name = NULL;
+    const gchar *reffile;
+    DriftTable *table = NULL;
+    gboolean same_file;
+    gint refid;
+
+    parse_reference(options.reference, &spec);
+    same_file = (!spec.file || is_same_file(spec.file, filename));
+    reffile = spec.file ? spec.file : filename;
+    refdata = (same_file ? g_object_ref(data)
+               : headless_run_load(reffile, error));
+    image_name = describe_channel(filename, id);
+    if (!refdata)
+        goto end;
+    if ((refid = pick_channel(refdata, reffile, spec.channel, error)) < 0)
+        goto end;
+    reference_name = describe_channel(reffile, refid);
+    if (same_file && refid == id) {
+        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
+                    _("the reference %s is the image itself: name another "
+                      "channel with --reference FILE:ID"), reference_name);
+        goto end;
+    }
+    image = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
+    reference = gwy_container_get_object(refdata,
+                                         gwy_app_get_data_key_for_id(refid));
+    if (check_reference_fits(image, image_name, reference, reference_name,
+                             options.stripes, error)) {
+        table = register_stripes(image, image_name, reference, reference_name,
+                                 options.stripes, mode, error);
+    }
+
+end:
+    if (refdata)
+        g_object_unref(refdata);
+    g_free(reference_name);
+    g_free(image_name);
+    g_free(spec.file);
+    return table;
+}
+
+/* Where the drift comes from: -d, --reference, else the table stored with
+ * the channel. */
 static DriftTable*
 obtain_drift_table(GwyContainer *data, const gchar *filename, gint id,
-                   GError **error)
+                   const CompensationMode *mode, GError **error)
 {
     if (options.table_file)
         return drift_table_load(options.table_file, error);
+    if (options.reference)
+        return measure_reference_table(data, filename, id, mode, error);
     return load_stored_table(data, filename, id, error);
 }
 
@@ -271,19 +445,47 @@ check_table_fits(const DriftTable *table, GwyDataField *field,
 }
 
 /* A compensated channel without a mask is correct when no pixel was
- * filled, so only the channel itself is required. */
+ * filled, so only the channel itself is required.  table_file NULL: the
+ * table stored with the channel. */
 static gboolean
-compensate_channel(GwyContainer *data, gint id, const CompensationMode *mode,
-                   GError **error)
+compensate_channel(GwyContainer *data, gint id, const gchar *table_file,
+                   const CompensationMode *mode, GError **error)
 {
     LocalscanBatchParams params;
 
-    params.source = (options.table_file
+    params.source = (table_file
                      ? LOCALSCAN_SOURCE_FILE : LOCALSCAN_SOURCE_STORED);
-    params.table_file = options.table_file;
+    params.table_file = table_file;
     params.mode = mode->value;
     localscan_settings_apply(&params);
     return headless_run_process(data, id, LOCALSCAN_FUNCTION_NAME, error) >= 0;
+}
+
+/* A measured table reaches the module as a CSV file (the same path as -d),
+ * so the new channel stores exactly the table used.  The file lives in a
+ * private folder that is always removed. */
+static gboolean
+compensate_with_measured(GwyContainer *data, gint id, const DriftTable *table,
+                         const CompensationMode *mode, GError **error)
+{
+    GError *err = NULL;
+    gchar *dir, *csv;
+    gboolean ok;
+
+    if (!(dir = g_dir_make_tmp("gwy-localscan-XXXXXX", &err))) {
+        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_SAVE,
+                    _("cannot make a temporary folder: %s"), err->message);
+        g_error_free(err);
+        return FALSE;
+    }
+    csv = g_build_filename(dir, "measured-drift.csv", NULL);
+    ok = (drift_table_save(table, csv, error)
+          && compensate_channel(data, id, csv, mode, error));
+    g_unlink(csv);
+    g_rmdir(dir);
+    g_free(csv);
+    g_free(dir);
+    return ok;
 }
 
 static gboolean
@@ -313,14 +515,17 @@ run_batch(const CompensationMode *mode, GError **error)
         return FALSE;
     if ((id = pick_channel(data, input, options.channel, error)) < 0)
         goto end;
-    if (!(table = obtain_drift_table(data, input, id, error)))
+    if (!(table = obtain_drift_table(data, input, id, mode, error)))
         goto end;
     field = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
     if (!check_table_fits(table, field, mode, error))
         goto end;
 
-    ok = (compensate_channel(data, id, mode, error)
-          && save_results(data, table, error));
+    if (options.reference)
+        ok = compensate_with_measured(data, id, table, mode, error);
+    else
+        ok = compensate_channel(data, id, options.table_file, mode, error);
+    ok = ok && save_results(data, table, error);
 
 end:
     if (table)
@@ -373,6 +578,8 @@ main(int argc, char *argv[])
         status = EXIT_USAGE;
         goto end;
     }
+    if (options.stripes == STRIPES_UNSET)
+        options.stripes = DEFAULT_STRIPES;
     if (!load_module(&error) || !run_batch(mode, &error))
         status = EXIT_ERROR;
     gwy_app_settings_free();
