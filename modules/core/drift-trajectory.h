@@ -36,8 +36,18 @@ typedef struct _DriftTrajectory DriftTrajectory;
 GQuark            drift_trajectory_error_quark  (void);
 
 /* Builds the displacement D(t) = p(t) - p(t_ref), t_ref the earliest t_local
- * of the measurements, from n measurements in any order. */
+ * of the measurements, from n measurements in any order.  With six or more
+ * distinct image times the measured values are smoothed first (penalised
+ * least squares, third differences, weight by generalised cross-validation),
+ * so measurement noise is averaged over instead of interpolated; exact
+ * measurements of smooth drift keep their values to far below 0.01 px. */
 DriftTrajectory*  drift_trajectory_new          (const DriftMeasurement *meas,
+                                                 gint n,
+                                                 GError **error);
+/* The same without smoothing: the spline passes through every
+ * measurement. */
+DriftTrajectory*  drift_trajectory_new_interpolating
+                                                (const DriftMeasurement *meas,
                                                  gint n,
                                                  GError **error);
 
