@@ -164,28 +164,51 @@ first_new_id(const gint *before, const gint *after)
     return -1;
 }
 
+/* Without a main window a process function reports its errors with
+ * g_printerr(); they are collected so that a failure is one message. */
+static GString *function_output = NULL;
+
+static void
+collect_function_output(const gchar *text)
+{
+    g_string_append(function_output, text);
+}
+
 gint
 headless_run_process(GwyContainer *data, gint id, const gchar *funcname,
                      GError **error)
 {
     gint *before, *after;
+    GPrintFunc printerr;
     gint newid;
 
     before = headless_run_channel_ids(data);
     gwy_app_data_browser_add(data);
     gwy_app_data_browser_select_data_field(data, id);
+    function_output = g_string_new(NULL);
+    printerr = g_set_printerr_handler(collect_function_output);
     gwy_process_func_run(funcname, data, GWY_RUN_IMMEDIATE);
+    g_set_printerr_handler(printerr);
     after = headless_run_channel_ids(data);
     gwy_app_data_browser_remove(data);
 
     newid = first_new_id(before, after);
     g_free(before);
     g_free(after);
-    if (newid < 0) {
+    g_strstrip(function_output->str);
+    if (newid < 0 && *function_output->str) {
+        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_RUN,
+                    "%s", function_output->str);
+    }
+    else if (newid < 0) {
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_RUN,
                     _("process function %s created no new channel"),
                     funcname);
     }
+    else if (*function_output->str)
+        g_printerr("%s\n", function_output->str);
+    g_string_free(function_output, TRUE);
+    function_output = NULL;
     return newid;
 }
 

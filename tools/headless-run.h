@@ -46,7 +46,9 @@ gint*         headless_run_channel_ids     (GwyContainer *data);
 gboolean      headless_run_has_channel     (GwyContainer *data, gint id);
 
 /* Runs funcname on channel id with GWY_RUN_IMMEDIATE and returns the id of
- * the channel it created, or -1 with error set when none appeared. */
+ * the channel it created, or -1 with error set when none appeared: the
+ * function's own message (what it printed with g_printerr()) when it gave
+ * one. */
 gint          headless_run_process         (GwyContainer *data,
                                             gint id,
                                             const gchar *funcname,
