@@ -72,20 +72,20 @@ scan_line(LineScanner *scanner, gdouble xc, gdouble yc, gboolean along_x)
     scanner->lines++;
 }
 
-/* The chord of the last line nearest to `expect` (position along the line,
- * relative to its centre): end points where the height crosses the threshold,
- * interpolated linearly between samples.  Runs cut by the line's ends are
- * incomplete chords and never used. */
-static gboolean
-find_chord_midpoint(const LineScanner *scanner, gdouble expect, gdouble *mid)
+/* The chords of the last line: end points where the height crosses the
+ * threshold, interpolated linearly between samples; their midpoints
+ * (position along the line, relative to its centre) go into mids.  Runs cut
+ * by the line's ends are incomplete chords and never used. */
+static void
+find_chord_midpoints(const LineScanner *scanner, GArray *mids)
 {
     const gdouble *h = scanner->heights;
     gdouble thr = scanner->threshold;
     gint n = scanner->params->points, i = 0, first, last;
     gdouble length = local_scan_line_length(scanner->params);
-    gdouble step = length/(n - 1), best = G_MAXDOUBLE;
-    gboolean found = FALSE;
+    gdouble step = length/(n - 1);
 
+    g_array_set_size(mids, 0);
     while (i < n) {
         gdouble left, right, m;
 
@@ -102,38 +102,87 @@ find_chord_midpoint(const LineScanner *scanner, gdouble expect, gdouble *mid)
         left = (first - 1) + (thr - h[first-1])/(h[first] - h[first-1]);
         right = last + (h[last] - thr)/(h[last] - h[last+1]);
         m = -0.5*length + 0.5*(left + right)*step;
-        if (fabs(m - expect) < best) {
+        g_array_append_val(mids, m);
+    }
+}
+
+/* The chord of the last line nearest to `expect`, skipping those already
+ * tried (marked NAN in mids) and those farther than limit from 0. */
+static gboolean
+take_nearest_chord(GArray *mids, gdouble expect, gdouble limit, gdouble *mid)
+{
+    gdouble best = G_MAXDOUBLE;
+    guint i, best_i = 0;
+
+    for (i = 0; i < mids->len; i++) {
+        gdouble m = g_array_index(mids, gdouble, i);
+
+        if (!isnan(m) && fabs(m) <= limit && fabs(m - expect) < best) {
             best = fabs(m - expect);
-            *mid = m;
-            found = TRUE;
+            best_i = i;
         }
     }
+    if (best == G_MAXDOUBLE)
+        return FALSE;
+    *mid = g_array_index(mids, gdouble, best_i);
+    g_array_index(mids, gdouble, best_i) = NAN;
+    return TRUE;
+}
+
+/* The line V along y through a horizontal chord's midpoint x_mid, offset
+ * y_line from y0: the centre's y offset from y0 when V finds the chord. */
+static gboolean
+measure_vertical(LineScanner *scanner, gdouble x_mid, gdouble y0,
+                 gdouble y_line, gdouble *y_mid)
+{
+    GArray *mids = g_array_new(FALSE, FALSE, sizeof(gdouble));
+    gboolean found;
+
+    scan_line(scanner, x_mid, y0, FALSE);
+    find_chord_midpoints(scanner, mids);
+    found = take_nearest_chord(mids, y_line - y0, G_MAXDOUBLE, y_mid);
+    g_array_free(mids, TRUE);
     return found;
 }
 
-/* L0 and its up/down moves: returns the offset (m) of the line that hit. */
+/* L0 and its up/down moves, each chord of a line nearest first, measured
+ * with V.  The lines are 2 (R + r_max) long and the search reaches r_max + R,
+ * so they also cut neighbours farther than r_max from the displayed centre
+ * (x0, y0): the particle cannot be there by the definition of r_max, so such
+ * a centre is refused and the search goes on.  A particle exactly r_max off
+ * is measured up to the lines' sample spacing, which is allowed for.
+ * Returns the centre found. */
 static gboolean
-search_horizontal_chord(LineScanner *scanner, gdouble x0, gdouble y0,
-                        gdouble *x_mid, gdouble *y_line)
+search_particle(LineScanner *scanner, gdouble x0, gdouble y0,
+                gdouble *x_centre, gdouble *y_centre)
 {
     const LocalScanParams *params = scanner->params;
     gdouble step = SEARCH_STEP_RADII*params->radius;
     gdouble reach = params->r_max + params->radius;
+    gdouble limit = params->r_max
+                    + local_scan_line_length(params)/(params->points - 1);
+    GArray *mids = g_array_new(FALSE, FALSE, sizeof(gdouble));
+    gboolean found = FALSE;
     gint k;
 
-    for (k = 0; k == 0 || ((k + 1)/2)*step <= reach; k++) {
+    for (k = 0; !found && (k == 0 || ((k + 1)/2)*step <= reach); k++) {
         /* 0, -1, +1, -2, +2, ... steps: up first, then down. */
         gdouble offset = ((k + 1)/2)*step*((k % 2) ? -1.0 : 1.0);
-        gdouble mid;
+        gdouble mid, y_mid;
 
         scan_line(scanner, x0, y0 + offset, TRUE);
-        if (find_chord_midpoint(scanner, 0.0, &mid)) {
-            *x_mid = x0 + mid;
-            *y_line = y0 + offset;
-            return TRUE;
+        find_chord_midpoints(scanner, mids);
+        while (!found && take_nearest_chord(mids, 0.0, limit, &mid)) {
+            if (measure_vertical(scanner, x0 + mid, y0, y0 + offset, &y_mid)
+                && hypot(mid, y_mid) <= limit) {
+                *x_centre = x0 + mid;
+                *y_centre = y0 + y_mid;
+                found = TRUE;
+            }
         }
     }
-    return FALSE;
+    g_array_free(mids, TRUE);
+    return found;
 }
 
 gdouble
@@ -147,7 +196,7 @@ local_scan_particle(GwyDataField *field, const LocalScanParams *params,
     gdouble xoff = gwy_data_field_get_xoffset(field);
     gdouble yoff = gwy_data_field_get_yoffset(field);
     gdouble x0 = xoff + (x_px + 0.5)*dx, y0 = yoff + (y_px + 0.5)*dy;
-    gdouble x_mid = 0.0, y_line = 0.0, y_mid = 0.0;
+    gdouble x_centre = 0.0, y_centre = 0.0;
     LineScanner scanner;
 
     g_return_val_if_fail(params->points >= 3 && params->tip_speed > 0.0,
@@ -164,15 +213,12 @@ local_scan_particle(GwyDataField *field, const LocalScanParams *params,
     result->x_disp = x_px;
     result->y_disp = y_px;
     result->x_act = result->y_act = result->dx = result->dy = NAN;
-    if (search_horizontal_chord(&scanner, x0, y0, &x_mid, &y_line)) {
-        scan_line(&scanner, x_mid, y0, FALSE);
-        if (find_chord_midpoint(&scanner, y_line - y0, &y_mid)) {
-            result->found = TRUE;
-            result->x_act = (x_mid - xoff)/dx - 0.5;
-            result->y_act = (y0 + y_mid - yoff)/dy - 0.5;
-            result->dx = x_px - result->x_act;
-            result->dy = y_px - result->y_act;
-        }
+    if (search_particle(&scanner, x0, y0, &x_centre, &y_centre)) {
+        result->found = TRUE;
+        result->x_act = (x_centre - xoff)/dx - 0.5;
+        result->y_act = (y_centre - yoff)/dy - 0.5;
+        result->dx = x_px - result->x_act;
+        result->dy = y_px - result->y_act;
     }
     result->lines = scanner.lines;
     result->t_start = t_start;

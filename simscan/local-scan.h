@@ -61,7 +61,10 @@ gdouble      local_scan_line_time     (const LocalScanParams *params);
  * chord height.  Line L0 runs along x through the displayed centre; when it
  * misses, it moves up and down alternately by 1.5 R until it hits or has
  * covered r_max + R; the chord's midpoint gives x, the perpendicular line V
- * through it gives y.  Returns the time the scan ended. */
+ * through it gives y.  A centre found farther than r_max (plus the lines'
+ * sample spacing, their resolution) from the displayed one is a neighbour,
+ * not the particle: the search goes on past it (the next chord of that line,
+ * nearest first, then the next line).  Returns the time the scan ended. */
 gdouble      local_scan_particle      (GwyDataField *field,
                                        const LocalScanParams *params,
                                        LocalScanProbe probe,

@@ -157,6 +157,60 @@ START_TEST(test_displaced_found)
 }
 END_TEST
 
+/* A neighbour that the search lines reach before the particle, but whose
+ * centre lies farther than r_max from the displayed centre, is passed over:
+ * by the definition of r_max it cannot be the particle.  The neighbour sits
+ * on the search's fourth line (two steps up, the lines go 0, -1, +1, -2, +2
+ * steps of 1.5 R), within r_max in x, so its chord is taken and measured,
+ * with its centre 10 nm or more beyond r_max (the lines resolve 4 nm); the
+ * particle is first cut by the fifth line (two steps down). */
+START_TEST(test_neighbour_beyond_rmax_passed)
+{
+    GwyDataField *field = make_field(128);
+    LocalScanParams params;
+    IdealSample sample = { 0 };
+    GRand *rng = g_rand_new_with_seed(test_seed + 5);
+    gdouble pxs = gwy_data_field_get_dx(field);
+    gint k;
+
+    local_scan_params_init(&params);
+    sample.n = 2;
+    sample.r[0] = sample.r[1] = params.radius;
+    for (k = 0; k < 50; k++) {
+        LocalScanParticle res;
+        gdouble r = params.radius, step = 1.5*r, r_max = params.r_max;
+        gdouble cx = g_rand_double_range(rng, 40.0, 88.0);
+        gdouble cy = g_rand_double_range(rng, 40.0, 88.0);
+        gdouble ny = -2.0*step + 0.3*g_rand_double_range(rng, -r, r);
+        gdouble py = 2.0*step + 0.3*g_rand_double_range(rng, -r, r);
+        gdouble nx_min = sqrt((r_max + 10e-9)*(r_max + 10e-9) - ny*ny);
+        gdouble nx = g_rand_double_range(rng, nx_min, r_max);
+        gdouble px_max = sqrt((r_max - 5e-9)*(r_max - 5e-9) - py*py);
+        gdouble px = g_rand_double_range(rng, -px_max, px_max);
+
+        if (g_rand_boolean(rng))
+            nx = -nx;
+        sample.x[0] = px_to_m(field, cx) + px;
+        sample.y[0] = px_to_m(field, cy) + py;
+        sample.x[1] = px_to_m(field, cx) + nx;
+        sample.y[1] = px_to_m(field, cy) + ny;
+        local_scan_particle(field, &params, ideal_probe, &sample, cx, cy,
+                            1.5*params.radius, 0.0, &res);
+        ck_assert_msg(res.found, "case %d: particle at (%g, %g) nm not found",
+                      k, px*1e9, py*1e9);
+        ck_assert_msg(fabs(res.x_act - (cx + px/pxs)) < 0.1
+                      && fabs(res.y_act - (cy + py/pxs)) < 0.1,
+                      "case %d: found (%g, %g), particle at (%g, %g), "
+                      "neighbour at (%g, %g)", k, res.x_act, res.y_act,
+                      cx + px/pxs, cy + py/pxs, cx + nx/pxs, cy + ny/pxs);
+        /* Five search lines, the neighbour's V and the particle's. */
+        ck_assert_int_eq(res.lines, 7);
+    }
+    g_rand_free(rng);
+    g_object_unref(field);
+}
+END_TEST
+
 /* Beyond the search's reach the particle is reported as not found. */
 START_TEST(test_beyond_reach)
 {
@@ -500,8 +554,8 @@ figure6_sample(SimScanParams *sp)
     SimSample *sample;
 
     sim_particle_params_init(&pp);
-    /* Neighbours farther apart than twice the largest drift (16 px, 312 nm),
-     * so the nearest chord is always the right particle, as in the preset. */
+    /* Neighbours farther apart than twice the largest drift ((16, 3) px,
+     * 318 nm), so some r_max reaches the particle and no neighbour. */
     pp.min_spacing = 700e-9;
     pp.count = 60;
     sample = sim_sample_new_particles(&pp, test_seed);
@@ -531,8 +585,12 @@ START_TEST(test_figure6_measured)
     frame = sim_scan_frame_stripes(probe.sample, &sp, 16, fdx, fdy);
     sim_scan_params_timing(&sp, &timing);
     local_scan_params_init(&params);
-    /* Stripe 16 is 16 px = 312 nm off. */
-    params.r_max = 400e-9;
+    /* Stripe 16 is (16, 3) px = 318 nm off, so r_max must exceed that; a
+     * neighbour, 700 nm or more from the particle, is at least 382 nm from
+     * its displayed centre, so r_max below that keeps neighbours out of
+     * reach.  Half way between, with 30 nm to spare either side for the
+     * displayed centres' errors: */
+    params.r_max = 350e-9;
     particles = particle_detect(frame, &half_way_detect,
                                 &substrate, NULL);
     table = local_scan_run(frame, &timing, particles, substrate, 16, &params,
@@ -643,6 +701,7 @@ local_scan_suite(void)
     tcase_add_test(tc, test_ideal_centre);
     tcase_add_test(tc, test_displaced_found);
     tcase_add_test(tc, test_beyond_reach);
+    tcase_add_test(tc, test_neighbour_beyond_rmax_passed);
     tcase_add_test(tc, test_empty_stripes_filled);
     tcase_add_test(tc, test_choice_closest_is_spec);
     tcase_add_test(tc, test_choice_prefer_whole_random);
