@@ -585,7 +585,11 @@ figure6_sample(SimScanParams *sp)
 }
 
 /* The local scans on the simulated Figure 6 frame measure exactly the
- * figure's drift in every stripe that has a particle. */
+ * figure's drift in every stripe that has a whole particle.  The stripes
+ * are measured on whole particles wherever the stripe has one (the opt-in
+ * choice): with the spec's closest particle, a quarter of the stripes fall
+ * on cut grains, and in 2 of 300 seeded frames fewer than 8 of 16 stripes
+ * were left to check. */
 START_TEST(test_figure6_measured)
 {
     gdouble fdx[16], fdy[16];
@@ -612,6 +616,7 @@ START_TEST(test_figure6_measured)
      * reach.  Half way between, with 30 nm to spare either side for the
      * displayed centres' errors: */
     params.r_max = 350e-9;
+    params.choice = PARTICLE_CHOICE_PREFER_WHOLE;
     particles = particle_detect(frame, &half_way_detect,
                                 &substrate, NULL);
     table = local_scan_run(frame, &timing, particles, substrate, 16, &params,
@@ -621,7 +626,8 @@ START_TEST(test_figure6_measured)
         g_printerr("%s", text);
         g_free(text);
     }
-    particle_choose_for_stripes(particles, 16, 256, 256, chosen);
+    particle_choose_for_stripes_by(particles, 16, 256, 256, params.choice,
+                                   chosen);
     for (s = 0; s < 16; s++) {
         const DetectedParticle *p;
         gdouble ex, ey;
