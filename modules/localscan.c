@@ -27,6 +27,8 @@
 #define RUN_MODES (GWY_RUN_INTERACTIVE | GWY_RUN_IMMEDIATE)
 #define PREVIEW_SIZE 480
 #define DRIFT_GRAPH_HEIGHT 170
+/* How long the stripe count must rest before it is registered. */
+#define STRIPES_SETTLE_MS 400
 
 enum {
     PARAM_SOURCE,
@@ -65,8 +67,8 @@ typedef struct {
     GwyDataField *mask;
     DriftTable *table;
     LocalscanApplied applied;
-    gdouble line_time;
-    gboolean line_time_known;
+    ScanTiming timing;                /* what continuous mode used */
+    LocalscanTimingFound timing_found;
     gint batch_reference;     /* reference-channel of an IMMEDIATE run, or -1 */
     MeasuredDrift measured;
 } ModuleArgs;
@@ -78,6 +80,8 @@ typedef struct {
     GtkWidget *file_button;
     GwyContainer *data;
     GwyGraphModel *drift_gmodel;
+    gboolean direction_in_meta;
+    guint stripes_settle_id;
 } ModuleGUI;
 
 static gboolean         module_register     (void);
@@ -104,6 +108,7 @@ static gboolean         reference_filter    (GwyContainer *data,
 static void             param_changed       (ModuleGUI *gui,
                                              gint id);
 static void             preview             (gpointer user_data);
+static gboolean         stripes_settled     (gpointer user_data);
 static void             measured_drift_clear(MeasuredDrift *measured);
 
 static GwyModuleInfo module_info = {
@@ -437,12 +442,17 @@ execute(ModuleArgs *args, GError **error)
     if (!(args->table = load_drift_table(args, error)))
         return FALSE;
 
-    args->line_time = localscan_channel_line_time(args->data, args->id, &args->line_time_known);
+    /* The direction setting is only the fallback for files that do not
+     * say how they were scanned. */
+    args->timing_found = localscan_channel_scan_timing(args->data, args->id,
+                                                       gwy_params_get_enum(params, PARAM_DIRECTION),
+                                                       &args->timing);
     options.mode = gwy_params_get_enum(params, PARAM_MODE);
     options.fill = gwy_params_get_enum(params, PARAM_FILL);
     options.interpolation = gwy_params_get_enum(params, PARAM_INTERPOLATION);
-    options.direction = gwy_params_get_enum(params, PARAM_DIRECTION);
-    options.line_time = args->line_time;
+    options.line_time = args->timing.line_time;
+    options.direction = args->timing.direction;
+    options.frame_start = args->timing.frame_start;
     return localscan_compensate_field(args->field, args->table, &options, args->result, args->mask,
                                       &args->applied, error);
 }
@@ -561,6 +571,9 @@ run_gui(ModuleArgs *args)
                             GWY_DATA_ITEM_REAL_SQUARE,
                             0);
 
+    gui.direction_in_meta = (localscan_channel_scan_timing(args->data, args->id, SCAN_DIRECTION_DOWN,
+                                                           &args->timing)
+                             & LOCALSCAN_TIMING_DIRECTION);
     gui.dialog = gwy_dialog_new(_("Local Scan Drift"));
     dialog = GWY_DIALOG(gui.dialog);
     gwy_dialog_add_buttons(dialog, GWY_RESPONSE_RESET, GTK_RESPONSE_CANCEL, GTK_RESPONSE_OK, 0);
@@ -604,6 +617,8 @@ run_gui(ModuleArgs *args)
     gwy_dialog_set_preview_func(dialog, GWY_PREVIEW_IMMEDIATE, preview, &gui, NULL);
 
     outcome = gwy_dialog_run(dialog);
+    if (gui.stripes_settle_id)
+        g_source_remove(gui.stripes_settle_id);
     g_object_unref(gui.drift_gmodel);
     g_object_unref(gui.data);
 
@@ -750,10 +765,30 @@ param_changed(ModuleGUI *gui, gint id)
     }
     if (id < 0 || id == PARAM_MODE) {
         gwy_param_table_set_sensitive(table, PARAM_INTERPOLATION, mode == LOCALSCAN_MODE_CONTINUOUS);
-        gwy_param_table_set_sensitive(table, PARAM_DIRECTION, mode == LOCALSCAN_MODE_CONTINUOUS);
+        gwy_param_table_set_sensitive(table, PARAM_DIRECTION,
+                                      mode == LOCALSCAN_MODE_CONTINUOUS && !gui->direction_in_meta);
     }
-    if (id != PARAM_ADD_MASK && id != PARAM_PLOT_DRIFT && id != PARAM_MASK_COLOR)
+    if (id == PARAM_ADD_MASK || id == PARAM_PLOT_DRIFT || id == PARAM_MASK_COLOR)
+        return;
+    if (gui->stripes_settle_id)
+        g_source_remove(gui->stripes_settle_id);
+    gui->stripes_settle_id = 0;
+    /* Registration takes about a second on a large image: a dragged stripe
+     * count is measured once it rests, not at every value it passes. */
+    if (id == PARAM_STRIPES)
+        gui->stripes_settle_id = g_timeout_add(STRIPES_SETTLE_MS, stripes_settled, gui);
+    else
         gwy_dialog_invalidate(GWY_DIALOG(gui->dialog));
+}
+
+static gboolean
+stripes_settled(gpointer user_data)
+{
+    ModuleGUI *gui = (ModuleGUI*)user_data;
+
+    gui->stripes_settle_id = 0;
+    gwy_dialog_invalidate(GWY_DIALOG(gui->dialog));
+    return G_SOURCE_REMOVE;
 }
 
 /* What registration found: stripes accepted and the range of their drift. */
@@ -782,6 +817,24 @@ append_registration(GString *status, ModuleArgs *args)
     g_free(dx);
 }
 
+/* Where each part of the scan timing came from, in two short lines. */
+static void
+append_timing(GString *status, const ScanTiming *timing, LocalscanTimingFound found)
+{
+    const gchar *from_meta = _("metadata"), *assumed = _("assumed");
+
+    g_string_append_printf(status, _("Line time %g s (%s),"), timing->line_time,
+                           (found & LOCALSCAN_TIMING_LINE_TIME) ? from_meta : assumed);
+    g_string_append_c(status, '\n');
+    g_string_append_printf(status,
+                           timing->direction == SCAN_DIRECTION_UP
+                           ? _("scan up (%s), frame start %g s (%s).")
+                           : _("scan down (%s), frame start %g s (%s)."),
+                           (found & LOCALSCAN_TIMING_DIRECTION) ? from_meta : _("setting"),
+                           timing->frame_start,
+                           (found & LOCALSCAN_TIMING_FRAME_START) ? from_meta : assumed);
+}
+
 /* Short lines: the message must not widen the dialog. */
 static gchar*
 format_status(ModuleArgs *args)
@@ -797,10 +850,7 @@ format_status(ModuleArgs *args)
     if (gwy_params_get_enum(args->params, PARAM_MODE) != LOCALSCAN_MODE_CONTINUOUS)
         return g_string_free(status, FALSE);
     g_string_append_c(status, '\n');
-    if (args->line_time_known)
-        g_string_append_printf(status, _("Line time %g s (from metadata)."), args->line_time);
-    else
-        g_string_append_printf(status, _("Line time %g s (assumed: none in metadata)."), args->line_time);
+    append_timing(status, &args->timing, args->timing_found);
     return g_string_free(status, FALSE);
 }
 

@@ -668,30 +668,86 @@ START_TEST(test_bad_sources_refused)
 }
 END_TEST
 
-START_TEST(test_line_time_from_metadata)
+/* The timing of channel 0 of a 4 x 6 image with the given metadata items
+ * (key, value pairs, NULL-terminated; no metadata at all when NULL). */
+static LocalscanTimingFound
+timing_with_meta(const gchar *const *items, ScanDirection fallback, ScanTiming *timing)
 {
     GwyDataField *field = make_worked_example(1, 1.0, 1.0, "m");
     GwyContainer *data = gwy_container_new(), *meta = gwy_container_new();
-    gboolean known = TRUE;
+    LocalscanTimingFound found;
+    gint i;
 
     gwy_container_set_object_by_name(data, "/0/data", field);
-    ck_assert(localscan_channel_line_time(data, 0, &known) == LOCALSCAN_DEFAULT_LINE_TIME);
-    ck_assert(!known);
-    gwy_container_set_object_by_name(data, "/0/meta", meta);
-    set_string(meta, "Frame time (s)", "0.413");
-    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, &known), 0.413/6, 1e-15);
-    ck_assert(known);
-    set_string(meta, "Scan Rate", "2.325");
-    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, NULL), 1.0/2.325, 1e-15);
-    set_string(meta, "Scan Rate", "2.5 kHz");
-    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, NULL), 1.0/2500.0, 1e-15);
-    set_string(meta, "Line time", "500 ms");
-    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, NULL), 0.5, 1e-15);
-    set_string(meta, "Line time", "fast");
-    ck_assert_double_eq_tol(localscan_channel_line_time(data, 0, NULL), 1.0/2500.0, 1e-15);
+    if (items)
+        gwy_container_set_object_by_name(data, "/0/meta", meta);
+    for (i = 0; items && items[i]; i += 2)
+        set_string(meta, items[i], items[i+1]);
+    found = localscan_channel_scan_timing(data, 0, fallback, timing);
+    ck_assert_int_eq(timing->xres, 4);
+    ck_assert_int_eq(timing->yres, 6);
     g_object_unref(meta);
     g_object_unref(data);
     g_object_unref(field);
+    return found;
+}
+
+/* Every key simscan and the measured files' importers give (simscan, Bruker
+ * Nanoscope, Anasys nanoIR, Asylum, HS-AFM movies), and what the timing is
+ * without them. */
+START_TEST(test_scan_timing_from_metadata)
+{
+    static const gchar *const simscan[] = { "Line time (s)", "1.5", "Slow scan", "up",
+                                            "Frame start (s)", "12.25", "Seed", "3", NULL };
+    static const gchar *const simscan_zero[] = { "Line time (s)", "1.171875", "Slow scan", "down",
+                                                 "Frame start (s)", "0", NULL };
+    static const gchar *const nanoscope[] = { "Scan Rate", "2.32515", "Frame direction", "Down",
+                                              "Capture direction", "Up", NULL };
+    static const gchar *const nanoscope_up[] = { "Scan Rate", "2.32515", "Frame direction", "Up", NULL };
+    static const gchar *const anasys[] = { "ScanRate", "0.5 Hz", "ScanAngle", "-90 deg", NULL };
+    static const gchar *const asylum[] = { "ScanRate", "1.0016", "FastMapScanRate", "0.23461", NULL };
+    static const gchar *const hsafm[] = { "Frame time (s)", "0.413", "Time since first kept frame (s)", "6.189",
+                                          NULL };
+    static const gchar *const units[] = { "Line time", "500 ms", "Scan Rate", "2.5 kHz", NULL };
+    static const gchar *const rate_units[] = { "Line time", "fast", "Scan rate", "2.5 kHz", NULL };
+    static const gchar *const bad[] = { "Line time", "-1 s", "Scan rate", "2 m", "Frame time (s)", "inf",
+                                        "Slow scan", "sideways", "Frame start (s)", "soon", NULL };
+    ScanTiming t;
+
+    ck_assert_int_eq(timing_with_meta(NULL, SCAN_DIRECTION_UP, &t), 0);
+    ck_assert(t.line_time == LOCALSCAN_DEFAULT_LINE_TIME && t.direction == SCAN_DIRECTION_UP);
+    ck_assert(t.frame_start == 0.0);
+
+    ck_assert_int_eq(timing_with_meta(simscan, SCAN_DIRECTION_DOWN, &t),
+                     LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_DIRECTION | LOCALSCAN_TIMING_FRAME_START);
+    ck_assert(t.line_time == 1.5 && t.direction == SCAN_DIRECTION_UP && t.frame_start == 12.25);
+    ck_assert_int_eq(timing_with_meta(simscan_zero, SCAN_DIRECTION_UP, &t),
+                     LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_DIRECTION | LOCALSCAN_TIMING_FRAME_START);
+    ck_assert(t.line_time == 1.171875 && t.direction == SCAN_DIRECTION_DOWN && t.frame_start == 0.0);
+
+    ck_assert_int_eq(timing_with_meta(nanoscope, SCAN_DIRECTION_UP, &t),
+                     LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_DIRECTION);
+    ck_assert_double_eq_tol(t.line_time, 1.0/2.32515, 1e-15);
+    ck_assert(t.direction == SCAN_DIRECTION_DOWN && t.frame_start == 0.0);
+    timing_with_meta(nanoscope_up, SCAN_DIRECTION_DOWN, &t);
+    ck_assert(t.direction == SCAN_DIRECTION_UP);
+
+    ck_assert_int_eq(timing_with_meta(anasys, SCAN_DIRECTION_DOWN, &t), LOCALSCAN_TIMING_LINE_TIME);
+    ck_assert_double_eq_tol(t.line_time, 2.0, 1e-15);
+    ck_assert_int_eq(timing_with_meta(asylum, SCAN_DIRECTION_DOWN, &t), LOCALSCAN_TIMING_LINE_TIME);
+    ck_assert_double_eq_tol(t.line_time, 1.0/1.0016, 1e-15);
+    ck_assert_int_eq(timing_with_meta(hsafm, SCAN_DIRECTION_DOWN, &t),
+                     LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_FRAME_START);
+    ck_assert_double_eq_tol(t.line_time, 0.413/6, 1e-15);
+    ck_assert_double_eq_tol(t.frame_start, 6.189, 1e-15);
+
+    timing_with_meta(units, SCAN_DIRECTION_DOWN, &t);
+    ck_assert_double_eq_tol(t.line_time, 0.5, 1e-15);
+    timing_with_meta(rate_units, SCAN_DIRECTION_DOWN, &t);
+    ck_assert_double_eq_tol(t.line_time, 1.0/2500.0, 1e-15);
+    ck_assert_int_eq(timing_with_meta(bad, SCAN_DIRECTION_DOWN, &t), 0);
+    ck_assert(t.line_time == LOCALSCAN_DEFAULT_LINE_TIME && t.direction == SCAN_DIRECTION_DOWN);
+    ck_assert(t.frame_start == 0.0);
 }
 END_TEST
 
@@ -1076,7 +1132,7 @@ main(void)
     tcase_add_test(tc, test_drift_graph);
     tcase_add_test(tc, test_continuous_mode_passes_timing);
     tcase_add_test(tc, test_bad_sources_refused);
-    tcase_add_test(tc, test_line_time_from_metadata);
+    tcase_add_test(tc, test_scan_timing_from_metadata);
     tcase_add_test(tc, test_reference_paper_mode);
     tcase_add_test(tc, test_reference_continuous_mode);
     tcase_add_test(tc, test_reference_graph_and_log);

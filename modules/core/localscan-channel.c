@@ -97,7 +97,7 @@ localscan_channel_store_table(GwyContainer *data, gint id, const DriftTable *tab
 
 /* A metadata value such as "2.325 Hz", "0.5 s" or "0.413": the number in
  * base SI units of the given unit, or the bare number when no unit follows.
- * FALSE when the text is no positive number or carries another unit. */
+ * FALSE when the text is no finite number or carries another unit. */
 static gboolean
 parse_meta_quantity(const gchar *text, const gchar *unit, gdouble *value)
 {
@@ -108,7 +108,7 @@ parse_meta_quantity(const gchar *text, const gchar *unit, gdouble *value)
     gdouble v;
 
     v = g_ascii_strtod(text, &end);
-    if (end == text || !isfinite(v) || v <= 0.0)
+    if (end == text || !isfinite(v))
         return FALSE;
     rest = g_strstrip(g_strdup(end));
     if (!*rest) {
@@ -125,46 +125,120 @@ parse_meta_quantity(const gchar *text, const gchar *unit, gdouble *value)
     return ok;
 }
 
+/* The first of the keys (NULL-terminated) whose value parses. */
 static gboolean
-meta_quantity(GwyContainer *meta, const gchar *key, const gchar *unit, gdouble *value)
+meta_quantity(GwyContainer *meta, const gchar *const *keys, const gchar *unit, gdouble *value)
 {
     const guchar *text;
 
-    if (!gwy_container_gis_string_by_name(meta, key, &text))
-        return FALSE;
-    return parse_meta_quantity((const gchar*)text, unit, value);
+    for (; *keys; keys++) {
+        if (gwy_container_gis_string_by_name(meta, *keys, &text)
+            && parse_meta_quantity((const gchar*)text, unit, value))
+            return TRUE;
+    }
+    return FALSE;
 }
 
-gdouble
-localscan_channel_line_time(GwyContainer *data, gint id, gboolean *from_metadata)
+static gboolean
+meta_positive(GwyContainer *meta, const gchar *const *keys, const gchar *unit, gdouble *value)
 {
-    GwyContainer *meta = NULL;
-    GwyDataField *field = NULL;
-    gchar key[48];
-    gdouble v, line_time = LOCALSCAN_DEFAULT_LINE_TIME;
-    gboolean found = FALSE;
+    gdouble v;
 
-    g_snprintf(key, sizeof(key), "/%d/meta", id);
-    if (gwy_container_gis_object_by_name(data, key, &meta) && GWY_IS_CONTAINER(meta)) {
-        if (meta_quantity(meta, "Line time", "s", &v) || meta_quantity(meta, "Line Time", "s", &v)) {
-            line_time = v;
-            found = TRUE;
+    if (!meta_quantity(meta, keys, unit, &v) || v <= 0.0)
+        return FALSE;
+    *value = v;
+    return TRUE;
+}
+
+static gboolean
+meta_line_time(GwyContainer *meta, gint yres, gdouble *line_time)
+{
+    static const gchar *const line_time_keys[] = { "Line time (s)", "Line time", "Line Time", NULL };
+    static const gchar *const line_rate_keys[] = { "Scan rate", "Scan Rate", "ScanRate", NULL };
+    static const gchar *const frame_time_keys[] = { "Frame time (s)", NULL };
+    gdouble v;
+
+    if (meta_positive(meta, line_time_keys, "s", line_time))
+        return TRUE;
+    if (meta_positive(meta, line_rate_keys, "Hz", &v)) {
+        *line_time = 1.0/v;
+        return TRUE;
+    }
+    if (yres > 0 && meta_positive(meta, frame_time_keys, "s", &v)) {
+        *line_time = v/yres;
+        return TRUE;
+    }
+    return FALSE;
+}
+
+/* The text begins with the word (any case), perhaps followed by more. */
+static gboolean
+starts_with_word(const gchar *text, const gchar *word)
+{
+    gsize len = strlen(word);
+
+    while (g_ascii_isspace(*text))
+        text++;
+    return !g_ascii_strncasecmp(text, word, len) && !g_ascii_isalnum(text[len]);
+}
+
+static gboolean
+meta_direction(GwyContainer *meta, ScanDirection *direction)
+{
+    static const gchar *const keys[] = { "Slow scan", "Frame direction", NULL };
+    const gchar *const *key;
+    const guchar *text;
+
+    for (key = keys; *key; key++) {
+        if (!gwy_container_gis_string_by_name(meta, *key, &text))
+            continue;
+        if (starts_with_word((const gchar*)text, "down")) {
+            *direction = SCAN_DIRECTION_DOWN;
+            return TRUE;
         }
-        else if (meta_quantity(meta, "Scan rate", "Hz", &v) || meta_quantity(meta, "Scan Rate", "Hz", &v)) {
-            line_time = 1.0/v;
-            found = TRUE;
-        }
-        else if (meta_quantity(meta, "Frame time (s)", "s", &v)) {
-            g_snprintf(key, sizeof(key), "/%d/data", id);
-            if (gwy_container_gis_object_by_name(data, key, &field) && GWY_IS_DATA_FIELD(field)) {
-                line_time = v/gwy_data_field_get_yres(field);
-                found = TRUE;
-            }
+        if (starts_with_word((const gchar*)text, "up")) {
+            *direction = SCAN_DIRECTION_UP;
+            return TRUE;
         }
     }
-    if (from_metadata)
-        *from_metadata = found;
-    return line_time;
+    return FALSE;
+}
+
+static gboolean
+meta_frame_start(GwyContainer *meta, gdouble *frame_start)
+{
+    static const gchar *const keys[] = { "Frame start (s)", "Time since first kept frame (s)", NULL };
+
+    return meta_quantity(meta, keys, "s", frame_start);
+}
+
+LocalscanTimingFound
+localscan_channel_scan_timing(GwyContainer *data, gint id, ScanDirection fallback_direction,
+                              ScanTiming *timing)
+{
+    GwyContainer *meta = channel_meta(data, id, FALSE);
+    GwyDataField *field = NULL;
+    LocalscanTimingFound found = 0;
+    gchar key[32];
+    gdouble line_time = LOCALSCAN_DEFAULT_LINE_TIME, frame_start = 0.0;
+    ScanDirection direction = fallback_direction;
+    gint xres = 0, yres = 0;
+
+    g_snprintf(key, sizeof(key), "/%d/data", id);
+    if (gwy_container_gis_object_by_name(data, key, &field) && GWY_IS_DATA_FIELD(field)) {
+        xres = gwy_data_field_get_xres(field);
+        yres = gwy_data_field_get_yres(field);
+    }
+    if (meta) {
+        if (meta_line_time(meta, yres, &line_time))
+            found |= LOCALSCAN_TIMING_LINE_TIME;
+        if (meta_direction(meta, &direction))
+            found |= LOCALSCAN_TIMING_DIRECTION;
+        if (meta_frame_start(meta, &frame_start))
+            found |= LOCALSCAN_TIMING_FRAME_START;
+    }
+    scan_timing_init(timing, xres, yres, frame_start, line_time, direction);
+    return found;
 }
 
 gdouble
@@ -227,7 +301,7 @@ continuous_compensate_field(GwyDataField *field, const DriftTable *table, const 
     gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
     ScanTiming timing;
 
-    scan_timing_init(&timing, xres, yres, 0.0, options->line_time, options->direction);
+    scan_timing_init(&timing, xres, yres, options->frame_start, options->line_time, options->direction);
     return continuous_compensate_table(gwy_data_field_get_data_const(field), xres, yres, table,
                                        gwy_data_field_get_dx(field), gwy_data_field_get_dy(field),
                                        &timing, options->interpolation, fill_value,

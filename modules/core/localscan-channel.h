@@ -28,7 +28,6 @@ G_BEGIN_DECLS
 typedef enum {
     LOCALSCAN_CHANNEL_ERROR_NO_TABLE,     /* no table stored with the channel */
     LOCALSCAN_CHANNEL_ERROR_UNITS,        /* physical table, non-metre image */
-    LOCALSCAN_CHANNEL_ERROR_UNAVAILABLE,  /* option not built into this version */
     LOCALSCAN_CHANNEL_ERROR_REFERENCE,    /* no usable reference image */
     LOCALSCAN_CHANNEL_ERROR_STRIPES,      /* more stripes than image rows */
 } LocalscanChannelError;
@@ -58,7 +57,17 @@ typedef struct {
     GwyInterpolationType interpolation;   /* continuous mode only */
     gdouble line_time;                    /* s, continuous mode only */
     ScanDirection direction;              /* continuous mode only */
+    gdouble frame_start;                  /* s, continuous mode only, in the
+                                             clock of the table's t_image,
+                                             t_local */
 } LocalscanOptions;
+
+/* The parts of a channel's scan timing its metadata gave. */
+typedef enum {
+    LOCALSCAN_TIMING_LINE_TIME   = 1 << 0,
+    LOCALSCAN_TIMING_DIRECTION   = 1 << 1,
+    LOCALSCAN_TIMING_FRAME_START = 1 << 2,
+} LocalscanTimingFound;
 
 /* What one compensation applied: the drift of every stripe in pixels after
  * unit conversion and the nearest-stripe rule. */
@@ -96,12 +105,23 @@ void         localscan_channel_store_table_text(GwyContainer *data,
                                                 gint id,
                                                 const gchar *text);
 
-/* Seconds per scan line from the channel's metadata ("Line time",
- * "Scan rate"/"Scan Rate" in Hz, or "Frame time (s)" over the rows), else
- * LOCALSCAN_DEFAULT_LINE_TIME. */
-gdouble      localscan_channel_line_time     (GwyContainer *data,
-                                              gint id,
-                                              gboolean *from_metadata);
+/* The scan timing of channel id (its field's xres, yres) from its metadata
+ * "/<id>/meta":
+ * - line time: "Line time (s)" (simscan), "Line time"/"Line Time" (with a
+ *   time unit or bare seconds), else the line rate "Scan rate"/"Scan Rate"
+ *   (Nanoscope)/"ScanRate" (Anasys, Asylum) in Hz, else "Frame time (s)"
+ *   (HS-AFM) over the rows; else LOCALSCAN_DEFAULT_LINE_TIME;
+ * - slow-scan direction: "Slow scan" (simscan) or "Frame direction"
+ *   (Nanoscope), "down" or "up" in any case; else fallback_direction;
+ * - frame start, s: "Frame start (s)" (simscan) or "Time since first kept
+ *   frame (s)" (HS-AFM); else 0.  A table's t_image, t_local columns are
+ *   in this clock.
+ * Values that do not parse count as absent.  Returns the parts found in
+ * the metadata. */
+LocalscanTimingFound localscan_channel_scan_timing(GwyContainer *data,
+                                                   gint id,
+                                                   ScanDirection fallback_direction,
+                                                   ScanTiming *timing);
 
 gdouble      localscan_fill_value            (GwyDataField *field,
                                               LocalscanFill fill);
