@@ -35,12 +35,19 @@
 
 enum {
     KERNEL_TAPS = 4,
+    /* Columns per inner loop.  A constant count lets GCC vectorise at -O2,
+     * whose cost model refuses loops that would need a scalar epilogue. */
+    CHUNK = 8,
     /* Rows kept while rebuilding the output: four taps, mirrored at the
      * image edges, always fall within four consecutive rows. */
     RING_ROWS = 8,
-    /* Rows whose x prefilter recursions run interleaved. */
+    /* Rows whose x prefilter recursions run side by side, interleaved. */
     PREFILTER_BATCH = 8,
+    /* Padding of the x coefficient rows: rows 32 KiB apart would share
+     * cache sets while the interleaved coefficients are scattered. */
     PREFILTER_ROW_PAD = 8,
+    /* Coefficient rows made per back substitution along y. */
+    COEFF_BLOCK = 64,
 };
 
 /* The factored tridiagonal system of the B-spline/o-MOMS prefilter for one
@@ -88,14 +95,7 @@ omoms_inner(gdouble d)
 static inline gdouble
 omoms_outer(gdouble d)
 {
-    return 4.0/21.0 + d*(-11.0/21.0 + d*(0.5 - d/6.0));
-}
-
-static inline gdouble
-nna_weight(gdouble d)
-{
-    d = 1.0/(d*d);
-    return d*d;
+    return 4.0/21.0 + d*(-11.0/21.0 + d*(0.5 - d*(1.0/6.0)));
 }
 
 /* Weights of the taps at i-1, i, i+1, i+2 for the position i + x,
@@ -103,7 +103,7 @@ nna_weight(gdouble d)
 KERNEL_INLINE void
 kernel_weights(GwyInterpolationType type, gdouble x, gdouble *w)
 {
-    gdouble y = 1.0 - x, s;
+    gdouble y = 1.0 - x, s, d0, d1, d2, d3;
 
     switch (type) {
         case GWY_INTERPOLATION_ROUND:
@@ -127,17 +127,17 @@ kernel_weights(GwyInterpolationType type, gdouble x, gdouble *w)
 
         case GWY_INTERPOLATION_SCHAUM:
         /* Cubic Lagrange polynomials through the nodes -1, 0, 1, 2. */
-        w[0] = x*y*(x - 2.0)/6.0;
-        w[1] = (x + 1.0)*y*(2.0 - x)/2.0;
-        w[2] = (x + 1.0)*x*(2.0 - x)/2.0;
-        w[3] = -(x + 1.0)*x*y/6.0;
+        w[0] = x*y*(x - 2.0)*(1.0/6.0);
+        w[1] = (x + 1.0)*y*(2.0 - x)*0.5;
+        w[2] = (x + 1.0)*x*(2.0 - x)*0.5;
+        w[3] = -(x + 1.0)*x*y*(1.0/6.0);
         break;
 
         case GWY_INTERPOLATION_BSPLINE:
-        w[0] = y*y*y/6.0;
+        w[0] = y*y*y*(1.0/6.0);
         w[1] = 2.0/3.0 - x*x*(1.0 - 0.5*x);
         w[2] = 2.0/3.0 - y*y*(1.0 - 0.5*y);
-        w[3] = x*x*x/6.0;
+        w[3] = x*x*x*(1.0/6.0);
         break;
 
         case GWY_INTERPOLATION_OMOMS:
@@ -148,15 +148,21 @@ kernel_weights(GwyInterpolationType type, gdouble x, gdouble *w)
         break;
 
         case GWY_INTERPOLATION_NNA:
-        if (x == 0.0) {
-            w[0] = w[2] = w[3] = 0.0;
-            w[1] = 1.0;
-            break;
-        }
-        w[0] = nna_weight(1.0 + x);
-        w[1] = nna_weight(x);
-        w[2] = nna_weight(y);
-        w[3] = nna_weight(1.0 + y);
+        /* Inverse fourth powers of the distances 1+x, x, y, 1+y, each
+         * multiplied by the product of all four fourth powers: one
+         * division, and x = 0 needs no branch (only w[1] is nonzero). */
+        d0 = (1.0 + x)*(1.0 + x);
+        d1 = x*x;
+        d2 = y*y;
+        d3 = (1.0 + y)*(1.0 + y);
+        d0 *= d0;
+        d1 *= d1;
+        d2 *= d2;
+        d3 *= d3;
+        w[0] = d1*d2*d3;
+        w[1] = d0*d2*d3;
+        w[2] = d0*d1*d3;
+        w[3] = d0*d1*d2;
         s = 1.0/(w[0] + w[1] + w[2] + w[3]);
         w[0] *= s;
         w[1] *= s;
@@ -235,28 +241,72 @@ prefilter_clear(Prefilter *prefilter)
     prefilter->factor = prefilter->inv_diag = NULL;
 }
 
-/* Data values to interpolation coefficients along count rows of data
- * (n values each, rows stride apart), in place.  The rows' recursions are
- * interleaved: each is a serial chain, several of them run in parallel. */
+/* Steps over which an error in a back substitution's starting value
+ * shrinks below 2^-60 of itself: each step multiplies it by side/pivot. */
+static gint
+prefilter_warmup(const Prefilter *prefilter)
+{
+    gdouble decay = 0.0;
+    gint i;
+
+    for (i = 0; i < prefilter->n; i++)
+        decay = MAX(decay, prefilter->side*prefilter->inv_diag[i]);
+    if (decay <= 0.0)
+        return 0;
+    return (gint)ceil(-60.0*G_LN2/log(decay));
+}
+
+/* Data values to interpolation coefficients along one row, in place. */
 static void
-prefilter_rows(const Prefilter *prefilter, gdouble *data, gint count,
-               gsize stride)
+prefilter_row(const Prefilter *prefilter, gdouble *data)
+{
+    const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
+    gdouble side = prefilter->side;
+    gint n = prefilter->n, i;
+
+    for (i = 1; i < n; i++)
+        data[i] -= factor[i]*data[i-1];
+    data[n-1] *= inv_diag[n-1];
+    for (i = n-2; i >= 0; i--)
+        data[i] = (data[i] - side*data[i+1])*inv_diag[i];
+}
+
+/* Coefficients of PREFILTER_BATCH rows of src (src_stride apart) into
+ * dest (dest_stride apart).  Each row's recursion is a serial chain; in
+ * lanes (n groups of PREFILTER_BATCH) the rows' values at one column lie
+ * side by side, so the chains run together in one vector loop. */
+static void
+prefilter_batch(const Prefilter *prefilter, const gdouble *restrict src,
+                gsize src_stride, gdouble *restrict lanes,
+                gdouble *restrict dest, gsize dest_stride)
 {
     const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
     gdouble side = prefilter->side, f, inv;
+    gdouble *restrict lane, *restrict next;
     gint n = prefilter->n, i, k;
 
+    for (k = 0; k < PREFILTER_BATCH; k++)
+        lanes[k] = src[k*src_stride];
     for (i = 1; i < n; i++) {
         f = factor[i];
-        for (k = 0; k < count; k++)
-            data[k*stride + i] -= f*data[k*stride + i-1];
+        lane = lanes + i*PREFILTER_BATCH;
+        for (k = 0; k < PREFILTER_BATCH; k++)
+            lane[k] = src[k*src_stride + i] - f*lane[k - PREFILTER_BATCH];
     }
-    for (k = 0; k < count; k++)
-        data[k*stride + n-1] *= inv_diag[n-1];
+    lane = lanes + (n-1)*PREFILTER_BATCH;
+    inv = inv_diag[n-1];
+    for (k = 0; k < PREFILTER_BATCH; k++) {
+        lane[k] *= inv;
+        dest[k*dest_stride + n-1] = lane[k];
+    }
     for (i = n-2; i >= 0; i--) {
         inv = inv_diag[i];
-        for (k = 0; k < count; k++)
-            data[k*stride + i] = (data[k*stride + i] - side*data[k*stride + i+1])*inv;
+        lane = lanes + i*PREFILTER_BATCH;
+        next = lane + PREFILTER_BATCH;
+        for (k = 0; k < PREFILTER_BATCH; k++) {
+            lane[k] = (lane[k] - side*next[k])*inv;
+            dest[k*dest_stride + i] = lane[k];
+        }
     }
 }
 
@@ -302,16 +352,40 @@ constant_offset_run(gdouble x_start, gdouble x_step, gint n, gint c, gint *d)
     return MIN(last, MIN(n - 4 - *d, n - 1));
 }
 
+/* Output pixels first .. last, all reading the source at the offset
+ * d = i - c with four taps inside.  The position is computed per pixel
+ * from the column (never accumulated), as in row_valid_range(). */
+KERNEL_INLINE void
+resample_run(GwyInterpolationType type, const gdouble *restrict src, gint d,
+             gdouble x_start, gdouble x_step, gint first, gint last,
+             gdouble *restrict dest)
+{
+    const gdouble *restrict s = src + d;
+    gdouble w[KERNEL_TAPS];
+    gint c = first, j, k;
+
+    for (; c + CHUNK - 1 <= last; c += CHUNK) {
+        for (j = 0; j < CHUNK; j++) {
+            k = c + j;
+            kernel_weights(type, (x_start + x_step*k) - (k + d), w);
+            dest[k] = w[0]*s[k-1] + w[1]*s[k] + w[2]*s[k+1] + w[3]*s[k+2];
+        }
+    }
+    for (; c <= last; c++) {
+        kernel_weights(type, (x_start + x_step*c) - (c + d), w);
+        dest[c] = w[0]*s[c-1] + w[1]*s[c] + w[2]*s[c+1] + w[3]*s[c+2];
+    }
+}
+
 /* Resamples one row: dest[c] = src at x_start + x_step*c.  Within runs of
  * constant tap offset the taps are read without index arithmetic or edge
  * checks, so the loop is a straight polynomial-and-dot-product. */
 KERNEL_INLINE void
-resample_row_with(GwyInterpolationType type, const gdouble *src, gint n,
-                  gdouble x_start, gdouble x_step, gdouble *dest)
+resample_row_with(GwyInterpolationType type, const gdouble *restrict src,
+                  gint n, gdouble x_start, gdouble x_step,
+                  gdouble *restrict dest)
 {
-    gdouble w[KERNEL_TAPS];
-    const gdouble *s;
-    gint c = 0, k, d, last;
+    gint c = 0, d, last;
 
     while (c < n) {
         last = constant_offset_run(x_start, x_step, n, c, &d);
@@ -320,19 +394,15 @@ resample_row_with(GwyInterpolationType type, const gdouble *src, gint n,
             c++;
             continue;
         }
-        s = src + d;
-        for (k = c; k <= last; k++) {
-            kernel_weights(type, (x_start + x_step*k) - (k + d), w);
-            dest[k] = w[0]*s[k-1] + w[1]*s[k] + w[2]*s[k+1] + w[3]*s[k+2];
-        }
+        resample_run(type, src, d, x_start, x_step, c, last, dest);
         c = last + 1;
     }
 }
 
 /* One specialised loop per kernel, so the weights are computed inline. */
 static void
-resample_row(GwyInterpolationType type, const gdouble *src, gint n,
-             gdouble x_start, gdouble x_step, gdouble *dest)
+resample_row(GwyInterpolationType type, const gdouble *restrict src, gint n,
+             gdouble x_start, gdouble x_step, gdouble *restrict dest)
 {
     switch (type) {
         case GWY_INTERPOLATION_ROUND:
@@ -362,6 +432,11 @@ resample_row(GwyInterpolationType type, const gdouble *src, gint n,
 
         case GWY_INTERPOLATION_OMOMS:
         resample_row_with(GWY_INTERPOLATION_OMOMS, src, n, x_start, x_step,
+                          dest);
+        break;
+
+        case GWY_INTERPOLATION_NNA:
+        resample_row_with(GWY_INTERPOLATION_NNA, src, n, x_start, x_step,
                           dest);
         break;
 
@@ -531,18 +606,23 @@ plan_rows(const DriftTrajectory *trajectory, const ScanTiming *timing,
     return TRUE;
 }
 
-/* Produces the x-corrected source rows one at a time. */
+/* Produces x-corrected source rows. */
 typedef struct {
     const gdouble *a;
     gint xres;
+    gint yres;
     const ResamplePlan *plan;
     GwyInterpolationType interpolation;
     gboolean prefilter_x;
     Prefilter x_prefilter;
-    gdouble *coeffs;
+    gdouble *lanes;        /* interleaved rows of prefilter_batch() */
+    gdouble *coeffs;       /* x coefficients of rows batch_first .. */
+    gsize coeff_stride;
+    gint batch_first;
+    gint batch_count;
 } RowShifter;
 
-/* The last few x-corrected (or y-prefiltered) rows, by row index. */
+/* The last few x-corrected rows, by row index. */
 typedef struct {
     gint xres;
     gint tags[RING_ROWS];
@@ -550,22 +630,27 @@ typedef struct {
 } RowRing;
 
 static void
-row_shifter_init(RowShifter *shifter, const gdouble *a, gint xres,
+row_shifter_init(RowShifter *shifter, const gdouble *a, gint xres, gint yres,
                  const ResamplePlan *plan, GwyInterpolationType interpolation)
 {
     gdouble centre, side;
 
     shifter->a = a;
     shifter->xres = xres;
+    shifter->yres = yres;
     shifter->plan = plan;
     shifter->interpolation = interpolation;
     shifter->prefilter_x = kernel_needs_prefilter(interpolation,
                                                   &centre, &side);
-    shifter->coeffs = NULL;
+    shifter->lanes = shifter->coeffs = NULL;
+    shifter->coeff_stride = xres + PREFILTER_ROW_PAD;
+    shifter->batch_first = -1;
+    shifter->batch_count = 0;
     if (shifter->prefilter_x) {
         prefilter_init(&shifter->x_prefilter, xres, centre, side);
+        shifter->lanes = g_new(gdouble, PREFILTER_BATCH*(gsize)xres);
         shifter->coeffs = g_new(gdouble,
-                                PREFILTER_BATCH*(xres + PREFILTER_ROW_PAD));
+                                PREFILTER_BATCH*shifter->coeff_stride);
     }
 }
 
@@ -574,6 +659,7 @@ row_shifter_clear(RowShifter *shifter)
 {
     if (shifter->prefilter_x)
         prefilter_clear(&shifter->x_prefilter);
+    g_free(shifter->lanes);
     g_free(shifter->coeffs);
 }
 
@@ -586,39 +672,51 @@ row_shift_is_whole(const ResamplePlan *plan, gint i, gint xres)
             && fabs(x_start) <= xres);
 }
 
-/* Source rows first .. first+count-1 (count <= PREFILTER_BATCH) shifted
- * in x into dest, row after row. */
-static void
-row_shifter_shift_rows(RowShifter *shifter, gint first, gint count,
-                       gdouble *dest)
+/* The x coefficients of source row i, prefiltered with the rows after it
+ * (or, at the bottom, before it) in one batch. */
+static const gdouble*
+row_shifter_coeffs(RowShifter *shifter, gint i)
 {
-    const ResamplePlan *plan = shifter->plan;
-    gint xres = shifter->xres, i, k;
-    const gdouble *src = shifter->a + first*(gsize)xres, *coeffs = src;
-    gsize stride = xres;
+    gint xres = shifter->xres, yres = shifter->yres, first;
 
-    if (shifter->prefilter_x) {
-        /* Rows 32 KiB apart would share cache sets; pad them. */
-        stride = xres + PREFILTER_ROW_PAD;
-        for (k = 0; k < count; k++) {
-            memcpy(shifter->coeffs + k*stride, src + k*(gsize)xres,
+    if (i < shifter->batch_first
+        || i >= shifter->batch_first + shifter->batch_count) {
+        if (yres < PREFILTER_BATCH) {
+            memcpy(shifter->coeffs, shifter->a + i*(gsize)xres,
                    xres*sizeof(gdouble));
-        }
-        prefilter_rows(&shifter->x_prefilter, shifter->coeffs, count, stride);
-        coeffs = shifter->coeffs;
-    }
-    for (k = 0; k < count; k++) {
-        i = first + k;
-        if (row_shift_is_whole(plan, i, xres)) {
-            shift_row_whole(src + k*(gsize)xres, xres, (gint)plan->x_start[i],
-                            dest + k*(gsize)xres);
+            prefilter_row(&shifter->x_prefilter, shifter->coeffs);
+            shifter->batch_first = i;
+            shifter->batch_count = 1;
         }
         else {
-            resample_row(shifter->interpolation, coeffs + k*stride, xres,
-                         plan->x_start[i], plan->x_step[i],
-                         dest + k*(gsize)xres);
+            first = MIN(i, yres - PREFILTER_BATCH);
+            prefilter_batch(&shifter->x_prefilter,
+                            shifter->a + first*(gsize)xres, xres,
+                            shifter->lanes, shifter->coeffs,
+                            shifter->coeff_stride);
+            shifter->batch_first = first;
+            shifter->batch_count = PREFILTER_BATCH;
         }
     }
+    return shifter->coeffs + (i - shifter->batch_first)*shifter->coeff_stride;
+}
+
+/* Source row i shifted in x into dest. */
+static void
+row_shifter_shift(RowShifter *shifter, gint i, gdouble *restrict dest)
+{
+    const ResamplePlan *plan = shifter->plan;
+    gint xres = shifter->xres;
+    const gdouble *src = shifter->a + i*(gsize)xres;
+
+    if (row_shift_is_whole(plan, i, xres)) {
+        shift_row_whole(src, xres, (gint)plan->x_start[i], dest);
+        return;
+    }
+    if (shifter->prefilter_x)
+        src = row_shifter_coeffs(shifter, i);
+    resample_row(shifter->interpolation, src, xres,
+                 plan->x_start[i], plan->x_step[i], dest);
 }
 
 static void
@@ -632,13 +730,6 @@ row_ring_init(RowRing *ring, gint xres)
         ring->tags[k] = -1;
 }
 
-static inline gdouble*
-row_ring_slot(RowRing *ring, gint i)
-{
-    ring->tags[i % RING_ROWS] = i;
-    return ring->rows + (i % RING_ROWS)*(gsize)ring->xres;
-}
-
 /* x-corrected row i, computed unless still in the ring. */
 static const gdouble*
 row_ring_shifted(RowRing *ring, RowShifter *shifter, gint i)
@@ -646,7 +737,7 @@ row_ring_shifted(RowRing *ring, RowShifter *shifter, gint i)
     gdouble *row = ring->rows + (i % RING_ROWS)*(gsize)ring->xres;
 
     if (ring->tags[i % RING_ROWS] != i) {
-        row_shifter_shift_rows(shifter, i, 1, row);
+        row_shifter_shift(shifter, i, row);
         ring->tags[i % RING_ROWS] = i;
     }
     return row;
@@ -664,21 +755,41 @@ rows_need_interpolation(const ResamplePlan *plan, gint yres)
     return FALSE;
 }
 
+/* dest = w1 r1 + w2 r2. */
+static void
+combine_two_rows(const gdouble *restrict r1, const gdouble *restrict r2,
+                 gdouble w1, gdouble w2, gint n, gdouble *restrict dest)
+{
+    gint c = 0, j;
+
+    for (; c + CHUNK <= n; c += CHUNK) {
+        for (j = 0; j < CHUNK; j++)
+            dest[c + j] = w1*r1[c + j] + w2*r2[c + j];
+    }
+    for (; c < n; c++)
+        dest[c] = w1*r1[c] + w2*r2[c];
+}
+
 /* dest = sum of w[k] times rows[k]; the outer rows are not read (and may
  * be NULL) when both their weights are zero. */
 static void
-combine_rows(const gdouble **rows, const gdouble *w, gint xres, gdouble *dest)
+combine_rows(const gdouble **rows, const gdouble *w, gint n,
+             gdouble *restrict dest)
 {
-    const gdouble *r0 = rows[0], *r1 = rows[1], *r2 = rows[2], *r3 = rows[3];
+    const gdouble *restrict r0 = rows[0], *restrict r1 = rows[1];
+    const gdouble *restrict r2 = rows[2], *restrict r3 = rows[3];
     gdouble w0 = w[0], w1 = w[1], w2 = w[2], w3 = w[3];
-    gint c;
+    gint c = 0, j;
 
     if (w0 == 0.0 && w3 == 0.0) {
-        for (c = 0; c < xres; c++)
-            dest[c] = w1*r1[c] + w2*r2[c];
+        combine_two_rows(r1, r2, w1, w2, n, dest);
         return;
     }
-    for (c = 0; c < xres; c++)
+    for (; c + CHUNK <= n; c += CHUNK) {
+        for (j = 0; j < CHUNK; j++)
+            dest[c + j] = w0*r0[c + j] + w1*r1[c + j] + w2*r2[c + j] + w3*r3[c + j];
+    }
+    for (; c < n; c++)
         dest[c] = w0*r0[c] + w1*r1[c] + w2*r2[c] + w3*r3[c];
 }
 
@@ -776,86 +887,194 @@ rebuild_rows_streaming(RowShifter *shifter, gint yres,
     g_free(ring.rows);
 }
 
-/* Lowest row index an output row's taps read (mirrored). */
-static gint
-lowest_tap(gint i, gint yres)
+/* row -= q prev: the forward elimination of the y prefilter. */
+static void
+eliminate_row(gdouble *restrict row, const gdouble *restrict prev, gdouble q,
+              gint n)
 {
-    gint k, lowest = yres;
+    gint c = 0, j;
 
-    for (k = -1; k <= 2; k++)
-        lowest = MIN(lowest, mirror_index(i + k, yres));
-    return lowest;
+    for (; c + CHUNK <= n; c += CHUNK) {
+        for (j = 0; j < CHUNK; j++)
+            row[c + j] -= q*prev[c + j];
+    }
+    for (; c < n; c++)
+        row[c] -= q*prev[c];
+}
+
+/* row = (row - side below) inv: one back substitution step. */
+static void
+substitute_row(gdouble *restrict row, const gdouble *restrict below,
+               gdouble side, gdouble inv, gint n)
+{
+    gint c = 0, j;
+
+    for (; c + CHUNK <= n; c += CHUNK) {
+        for (j = 0; j < CHUNK; j++)
+            row[c + j] = (row[c + j] - side*below[c + j])*inv;
+    }
+    for (; c < n; c++)
+        row[c] = (row[c] - side*below[c])*inv;
+}
+
+/* row = (eliminated - side row) inv: a back substitution step within one
+ * buffer, for the steps whose result is not kept. */
+static void
+substitute_row_over(gdouble *restrict row, const gdouble *restrict eliminated,
+                    gdouble side, gdouble inv, gint n)
+{
+    gint c = 0, j;
+
+    for (; c + CHUNK <= n; c += CHUNK) {
+        for (j = 0; j < CHUNK; j++)
+            row[c + j] = (eliminated[c + j] - side*row[c + j])*inv;
+    }
+    for (; c < n; c++)
+        row[c] = (eliminated[c] - side*row[c])*inv;
+}
+
+/* The y coefficients of the x-corrected rows, made in blocks through a
+ * ring of rows.  Rows from next_coeff on hold the forward elimination, rows
+ * before it the coefficients.  The back substitution of a block starts
+ * warmup rows below it from the elimination alone (as if the coefficient
+ * below were zero); the error that makes shrinks by side/pivot per row,
+ * to below 2^-60 of itself at the block, so no full-size image of
+ * eliminated rows is needed. */
+typedef struct {
+    RowShifter *shifter;
+    Prefilter prefilter;
+    gint warmup;
+    gint ring_rows;
+    gdouble *rows;
+    gdouble *scratch;      /* the warm-up's coefficient row */
+    gint next_source;      /* first row not yet x-shifted and eliminated */
+    gint next_coeff;       /* first row not yet back-substituted */
+} ColumnCoeffs;
+
+static void
+column_coeffs_init(ColumnCoeffs *cc, RowShifter *shifter,
+                   GwyInterpolationType interpolation)
+{
+    gdouble centre = 0.0, side = 0.0;
+    gint xres = shifter->xres, yres = shifter->yres;
+
+    kernel_needs_prefilter(interpolation, &centre, &side);
+    prefilter_init(&cc->prefilter, yres, centre, side);
+    cc->shifter = shifter;
+    cc->warmup = prefilter_warmup(&cc->prefilter);
+    /* Alive at once: three coefficient rows before a block (taps of the
+     * output row that asks for it), the block and its warm-up rows. */
+    cc->ring_rows = MIN(yres, 3 + COEFF_BLOCK + cc->warmup + 1);
+    cc->rows = g_new(gdouble, cc->ring_rows*(gsize)xres);
+    cc->scratch = g_new(gdouble, xres);
+    cc->next_source = cc->next_coeff = 0;
+}
+
+static void
+column_coeffs_clear(ColumnCoeffs *cc)
+{
+    prefilter_clear(&cc->prefilter);
+    g_free(cc->rows);
+    g_free(cc->scratch);
+}
+
+static inline gdouble*
+column_coeffs_row(const ColumnCoeffs *cc, gint i)
+{
+    return cc->rows + (i % cc->ring_rows)*(gsize)cc->shifter->xres;
+}
+
+/* x-shifts and eliminates source rows up to and including last. */
+static void
+column_coeffs_eliminate(ColumnCoeffs *cc, gint last)
+{
+    gint xres = cc->shifter->xres, i;
+    gdouble *row;
+
+    for (i = cc->next_source; i <= last; i++) {
+        row = column_coeffs_row(cc, i);
+        row_shifter_shift(cc->shifter, i, row);
+        if (i > 0) {
+            eliminate_row(row, column_coeffs_row(cc, i-1),
+                          cc->prefilter.factor[i], xres);
+        }
+    }
+    cc->next_source = MAX(cc->next_source, last + 1);
+}
+
+/* Makes the coefficient rows up to and including last (and the rest of
+ * their block). */
+static void
+column_coeffs_make(ColumnCoeffs *cc, gint last)
+{
+    const gdouble *inv_diag = cc->prefilter.inv_diag;
+    gint xres = cc->shifter->xres, yres = cc->shifter->yres;
+    gint first, end, start, i, c;
+    gdouble side = cc->prefilter.side, *row;
+    const gdouble *below, *eliminated;
+
+    while (cc->next_coeff <= last) {
+        first = cc->next_coeff;
+        end = MIN(first + COEFF_BLOCK, yres);
+        start = MIN(end - 1 + cc->warmup, yres - 1);
+        column_coeffs_eliminate(cc, start);
+        below = NULL;
+        if (start >= end) {
+            eliminated = column_coeffs_row(cc, start);
+            for (c = 0; c < xres; c++)
+                cc->scratch[c] = eliminated[c]*inv_diag[start];
+            for (i = start - 1; i >= end; i--) {
+                substitute_row_over(cc->scratch, column_coeffs_row(cc, i),
+                                    side, inv_diag[i], xres);
+            }
+            below = cc->scratch;
+        }
+        for (i = end - 1; i >= first; i--) {
+            row = column_coeffs_row(cc, i);
+            if (below)
+                substitute_row(row, below, side, inv_diag[i], xres);
+            else {
+                for (c = 0; c < xres; c++)
+                    row[c] *= inv_diag[i];
+            }
+            below = row;
+        }
+        cc->next_coeff = end;
+    }
 }
 
 /* B-spline and o-MOMS with fractional source rows need coefficients along
- * y, the solution of a tridiagonal system over each whole column.  Its
- * forward elimination runs as the x-corrected rows are made; the back
- * substitution runs upwards through a ring of rows, and each output row is
- * made (upwards too) as soon as all its coefficient rows are there. */
+ * y, the solution of a tridiagonal system over each whole column, made
+ * block by block as the output rows (top to bottom) ask for them. */
 static void
 rebuild_rows_prefiltered(RowShifter *shifter, gint yres,
                          GwyInterpolationType interpolation,
                          gdouble fill_value, gdouble *result, gdouble *mask)
 {
     const ResamplePlan *plan = shifter->plan;
-    gint xres = shifter->xres, r, i, k, c, below_row, tap;
+    gint xres = shifter->xres, r, i, k, taps[KERNEL_TAPS], highest;
     const gdouble *rows[KERNEL_TAPS];
-    gdouble w[KERNEL_TAPS], centre = 0.0, side = 0.0, frac, q, inv;
-    gdouble *eliminated, *row, *prev;
-    const gdouble *below;
-    Prefilter prefilter;
-    RowRing ring;
+    gdouble w[KERNEL_TAPS], frac;
+    ColumnCoeffs cc;
 
-    kernel_needs_prefilter(interpolation, &centre, &side);
-    prefilter_init(&prefilter, yres, centre, side);
-    eliminated = g_new(gdouble, xres*(gsize)yres);
-    for (i = 0; i < yres; i++) {
-        row = eliminated + i*(gsize)xres;
-        if (i % PREFILTER_BATCH == 0) {
-            row_shifter_shift_rows(shifter, i, MIN(PREFILTER_BATCH, yres - i),
-                                   row);
-        }
-        if (i == 0)
-            continue;
-        prev = row - xres;
-        q = prefilter.factor[i];
-        for (c = 0; c < xres; c++)
-            row[c] -= q*prev[c];
-    }
-
-    row_ring_init(&ring, xres);
-    r = yres - 1;
-    for (i = yres - 1; i >= 0; i--) {
-        row = row_ring_slot(&ring, i);
-        prev = eliminated + i*(gsize)xres;
-        inv = prefilter.inv_diag[i];
-        if (i == yres - 1) {
-            for (c = 0; c < xres; c++)
-                row[c] = prev[c]*inv;
-        }
-        else {
-            below = ring.rows + ((i + 1) % RING_ROWS)*(gsize)xres;
-            for (c = 0; c < xres; c++)
-                row[c] = (prev[c] - side*below[c])*inv;
-        }
-        for (; r >= 0; r--) {
-            if (!isnan(plan->rho[r])) {
-                below_row = source_row_below(plan->rho[r], &frac);
-                if (lowest_tap(below_row, yres) < i)
-                    break;
-                kernel_weights(interpolation, frac, w);
-                for (k = 0; k < KERNEL_TAPS; k++) {
-                    tap = mirror_index(below_row - 1 + k, yres);
-                    rows[k] = ring.rows + (tap % RING_ROWS)*(gsize)xres;
-                }
-                combine_rows(rows, w, xres, result + r*(gsize)xres);
+    column_coeffs_init(&cc, shifter, interpolation);
+    for (r = 0; r < yres; r++) {
+        if (!isnan(plan->rho[r])) {
+            i = source_row_below(plan->rho[r], &frac);
+            highest = 0;
+            for (k = 0; k < KERNEL_TAPS; k++) {
+                taps[k] = mirror_index(i - 1 + k, yres);
+                highest = MAX(highest, taps[k]);
             }
-            finish_row(plan, xres, yres, r, fill_value, result, mask);
+            column_coeffs_make(&cc, highest);
+            for (k = 0; k < KERNEL_TAPS; k++)
+                rows[k] = column_coeffs_row(&cc, taps[k]);
+            kernel_weights(interpolation, frac, w);
+            combine_rows(rows, w, xres, result + r*(gsize)xres);
         }
+        finish_row(plan, xres, yres, r, fill_value, result, mask);
     }
-    g_free(ring.rows);
-    g_free(eliminated);
-    prefilter_clear(&prefilter);
+    column_coeffs_clear(&cc);
 }
 
 static void
@@ -907,7 +1126,7 @@ continuous_compensate_trajectory(const gdouble *a,
     ok = (plan_columns(trajectory, timing, &plan, error)
           && plan_rows(trajectory, timing, &plan, error));
     if (ok) {
-        row_shifter_init(&shifter, a, xres, &plan, interpolation);
+        row_shifter_init(&shifter, a, xres, yres, &plan, interpolation);
         if (kernel_needs_prefilter(interpolation, &centre, &side)
             && rows_need_interpolation(&plan, yres)) {
             rebuild_rows_prefiltered(&shifter, yres, interpolation,
