@@ -11,6 +11,9 @@
 #define MAX_BASIS 4
 #define GOLDEN_STEPS 40
 #define MAX_GRID 6000
+/* Oscillation periods whose cycles mostly cancel between the frames are not
+ * searched (see oscillation_visibility). */
+#define MIN_VISIBILITY 0.25
 
 /* Measurements in nm and s, weights normalised to mean 1 over those used. */
 typedef struct {
@@ -288,6 +291,28 @@ observable_periods(const Prepared *pm, const DriftFitOptions *options,
     return pm->n_used >= 3 && *shortest < *longest;
 }
 
+/* How much of an oscillation of this period shows in the measurements: the
+ * weighted mean of |exp(i w t_a) - exp(i w t_b)|^2/2 = 1 - cos(w (t_a - t_b)),
+ * about 1 for a period unrelated to the frame timing, 0 when every
+ * measurement spans a whole number of cycles.  Such an oscillation repeats
+ * identically in every frame and cancels between frames; fitting it anyway
+ * blows a small pattern tied to the position in the frame (a registration
+ * bias of each block) up into a large amplitude. */
+static gdouble
+oscillation_visibility(const Prepared *pm, gdouble period)
+{
+    gdouble sum = 0.0, wsum = 0.0;
+    gint i;
+
+    for (i = 0; i < pm->n; i++) {
+        if (pm->w[i] <= 0.0)
+            continue;
+        sum += pm->w[i]*(1.0 - cos(2.0*G_PI*(pm->ta[i] - pm->tb[i])/period));
+        wsum += pm->w[i];
+    }
+    return (wsum > 0.0) ? sum/wsum : 0.0;
+}
+
 /* Candidate values of the nonlinear parameter; 0 when there are none. */
 static gint
 parameter_grid(const Prepared *pm, DriftModelType type,
@@ -316,8 +341,17 @@ parameter_grid(const Prepared *pm, DriftModelType type,
         fmax = 1.0/pshort;
         m = CLAMP((gint)ceil((fmax - fmin)/df) + 1, 8, MAX_GRID);
         g = g_new(gdouble, m);
-        for (i = 0; i < m; i++)
-            g[i] = 1.0/(fmin + (fmax - fmin)*i/(m - 1.0));
+        for (i = nt = 0; i < m; i++) {
+            gdouble period = 1.0/(fmin + (fmax - fmin)*i/(m - 1.0));
+
+            if (oscillation_visibility(pm, period) >= MIN_VISIBILITY)
+                g[nt++] = period;
+        }
+        m = nt;
+        if (!m) {
+            g_free(g);
+            g = NULL;
+        }
     }
     else {
         /* A step between each pair of consecutive distinct times. */
@@ -403,6 +437,9 @@ fit_prepared(const Prepared *pm, DriftModelType type,
             best = refine_golden(pm, type, grid[MAX(ibest - 1, 0)],
                                  grid[MIN(ibest + 1, m - 1)],
                                  theta, best, &theta);
+        if (type == DRIFT_MODEL_OSCILLATION
+            && oscillation_visibility(pm, theta) < MIN_VISIBILITY)
+            theta = grid[ibest];
         g_free(grid);
     }
     rss = solve_fixed(pm, type, theta, coef, &k);

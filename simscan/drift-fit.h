@@ -83,8 +83,11 @@ gboolean       drift_fit_model        (const DriftMeasurement *meas,
 /* The periods an oscillation can be observed with (s): at least
  * min_cycles cycles over the time span of the measurements, and no shorter
  * than twice the longest gap between measured times (shorter periods alias
- * across the gap), nor than min_period.  Only these are searched; FALSE
- * (and no oscillation fitted) when the interval is empty. */
+ * across the gap), nor than min_period.  Only these are searched, and of
+ * them only periods that do not cancel between the frames (whole cycles
+ * per frame interval: such an oscillation repeats in every frame and no
+ * frame series sees it).  FALSE (and no oscillation fitted) when the
+ * interval is empty. */
 gboolean       drift_fit_observable_periods(const DriftMeasurement *meas,
                                             gint n,
                                             const DriftFitOptions *options,
