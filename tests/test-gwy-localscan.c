@@ -24,6 +24,8 @@
 #include "drift-table.h"
 #include "paper-compensate.h"
 #include "registration-frames.h"
+#include "localscan-channel.h"
+#include "simscan-file-case.h"
 
 #define TOOL_PATH TEST_BUILDDIR "/tools/gwy-localscan"
 #define DEFAULT_MODULE TEST_BUILDDIR "/modules/.libs/localscan.so"
@@ -1643,6 +1645,136 @@ START_TEST(test_reference_errors)
 }
 END_TEST
 
+/************************************************************************
+ * -m continuous on simscan's files: timing from their metadata
+ ************************************************************************/
+
+/* Seeds tried in order until enough had every local scan on its own
+ * particle (one that measured a neighbour may make continuous mode lose to
+ * paper mode: the trajectory's robustness, not the timing). */
+#define SIMSCAN_SEEDS_TRIED 12
+#define SIMSCAN_SEEDS_JUDGED 3
+#define GOOD_STRIPE_PX 0.5
+/* Measured 0.64-0.76 on such seeds (1-24, both cases); 2.0 scanning up
+ * with the wrong timing. */
+#define CONTINUOUS_VS_PAPER 0.85
+
+static const SimscanFileCase *const simscan_cases[] = { &simscan_file_default, &simscan_file_up };
+
+/* Runs gwy-localscan in a mode; the loaded output, or NULL when the tool
+ * refused (its one line in *message). */
+static GwyContainer*
+run_simscan_mode(const gchar *input, const gchar *mode, gchar **message)
+{
+    gchar *output = out_path(mode), *title;
+    GwyContainer *out = NULL;
+    ToolRun run;
+
+    run_tool(&run, (const gchar *const[]){ "-m", mode, "-o", output, input, NULL });
+    if (run.status == 0) {
+        assert_success(&run);
+        out = load_gwy(output);
+        title = g_strconcat(get_string(out, "/0/data/title"), TITLE_SUFFIX, NULL);
+        ck_assert_str_eq(get_string(out, "/2/data/title"), title);
+        g_free(title);
+        g_unlink(output);
+    }
+    else
+        assert_failure(&run, 1, "gwy-localscan: *");
+    *message = g_strdup(run.err);
+    tool_run_clear(&run);
+    g_free(output);
+    return out;
+}
+
+/* The continuous result is continuous_compensate_table()'s with the timing
+ * simscan was told; the input's metadata gives exactly that timing. */
+static void
+check_simscan_timing(const SimscanFileCase *fcase, guint32 seed, GwyContainer *in, GwyContainer *out)
+{
+    GwyDataField *expected;
+    ScanTiming told, found;
+
+    simscan_file_timing(fcase, get_field(in, gwy_app_get_data_key_for_id(0)), &told);
+    ck_assert_int_eq(localscan_channel_scan_timing(in, 0, !fcase->direction, &found),
+                     LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_DIRECTION | LOCALSCAN_TIMING_FRAME_START);
+    ck_assert_msg(found.line_time == told.line_time && found.direction == told.direction
+                  && found.frame_start == 0.0,
+                  "%s, seed %u: read %g s, direction %d, frame start %g s", fcase->name, seed,
+                  found.line_time, found.direction, found.frame_start);
+    expected = simscan_file_expected_continuous(in, &told);
+    ck_assert_msg((expected != NULL) == (out != NULL), "%s, seed %u: the tool %s, the expected result %s",
+                  fcase->name, seed, out ? "succeeded" : "failed", expected ? "exists" : "does not");
+    if (expected) {
+        ck_assert_msg(fields_identical(get_field(out, gwy_app_get_data_key_for_id(2)), expected),
+                      "%s, seed %u: the result is not continuous mode's with simscan's timing",
+                      fcase->name, seed);
+        g_object_unref(expected);
+    }
+}
+
+/* Judged against the truth channel shifted to continuous mode's reference
+ * time (paper mode shows each stripe at its own local scan, all within
+ * 4 s of it: 0.05 px of drift). */
+static gboolean
+judge_simscan_seed(const SimscanFileCase *fcase, guint32 seed, const gchar *input)
+{
+    GwyContainer *in = load_gwy(input), *continuous, *paper;
+    DriftTable *table = localscan_channel_stored_table(in, 0, NULL);
+    gdouble worst, t_ref, rms_paper, rms_continuous;
+    gchar *message;
+    gboolean judged = FALSE;
+
+    ck_assert(table);
+    continuous = run_simscan_mode(input, "continuous", &message);
+    check_simscan_timing(fcase, seed, in, continuous);
+    worst = simscan_file_worst_stripe_px(fcase, table, get_field(in, gwy_app_get_data_key_for_id(0)));
+    if (worst > GOOD_STRIPE_PX || !continuous) {
+        printf("test-gwy-localscan: %s, simscan seed %u: a local scan is %.2f px off, not judged %s\n",
+               fcase->name, seed, worst, message);
+    }
+    else {
+        g_free(message);
+        paper = run_simscan_mode(input, "paper", &message);
+        ck_assert_msg(paper, "%s", message);
+        t_ref = simscan_file_reference_time(table);
+        rms_paper = simscan_file_truth_rms(fcase, paper, 2, t_ref);
+        rms_continuous = simscan_file_truth_rms(fcase, continuous, 2, t_ref);
+        printf("test-gwy-localscan: %s, simscan seed %u: RMS against the truth at %.1f s: paper %.3f nm, "
+               "continuous %.3f nm (%.2f of paper)\n", fcase->name, seed, t_ref, 1e9*rms_paper,
+               1e9*rms_continuous, rms_continuous/rms_paper);
+        ck_assert_msg(rms_continuous < CONTINUOUS_VS_PAPER*rms_paper,
+                      "%s, simscan seed %u: continuous %g nm RMS, paper %g nm", fcase->name, seed,
+                      1e9*rms_continuous, 1e9*rms_paper);
+        g_object_unref(paper);
+        judged = TRUE;
+    }
+    g_free(message);
+    if (continuous)
+        g_object_unref(continuous);
+    drift_table_free(table);
+    g_object_unref(in);
+    return judged;
+}
+
+START_TEST(test_continuous_simscan_files)
+{
+    const SimscanFileCase *fcase = simscan_cases[_i];
+    gchar *input = in_path("simscan.gwy");
+    GError *error = NULL;
+    gint judged = 0;
+    guint32 seed;
+
+    for (seed = 1; seed <= SIMSCAN_SEEDS_TRIED && judged < SIMSCAN_SEEDS_JUDGED; seed++) {
+        ck_assert_msg(simscan_file_write(fcase, seed, input, &error), "%s", error ? error->message : "");
+        judged += judge_simscan_seed(fcase, seed, input);
+    }
+    ck_assert_msg(judged == SIMSCAN_SEEDS_JUDGED, "%s: only %d of simscan seeds 1-%d had every local scan "
+                  "on its particle", fcase->name, judged, SIMSCAN_SEEDS_TRIED);
+    g_free(input);
+}
+END_TEST
+
 static Suite*
 gwy_localscan_suite(void)
 {
@@ -1659,6 +1791,11 @@ gwy_localscan_suite(void)
     tcase_add_test(tc, test_user_settings_do_not_leak);
     tcase_add_test(tc, test_nanoscope_input);
     tcase_add_test(tc, test_continuous_mode_accepts_fractions);
+    suite_add_tcase(suite, tc);
+
+    tc = tcase_create("continuous on simscan files");
+    tcase_add_checked_fixture(tc, setup_scratch, teardown_scratch);
+    tcase_add_loop_test(tc, test_continuous_simscan_files, 0, G_N_ELEMENTS(simscan_cases));
     suite_add_tcase(suite, tc);
 
     tc = tcase_create("reference registration");

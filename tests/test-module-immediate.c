@@ -23,6 +23,7 @@
 #include "continuous-compensate.h"
 #include "localscan-channel.h"
 #include "registration-frames.h"
+#include "simscan-file-case.h"
 
 #define FUNC_NAME "localscan_drift"
 #define SETTINGS_PREFIX "/module/localscan_drift/"
@@ -1078,6 +1079,182 @@ START_TEST(test_reference_unrelated_refused)
 }
 END_TEST
 
+/************************************************************************
+ * Continuous mode on simscan's files: timing from their metadata
+ ************************************************************************/
+
+/* Seeds tried in order until enough had every local scan on its own
+ * particle (a scan that measured a neighbour is the trajectory's problem,
+ * not the timing's: continuous mode may then lose to paper mode). */
+#define SIMSCAN_SEEDS_TRIED 12
+#define SIMSCAN_SEEDS_JUDGED 3
+#define GOOD_STRIPE_PX 0.5
+/* On such seeds continuous mode's RMS against the truth is 0.64-0.76 of
+ * paper mode's (seeds 1-24 of both cases); with the wrong timing (1 s per
+ * line, scanning down) it was 2.0 of it scanning up. */
+#define CONTINUOUS_VS_PAPER 0.85
+
+static const LocalscanTimingFound all_timing = (LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_DIRECTION
+                                                | LOCALSCAN_TIMING_FRAME_START);
+
+/* The file simscan wrote, loaded, in the data browser, channel 0 selected. */
+static GwyContainer*
+load_simscan_file(const SimscanFileCase *fcase, guint32 seed)
+{
+    gchar *dir = g_dir_make_tmp("localscan-simscan-XXXXXX", NULL), *path;
+    GError *error = NULL;
+    GwyContainer *data;
+
+    ck_assert(dir);
+    path = g_build_filename(dir, "simscan.gwy", NULL);
+    ck_assert_msg(simscan_file_write(fcase, seed, path, &error), "%s", error ? error->message : "");
+    data = gwy_file_load(path, GWY_RUN_NONINTERACTIVE, &error);
+    ck_assert_msg(data, "cannot load simscan's file: %s", error ? error->message : "");
+    g_unlink(path);
+    g_rmdir(dir);
+    g_free(path);
+    g_free(dir);
+    gwy_app_data_browser_add(data);
+    gwy_app_data_browser_select_data_field(data, 0);
+    return data;
+}
+
+/* The direction setting is the opposite of the file's: the metadata must
+ * win. */
+static gint
+run_simscan_mode(GwyContainer *data, const SimscanFileCase *fcase, gint mode)
+{
+    ModuleSettings ms = default_settings;
+
+    ms.mode = mode;
+    ms.direction = (fcase->direction == SCAN_DIRECTION_UP ? SCAN_DIRECTION_DOWN : SCAN_DIRECTION_UP);
+    set_module_settings(&ms);
+    gwy_app_data_browser_select_data_field(data, 0);
+    return run_module(data, NULL);
+}
+
+/* The timing read from the file is what simscan was told, and continuous
+ * mode compensates with exactly it.  Returns the new channel, or -1 when
+ * continuous compensation refuses the table (as it must then). */
+static gint
+check_simscan_timing(GwyContainer *data, const SimscanFileCase *fcase, guint32 seed)
+{
+    GwyDataField *field = get_field(data, gwy_app_get_data_key_for_id(0)), *expected;
+    ScanTiming told, found;
+    gint id;
+
+    simscan_file_timing(fcase, field, &told);
+    ck_assert_int_eq(localscan_channel_scan_timing(data, 0, !fcase->direction, &found), all_timing);
+    ck_assert_msg(found.line_time == told.line_time && found.direction == told.direction
+                  && found.frame_start == 0.0 && found.xres == told.xres && found.yres == told.yres,
+                  "%s, seed %u: timing %g s, direction %d, frame start %g s read; simscan was told %g s, %d",
+                  fcase->name, seed, found.line_time, found.direction, found.frame_start,
+                  told.line_time, told.direction);
+    expected = simscan_file_expected_continuous(data, &told);
+    id = run_simscan_mode(data, fcase, LOCALSCAN_MODE_CONTINUOUS);
+    if (!expected)
+        ck_assert_int_eq(id, -1);
+    else {
+        ck_assert_int_ge(id, 0);
+        assert_same_field_bits(get_field(data, gwy_app_get_data_key_for_id(id)), expected);
+        g_object_unref(expected);
+    }
+    return id;
+}
+
+static void
+check_simscan_case(const SimscanFileCase *fcase)
+{
+    GwyContainer *data;
+    DriftTable *table;
+    gdouble worst, t_ref, rms_before, rms_paper, rms_continuous;
+    gint judged = 0, continuous_id, paper_id;
+    guint32 seed;
+
+    for (seed = 1; seed <= SIMSCAN_SEEDS_TRIED && judged < SIMSCAN_SEEDS_JUDGED; seed++) {
+        data = load_simscan_file(fcase, seed);
+        table = localscan_channel_stored_table(data, 0, NULL);
+        ck_assert(table);
+        continuous_id = check_simscan_timing(data, fcase, seed);
+        worst = simscan_file_worst_stripe_px(fcase, table, get_field(data, gwy_app_get_data_key_for_id(0)));
+        if (worst > GOOD_STRIPE_PX || continuous_id < 0) {
+            printf("test-module-immediate: %s, simscan seed %u: a local scan is %.2f px off, not judged\n",
+                   fcase->name, seed, worst);
+        }
+        else {
+            paper_id = run_simscan_mode(data, fcase, LOCALSCAN_MODE_PAPER);
+            ck_assert_int_ge(paper_id, 0);
+            t_ref = simscan_file_reference_time(table);
+            rms_before = simscan_file_truth_rms(fcase, data, 0, t_ref);
+            rms_paper = simscan_file_truth_rms(fcase, data, paper_id, t_ref);
+            rms_continuous = simscan_file_truth_rms(fcase, data, continuous_id, t_ref);
+            printf("test-module-immediate: %s, simscan seed %u: RMS against the truth at %.1f s: "
+                   "before %.3f nm, paper %.3f nm, continuous %.3f nm (%.2f of paper)\n",
+                   fcase->name, seed, t_ref, 1e9*rms_before, 1e9*rms_paper, 1e9*rms_continuous,
+                   rms_continuous/rms_paper);
+            ck_assert_msg(rms_continuous < CONTINUOUS_VS_PAPER*rms_paper,
+                          "%s, simscan seed %u: continuous %g nm RMS, paper %g nm", fcase->name, seed,
+                          1e9*rms_continuous, 1e9*rms_paper);
+            judged++;
+        }
+        drift_table_free(table);
+        drop_container(data);
+    }
+    ck_assert_msg(judged == SIMSCAN_SEEDS_JUDGED, "%s: only %d of simscan seeds 1-%d had every local scan "
+                  "on its particle", fcase->name, judged, SIMSCAN_SEEDS_TRIED);
+}
+
+START_TEST(test_simscan_default_timing)
+{
+    check_simscan_case(&simscan_file_default);
+}
+END_TEST
+
+START_TEST(test_simscan_up_timing)
+{
+    check_simscan_case(&simscan_file_up);
+}
+END_TEST
+
+/* The same scan as a later frame: "Frame start (s)" and the table's
+ * t_image, t_local all 1000 s later give the same image.  Not to the bit:
+ * the trajectory's smoothing rounds differently at later times (3e-5 of
+ * the range here); a frame start ignored moves 0.9 of it. */
+START_TEST(test_simscan_frame_start)
+{
+    GwyContainer *data = load_simscan_file(&simscan_file_up, 2), *meta;
+    DriftTable *table = localscan_channel_stored_table(data, 0, NULL);
+    GwyDataField *first, *later;
+    gdouble t, range, diff;
+    gint s, id;
+
+    ck_assert(table);
+    id = run_simscan_mode(data, &simscan_file_up, LOCALSCAN_MODE_CONTINUOUS);
+    ck_assert_int_ge(id, 0);
+    first = get_field(data, gwy_app_get_data_key_for_id(id));
+    for (s = 0; s < table->n_stripes; s++) {
+        if (drift_table_get_extra(table, s, "t_image", &t))
+            drift_table_set_extra(table, s, "t_image", t + 1000.0);
+        if (drift_table_get_extra(table, s, "t_local", &t))
+            drift_table_set_extra(table, s, "t_local", t + 1000.0);
+    }
+    localscan_channel_store_table(data, 0, table);
+    ck_assert(gwy_container_gis_object_by_name(data, "/0/meta", &meta));
+    set_string(meta, "Frame start (s)", "1000");
+    id = run_simscan_mode(data, &simscan_file_up, LOCALSCAN_MODE_CONTINUOUS);
+    ck_assert_int_ge(id, 0);
+    later = gwy_data_field_duplicate(get_field(data, gwy_app_get_data_key_for_id(id)));
+    range = gwy_data_field_get_max(first) - gwy_data_field_get_min(first);
+    gwy_data_field_subtract_fields(later, later, first);
+    diff = fmax(-gwy_data_field_get_min(later), gwy_data_field_get_max(later));
+    printf("test-module-immediate: frame start 1000 s: largest difference %.3g of the range\n", diff/range);
+    ck_assert_msg(diff <= 1e-3*range, "frame start 1000 s changes the result by %g of its range", diff/range);
+    g_object_unref(later);
+    drift_table_free(table);
+    drop_container(data);
+}
+END_TEST
+
 static guint32
 choose_seed(void)
 {
@@ -1133,6 +1310,9 @@ main(void)
     tcase_add_test(tc, test_continuous_mode_passes_timing);
     tcase_add_test(tc, test_bad_sources_refused);
     tcase_add_test(tc, test_scan_timing_from_metadata);
+    tcase_add_test(tc, test_simscan_default_timing);
+    tcase_add_test(tc, test_simscan_up_timing);
+    tcase_add_test(tc, test_simscan_frame_start);
     tcase_add_test(tc, test_reference_paper_mode);
     tcase_add_test(tc, test_reference_continuous_mode);
     tcase_add_test(tc, test_reference_graph_and_log);
