@@ -46,6 +46,8 @@ typedef struct {
     gboolean found_text;
     gboolean ok_sensitive;
     gboolean answered;
+    const gchar *also_text;      /* shown too when wait_for_text is */
+    gboolean found_also;
 } DialogProbe;
 
 static GwyContainer*
@@ -129,6 +131,7 @@ probe_dialog(gpointer user_data)
         return TRUE;
     ok_button = gtk_dialog_get_widget_for_response(GTK_DIALOG(dialog), GTK_RESPONSE_OK);
     probe->ok_sensitive = ok_button && gtk_widget_is_sensitive(ok_button);
+    probe->found_also = probe->also_text && widget_shows_text(dialog, probe->also_text);
     gtk_dialog_response(GTK_DIALOG(dialog), probe->response);
     probe->answered = TRUE;
     return FALSE;
@@ -158,7 +161,7 @@ run_dialog(GwyContainer *data, DialogProbe *probe)
 START_TEST(test_bad_table_disables_ok)
 {
     GwyContainer *data = make_container("stripe,dx,dy\n0,abc,1\n");
-    DialogProbe probe = { "channel 0 drift table:2", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, TRUE, FALSE };
+    DialogProbe probe = { "channel 0 drift table:2", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, TRUE, FALSE, NULL, FALSE };
 
     set_stored_table_settings();
     run_dialog(data, &probe);
@@ -174,7 +177,7 @@ END_TEST
 START_TEST(test_good_table_ok_makes_channel)
 {
     GwyContainer *data = make_container(worked_table);
-    DialogProbe probe = { "3 stripes, 5 filled pixels.", GTK_RESPONSE_OK, 0, FALSE, FALSE, FALSE, FALSE };
+    DialogProbe probe = { "3 stripes, 5 filled pixels.", GTK_RESPONSE_OK, 0, FALSE, FALSE, FALSE, FALSE, NULL, FALSE };
     GwyDataField *result = NULL, *mask = NULL;
     const guchar *title = NULL;
     gint i;
@@ -197,6 +200,37 @@ START_TEST(test_good_table_ok_makes_channel)
 }
 END_TEST
 
+/* Continuous mode says where each part of the scan timing came from. */
+START_TEST(test_status_names_timing_source)
+{
+    static const gchar gentle_table[] = "stripe,dx,dy\n0,0,0\n1,0.5,0\n2,1,0\n";
+    DialogProbe with_meta = { "scan up (metadata), frame start 2.5 s (metadata).", GTK_RESPONSE_CANCEL,
+                              0, FALSE, FALSE, FALSE, FALSE, "Line time 1.5 s (metadata),", FALSE };
+    DialogProbe without = { "scan down (setting), frame start 0 s (assumed).", GTK_RESPONSE_CANCEL,
+                            0, FALSE, FALSE, FALSE, FALSE, "Line time 1 s (assumed),", FALSE };
+    GwyContainer *settings = gwy_app_settings_get(), *data, *meta;
+
+    set_stored_table_settings();
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "mode", 1);
+    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "direction", 0);
+    data = make_container(gentle_table);
+    run_dialog(data, &without);
+    ck_assert_msg(without.found_text && without.found_also, "no timing source shown without metadata");
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+
+    data = make_container(gentle_table);
+    ck_assert(gwy_container_gis_object_by_name(data, "/0/meta", &meta));
+    gwy_container_set_const_string_by_name(meta, "Line time (s)", (const guchar*)"1.5");
+    gwy_container_set_const_string_by_name(meta, "Slow scan", (const guchar*)"up");
+    gwy_container_set_const_string_by_name(meta, "Frame start (s)", (const guchar*)"2.5");
+    run_dialog(data, &with_meta);
+    ck_assert_msg(with_meta.found_text && with_meta.found_also, "the timing from metadata is not shown");
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+}
+END_TEST
+
 /************************************************************************
  * The reference source in the dialog
  ************************************************************************/
@@ -209,7 +243,7 @@ END_TEST
 typedef enum {
     STEP_REGISTERED,      /* first preview: 16 stripes registered */
     STEP_CONTINUOUS,      /* mode switched: the measured table reused */
-    STEP_EIGHT_STRIPES,   /* stripe count changed: measured again */
+    STEP_EIGHT_STRIPES,   /* stripe count moved 12, 10, 8: measured once */
     STEP_DONE,
 } ReferenceStep;
 
@@ -217,6 +251,7 @@ typedef struct {
     ReferenceStep step;
     gint ticks;
     gint registrations[STEP_DONE];
+    gint registrations_while_moving;  /* before the stripe count rested */
     gint offered;             /* channels the reference chooser offers */
     gboolean offers_other_size;
     gboolean offers_other_real;
@@ -325,6 +360,23 @@ save_screenshot(GtkWidget *dialog, const gchar *filename)
     return ok;
 }
 
+/* As a dragged slider passes values: the main loop runs between them (an
+ * immediate preview would register each), but for far less time than the
+ * count must rest. */
+static void
+move_stripes(GtkWidget *spin, ReferenceProbe *probe)
+{
+    static const gint values[] = { 12, 10, 8 };
+    guint i, k;
+
+    for (i = 0; i < G_N_ELEMENTS(values); i++) {
+        gtk_spin_button_set_value(GTK_SPIN_BUTTON(spin), values[i]);
+        for (k = 0; k < 100 && gtk_events_pending(); k++)
+            gtk_main_iteration_do(FALSE);
+    }
+    probe->registrations_while_moving = registrations;
+}
+
 /* Each step waits for the preview's status line, records, and makes the
  * next change; the last answers OK. */
 static gboolean
@@ -355,7 +407,7 @@ probe_reference_dialog(gpointer user_data)
     else if (probe->step == STEP_CONTINUOUS) {
         widget = find_labelled_spin(dialog, "Stripes:");
         ck_assert_msg(widget, "no stripes slider");
-        gtk_spin_button_set_value(GTK_SPIN_BUTTON(widget), 8);
+        move_stripes(widget, probe);
     }
     else {
         gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_OK);
@@ -424,9 +476,9 @@ START_TEST(test_reference_chooser_and_cache)
     g_log_remove_handler(NULL, handler);
 
     printf("test-module-dialog: chooser offers %d channel(s), chose %d; registrations after each step: "
-           "%d, %d, %d, after OK %d; drift graph %d points\n",
-           probe.offered, probe.chosen, probe.registrations[0], probe.registrations[1], probe.registrations[2],
-           registrations, probe.graph_points);
+           "%d, %d, (stripes moving %d) %d, after OK %d; drift graph %d points\n",
+           probe.offered, probe.chosen, probe.registrations[0], probe.registrations[1],
+           probe.registrations_while_moving, probe.registrations[2], registrations, probe.graph_points);
     ck_assert_msg(probe.answered, "the dialog never reached step %d", probe.step);
     ck_assert_int_eq(probe.offered, 1);
     ck_assert_int_eq(probe.chosen, 0);
@@ -439,6 +491,7 @@ START_TEST(test_reference_chooser_and_cache)
      * for 8 stripes, and OK's final run reused that. */
     ck_assert_int_eq(probe.registrations[STEP_REGISTERED], 1);
     ck_assert_int_eq(probe.registrations[STEP_CONTINUOUS], 1);
+    ck_assert_int_eq(probe.registrations_while_moving, 1);
     ck_assert_int_eq(probe.registrations[STEP_EIGHT_STRIPES], 2);
     ck_assert_int_eq(registrations, 2);
 
@@ -499,6 +552,7 @@ main(int argc, char **argv)
     tc = tcase_create("dialog");
     tcase_add_test(tc, test_bad_table_disables_ok);
     tcase_add_test(tc, test_good_table_ok_makes_channel);
+    tcase_add_test(tc, test_status_names_timing_source);
     tcase_add_test(tc, test_reference_chooser_and_cache);
     suite_add_tcase(suite, tc);
     sr = srunner_create(suite);
