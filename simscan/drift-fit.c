@@ -585,33 +585,66 @@ lowest_bic(const DriftFit *fits, gint n_types)
     return best;
 }
 
-/* Marks measurements whose residual under fit is a gross outlier (a failed
- * registration), by a robust (median absolute) scale. */
-static void
-mark_outliers(const DriftMeasurement *meas, gint n, const DriftFit *fit,
-              gdouble sigmas, gboolean *mask)
+/* The kept measurement with the largest residual under fit, when it is a
+ * gross outlier (a failed registration) by a robust (median) scale of the
+ * kept residuals; else -1. */
+static gint
+worst_outlier(const DriftMeasurement *meas, gint n, const DriftFit *fit,
+              gdouble sigmas, const gboolean *mask)
 {
     gdouble *r = g_new(gdouble, n), *sorted = g_new(gdouble, n), scale;
-    gint i, m = 0;
+    gint i, m = 0, worst = -1;
 
     for (i = 0; i < n; i++) {
         gdouble dx, dy;
 
+        r[i] = NAN;
+        if (!mask[i] || !(meas[i].weight > 0.0))
+            continue;
         drift_fit_predict(fit, meas + i, &dx, &dy);
         r[i] = 1e9*sqrt(0.5*((meas[i].dx - dx)*(meas[i].dx - dx)
                              + (meas[i].dy - dy)*(meas[i].dy - dy)));
-        if (meas[i].weight > 0.0 && isfinite(r[i]))
-            sorted[m++] = r[i];
+        if (!isfinite(r[i]))
+            continue;
+        sorted[m++] = r[i];
+        if (worst < 0 || r[i] > r[worst])
+            worst = i;
     }
     if (m) {
         qsort(sorted, m, sizeof(gdouble), compare_doubles);
         /* The median of a 2-D radial residual is about 1.18 sigma. */
         scale = sorted[m/2]/1.1774;
-        for (i = 0; i < n; i++)
-            mask[i] = !(r[i] > sigmas*MAX(scale, 1e-6));
+        if (!(r[worst] > sigmas*MAX(scale, 1e-6)))
+            worst = -1;
     }
     g_free(r);
     g_free(sorted);
+    return worst;
+}
+
+/* Drops gross outliers one at a time, the worst first, refitting fit's
+ * model after each: a single failed registration pulls a least-squares fit
+ * far enough that a whole group of good measurements (those spanning a
+ * jump, say) would look like outliers if all were judged at once. */
+static void
+drop_outliers(const DriftMeasurement *meas, gint n,
+              const DriftFitOptions *options, DriftFit *fit, gboolean *mask)
+{
+    DriftModelType type = fit->type;
+    Prepared pm;
+    gint dropped, worst;
+
+    for (dropped = 0; dropped < n/4; dropped++) {
+        worst = worst_outlier(meas, n, fit, options->outlier_sigmas, mask);
+        if (worst < 0)
+            break;
+        mask[worst] = FALSE;
+        prepare(meas, n, mask, &pm);
+        fit_prepared(&pm, type, options, fit);
+        prepared_free(&pm);
+        if (!fit->ok)
+            break;
+    }
 }
 
 /* RMS of what the effect explains beyond constant drift. */
@@ -657,7 +690,7 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
     for (i = 0; i < n; i++)
         mask[i] = TRUE;
     if (options->outlier_sigmas > 0.0)
-        mark_outliers(meas, n, fits + best, options->outlier_sigmas, mask);
+        drop_outliers(meas, n, options, fits + best, mask);
 
     if (kept)
         memcpy(kept, mask, n*sizeof(gboolean));
