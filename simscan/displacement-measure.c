@@ -1,27 +1,16 @@
 /*
- *  Displacement measurements of a frame series by block registration
- *  (masked normalised cross-correlation through FFTW).
+ *  Displacement measurements of a frame series: blocks of lines registered
+ *  by the core's stripe registration (stripe-registration.h), searched
+ *  around the frame's overall shift, chained across frames.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
 #include <string.h>
 #include <math.h>
-#include <fftw3.h>
 #include <libprocess/gwyprocess.h>
+#include "stripe-registration.h"
 #include "displacement-measure.h"
-
-/* Correlation workspace for one image/reference pair: padded to twice the
- * frame so that no shift wraps around. */
-typedef struct {
-    gint xres, yres, px, py, nc;
-    gdouble *real;
-    fftw_complex *ref, *ref2, *refmask;      /* spectra of the reference */
-    fftw_complex *blk, *blk2, *blkmask, *prod;
-    gdouble *num, *den_b, *den_r, *overlap;
-    fftw_plan forward, backward;
-    const gdouble *image;
-} Correlator;
 
 void
 displacement_options_init(DisplacementOptions *options)
@@ -103,141 +92,19 @@ level_lines(const gdouble *data, gint xres, gint yres,
     return out;
 }
 
+/* The stripes' shifts (px) and the score the fit weighs them by: the
+ * correlation at the peak, for blocks the registration accepted. */
 static void
-forward_of(Correlator *c, const gdouble *src, gint r0, gint r1,
-           gboolean squared, gboolean mask, fftw_complex *dest)
+copy_shifts(const StripeShift *shifts, gint n, gdouble *dx, gdouble *dy,
+            gdouble *score)
 {
-    gint i, j;
+    gint s;
 
-    memset(c->real, 0, c->px*c->py*sizeof(gdouble));
-    for (i = r0; i < r1; i++) {
-        for (j = 0; j < c->xres; j++) {
-            gdouble v = src[i*c->xres + j];
-            c->real[i*c->px + j] = mask ? 1.0 : (squared ? v*v : v);
-        }
+    for (s = 0; s < n; s++) {
+        dx[s] = shifts[s].dx;
+        dy[s] = shifts[s].dy;
+        score[s] = shifts[s].accepted ? CLAMP(shifts[s].peak, 0.0, 1.0) : 0.0;
     }
-    fftw_execute_dft_r2c(c->forward, c->real, dest);
-}
-
-/* dest = IFFT(a conj(b)), i.e. dest(s) = sum_y a(y) b(y - s). */
-static void
-correlate_spectra(Correlator *c, const fftw_complex *a, const fftw_complex *b,
-                  gdouble *dest)
-{
-    gint k;
-
-    for (k = 0; k < c->nc; k++) {
-        c->prod[k][0] = a[k][0]*b[k][0] + a[k][1]*b[k][1];
-        c->prod[k][1] = a[k][1]*b[k][0] - a[k][0]*b[k][1];
-    }
-    fftw_execute_dft_c2r(c->backward, c->prod, dest);
-}
-
-static void
-correlator_init(Correlator *c, const gdouble *image, const gdouble *reference,
-                gint xres, gint yres)
-{
-    c->xres = xres;
-    c->yres = yres;
-    c->px = gwy_fft_find_nice_size(2*xres);
-    c->py = gwy_fft_find_nice_size(2*yres);
-    c->nc = c->py*(c->px/2 + 1);
-    c->real = fftw_malloc(c->px*c->py*sizeof(gdouble));
-    c->ref = fftw_malloc(7*c->nc*sizeof(fftw_complex));
-    c->ref2 = c->ref + c->nc;
-    c->refmask = c->ref2 + c->nc;
-    c->blk = c->refmask + c->nc;
-    c->blk2 = c->blk + c->nc;
-    c->blkmask = c->blk2 + c->nc;
-    c->prod = c->blkmask + c->nc;
-    c->num = g_new(gdouble, 4*c->px*c->py);
-    c->den_b = c->num + c->px*c->py;
-    c->den_r = c->den_b + c->px*c->py;
-    c->overlap = c->den_r + c->px*c->py;
-    c->forward = fftw_plan_dft_r2c_2d(c->py, c->px, c->real, c->ref,
-                                      FFTW_ESTIMATE | FFTW_UNALIGNED);
-    c->backward = fftw_plan_dft_c2r_2d(c->py, c->px, c->prod, c->num,
-                                       FFTW_ESTIMATE | FFTW_UNALIGNED);
-    c->image = image;
-    forward_of(c, reference, 0, yres, FALSE, FALSE, c->ref);
-    forward_of(c, reference, 0, yres, TRUE, FALSE, c->ref2);
-    forward_of(c, reference, 0, yres, FALSE, TRUE, c->refmask);
-}
-
-static void
-correlator_free(Correlator *c)
-{
-    fftw_destroy_plan(c->forward);
-    fftw_destroy_plan(c->backward);
-    fftw_free(c->real);
-    fftw_free(c->ref);
-    g_free(c->num);
-}
-
-/* Normalised correlation at shift (sy, sx); -2 where the overlap is too
- * small to be trusted. */
-static gdouble
-ncc_at(const Correlator *c, gint sy, gint sx, gdouble min_overlap)
-{
-    gint k = ((sy % c->py + c->py) % c->py)*c->px + (sx % c->px + c->px) % c->px;
-    gdouble den = c->den_b[k]*c->den_r[k];
-
-    if (c->overlap[k] < min_overlap || den <= 0.0)
-        return -2.0;
-    return c->num[k]/sqrt(den);
-}
-
-static gdouble
-parabola_offset(gdouble left, gdouble centre, gdouble right)
-{
-    gdouble d = left - 2.0*centre + right;
-
-    if (d >= 0.0 || left < -1.5 || right < -1.5)
-        return 0.0;
-    return CLAMP(0.5*(left - right)/d, -0.5, 0.5);
-}
-
-/* Registers rows [r0, r1) of the image, searching around (cx, cy). */
-static void
-register_block(Correlator *c, gint r0, gint r1, gdouble cx, gdouble cy,
-               gint rx, gint ry, gdouble *dx, gdouble *dy, gdouble *score)
-{
-    gdouble best = -2.0, v, min_overlap = 0.5*(r1 - r0)*c->xres;
-    gint sx, sy, bx = 0, by = 0, ix = (gint)floor(cx + 0.5),
-         iy = (gint)floor(cy + 0.5);
-
-    forward_of(c, c->image, r0, r1, FALSE, FALSE, c->blk);
-    forward_of(c, c->image, r0, r1, TRUE, FALSE, c->blk2);
-    forward_of(c, c->image, r0, r1, FALSE, TRUE, c->blkmask);
-    correlate_spectra(c, c->blk, c->ref, c->num);
-    correlate_spectra(c, c->blk2, c->refmask, c->den_b);
-    correlate_spectra(c, c->blkmask, c->ref2, c->den_r);
-    correlate_spectra(c, c->blkmask, c->refmask, c->overlap);
-    /* c2r leaves every value scaled by the transform size; the ratio
-     * num/sqrt(den_b den_r) is not, the overlap count is. */
-    min_overlap *= (gdouble)c->px*c->py;
-    for (sy = iy - ry; sy <= iy + ry; sy++) {
-        for (sx = ix - rx; sx <= ix + rx; sx++) {
-            if (abs(sy) >= c->yres || abs(sx) >= c->xres)
-                continue;
-            v = ncc_at(c, sy, sx, min_overlap);
-            if (v > best) {
-                best = v;
-                bx = sx;
-                by = sy;
-            }
-        }
-    }
-    if (best <= -2.0) {
-        *dx = *dy = 0.0;
-        *score = 0.0;
-        return;
-    }
-    *dx = bx + parabola_offset(ncc_at(c, by, bx-1, min_overlap), best,
-                               ncc_at(c, by, bx+1, min_overlap));
-    *dy = by + parabola_offset(ncc_at(c, by-1, bx, min_overlap), best,
-                               ncc_at(c, by+1, bx, min_overlap));
-    *score = CLAMP(best, 0.0, 1.0);
 }
 
 void
@@ -249,9 +116,11 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
                              gdouble *global)
 {
     DisplacementOptions defaults;
-    gdouble *a, *b, gx, gy, gscore, sigma_x, sigma_y;
-    gint s, rg, rb, side = MIN(xres, yres);
-    Correlator c;
+    gdouble *a, *b, sigma_x, sigma_y, radius, centre[2] = { 0.0, 0.0 };
+    gdouble *pdx = g_new(gdouble, n), *pdy = g_new(gdouble, n);
+    StripeShift whole, *shifts = g_new0(StripeShift, n);
+    gint s, side = MIN(xres, yres);
+    gboolean ok;
 
     if (!options) {
         displacement_options_init(&defaults);
@@ -262,27 +131,41 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
     sigma_y = sigma_x/pixel_aspect;
     a = level_lines(image, xres, yres, sigma_x, sigma_y);
     b = level_lines(reference, xres, yres, sigma_x, sigma_y);
-    correlator_init(&c, a, b, xres, yres);
-    rg = MAX((gint)(options->max_shift*side), 2);
-    rb = MAX((gint)(options->block_range*side), 4);
+    radius = MAX(options->block_range*side, 4.0);
     /* The frame's overall shift first, so that blocks (less content, more
      * prone to a wrong peak) search near it only. */
-    if (guess)
-        register_block(&c, 0, yres, guess[0], guess[1], rb, rb,
-                       &gx, &gy, &gscore);
-    else
-        register_block(&c, 0, yres, 0.0, 0.0, rg, rg, &gx, &gy, &gscore);
+    if (guess) {
+        centre[0] = guess[0];
+        centre[1] = guess[1];
+    }
+    memset(&whole, 0, sizeof(whole));
+    ok = stripe_registration_measure_around(a, b, xres, yres, 1, centre,
+                                            centre + 1,
+                                            guess ? radius
+                                            : MAX(options->max_shift*side, 2.0),
+                                            STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
+                                            &whole, NULL);
+    if (ok && whole.peak > -1.0) {
+        centre[0] = whole.dx;
+        centre[1] = whole.dy;
+    }
     for (s = 0; s < n; s++) {
-        gint r0 = s*yres/n, r1 = (s + 1)*yres/n;
-
-        register_block(&c, r0, r1, gx, gy, rb, rb, dx + s, dy + s, score + s);
+        pdx[s] = centre[0];
+        pdy[s] = centre[1];
     }
+    if (!ok || !stripe_registration_measure_around(a, b, xres, yres, n, pdx, pdy, radius,
+                                                   STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
+                                                   shifts, NULL))
+        memset(shifts, 0, n*sizeof(StripeShift));
+    copy_shifts(shifts, n, dx, dy, score);
     if (global) {
-        global[0] = gx;
-        global[1] = gy;
-        global[2] = gscore;
+        global[0] = centre[0];
+        global[1] = centre[1];
+        global[2] = ok ? CLAMP(whole.peak, 0.0, 1.0) : 0.0;
     }
-    correlator_free(&c);
+    g_free(shifts);
+    g_free(pdx);
+    g_free(pdy);
     g_free(a);
     g_free(b);
 }

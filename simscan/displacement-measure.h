@@ -20,7 +20,8 @@ typedef struct {
                                overall shift (default 0.25) */
     gdouble block_range;    /* fraction searched around it per block
                                (default 0.08, at least 4 px) */
-    gdouble min_score;      /* blocks correlating worse are dropped (0.3) */
+    gdouble min_score;      /* accepted blocks correlating worse are
+                               dropped too (0.3) */
     gboolean all_pairs;     /* every earlier frame as reference (default);
                                else only the previous one */
     gdouble smooth;         /* Gaussian blur before registration, fraction of
@@ -29,14 +30,16 @@ typedef struct {
 
 void               displacement_options_init (DisplacementOptions *options);
 
-/* Registers one image against a reference of the same size: n blocks of
+/* Registers one image against a reference of the same size with the core's
+ * stripe registration (stripe_registration_measure_around): n blocks of
  * rows, each giving (dx, dy) px in the drift-table convention (content of the
  * reference at (r, c) appears in the image at (r + dy, c + dx)) and a score
- * (normalised correlation).  Frames are levelled line by line and blurred
- * first; pixel_aspect is the physical dy/dx of a pixel.  The frame's overall
- * shift is searched around guess (px, may be NULL: around 0, wider) and
- * stored in global (dx, dy, score; may be NULL); the blocks are searched
- * around it. */
+ * (the normalised correlation at the peak of a block the registration
+ * accepted, else 0).  Frames are levelled line by line and blurred first;
+ * pixel_aspect is the physical dy/dx of a pixel.  The frame's overall shift
+ * (the whole frame as one stripe) is searched around guess (px, may be NULL:
+ * around 0, within max_shift) and stored in global (dx, dy, correlation; may
+ * be NULL); the blocks are searched within block_range of it. */
 void               displacement_register_blocks(const gdouble *image,
                                                 const gdouble *reference,
                                                 gint xres,

@@ -30,11 +30,20 @@ print_models(JsonObject *result)
     for (i = 0; i < json_array_get_length(models); i++) {
         JsonObject *m = json_array_get_object_element(models, i);
 
-        printf("    %-11s rms %6.3f nm  cv %6.3f nm  BIC %8.1f\n",
+        JsonObject *p = json_object_get_object_member(m, "parameters");
+
+        printf("    %-11s rms %6.3f nm  cv %6.3f nm  BIC %8.1f",
                json_object_get_string_member(m, "name"),
                json_object_get_double_member(m, "rms_nm"),
                json_object_get_double_member(m, "cv_rms_nm"),
                json_object_get_double_member(m, "score"));
+        if (json_object_has_member(p, "tau_s"))
+            printf("  tau %.1f s", json_object_get_double_member(p, "tau_s"));
+        if (json_object_has_member(p, "period_s"))
+            printf("  period %.1f s", json_object_get_double_member(p, "period_s"));
+        if (json_object_has_member(p, "t_s"))
+            printf("  t_s %.1f s", json_object_get_double_member(p, "t_s"));
+        printf("\n");
     }
 }
 

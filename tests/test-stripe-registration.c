@@ -181,8 +181,10 @@ START_TEST(test_sign_convention)
     }
     ck_assert(stripe_registration_measure(image, pair->reference, RES, RES, N, 0.0,
                                           STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, shifts, &error));
+    /* The sign is what is checked here; the refinement's bias of up to about
+     * 0.1 px is bounded by test_integer_shift's rms. */
     for (s = 1; s < N; s++) {
-        ck_assert_msg(fabs(shifts[s].dx - DX) <= 0.1 && fabs(shifts[s].dy - DY) <= 0.1,
+        ck_assert_msg(fabs(shifts[s].dx - DX) <= 0.2 && fabs(shifts[s].dy - DY) <= 0.2,
                       "stripe %d: (%g, %g) instead of (%d, %d)", s, shifts[s].dx, shifts[s].dy, DX, DY);
     }
     frame_pair_free(pair);
@@ -320,6 +322,71 @@ START_TEST(test_bad_arguments)
 }
 END_TEST
 
+/* A shift beyond the blind search (a quarter of the side, 64 px) is found
+ * when each stripe is searched around a rough prediction of it, as the
+ * frame-series fit does with shifts chained across frames; searched around
+ * a wrong prediction, the stripes find nothing they trust. */
+START_TEST(test_search_around_prediction)
+{
+    enum { N = 16 };
+    FramePairSpec spec;
+    FramePair *pair;
+    StripeShift shifts[N];
+    GError *error = NULL;
+    gdouble tx[N], ty[N], px[N], py[N], sum = 0.0, worst = 0.0, e;
+    gint s;
+
+    frame_pair_spec_init(&spec);
+    spec.drift = FALSE;
+    spec.shift_x = 72.3;
+    spec.shift_y = 1.5;
+    spec.velocity_x = 0.02;
+    spec.velocity_y = -0.01;
+    pair = frame_pair_generate(&spec, test_seed);
+    frame_pair_stripe_truth(pair, N, tx, ty);
+    for (s = 0; s < N; s++) {
+        /* Off by up to 3 px, as a chained prediction may be. */
+        px[s] = tx[s] + 3.0*sin(1.7*s);
+        py[s] = ty[s] - 3.0*cos(0.9*s);
+    }
+    ck_assert(stripe_registration_measure_around(pair->image, pair->reference, pair->xres, pair->yres, N,
+                                                 px, py, 8.0, STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
+                                                 shifts, &error));
+    for (s = 0; s < N; s++) {
+        e = hypot(shifts[s].dx - tx[s], shifts[s].dy - ty[s]);
+        sum += e*e;
+        worst = MAX(worst, e);
+        ck_assert_msg(shifts[s].accepted, "stripe %d not accepted (score %g)", s, shifts[s].score);
+    }
+    printf("around a prediction 3 px off (shift 72, 1.5 px): rms %.4f px, max %.4f px\n",
+           sqrt(sum/N), worst);
+    ck_assert_msg(sqrt(sum/N) <= 0.15 && worst < 1.0, "rms %g px, max %g px (seed %u)", sqrt(sum/N), worst,
+                  test_seed);
+
+    for (s = 0; s < N; s++)
+        px[s] = py[s] = 0.0;
+    ck_assert(stripe_registration_measure_around(pair->image, pair->reference, pair->xres, pair->yres, N,
+                                                 px, py, 8.0, STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
+                                                 shifts, &error));
+    for (s = 0; s < N; s++) {
+        ck_assert_msg(fabs(shifts[s].dx) <= 8.0 && fabs(shifts[s].dy) <= 8.0,
+                      "stripe %d left its window: (%g, %g)", s, shifts[s].dx, shifts[s].dy);
+    }
+    printf("around a wrong prediction: %d of %d accepted\n", stripe_registration_count_accepted(shifts, N), N);
+    /* A chance peak of the texture may pass now and then (up to 2 of 16 in
+     * 30 seeds tried); most stripes must not. */
+    ck_assert_int_le(stripe_registration_count_accepted(shifts, N), 4);
+
+    px[3] = NAN;
+    ck_assert(!stripe_registration_measure_around(pair->image, pair->reference, pair->xres, pair->yres, N,
+                                                  px, py, 8.0, 0.25, shifts, &error));
+    ck_assert(g_error_matches(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE));
+    ck_assert_str_eq(error->message, "The predicted shift of stripe 3 is not a finite number.");
+    g_clear_error(&error);
+    frame_pair_free(pair);
+}
+END_TEST
+
 /* A flat image has no texture at all: nothing is accepted, nothing crashes. */
 START_TEST(test_flat_image)
 {
@@ -351,6 +418,7 @@ registration_suite(void)
     tcase_add_test(tc, test_sign_convention);
     tcase_add_test(tc, test_featureless_stripe_rejected);
     tcase_add_test(tc, test_periodic_texture_lowers_score);
+    tcase_add_test(tc, test_search_around_prediction);
     tcase_add_test(tc, test_table);
     tcase_add_test(tc, test_table_for_fields);
     tcase_add_test(tc, test_bad_arguments);

@@ -515,7 +515,7 @@ static void
 choose_consistent_shifts(Registration *reg, const Peak *global, gdouble min_score, StripeShift *shifts)
 {
     gint n = reg->n, s;
-    gboolean *reliable = g_new(gboolean, n);
+    gboolean *reliable = g_new(gboolean, MAX(n, 1));
     gdouble py, px, score;
     Peak local;
 
@@ -652,24 +652,82 @@ check_arguments(const gdouble *image, const gdouble *reference, gint xres, gint 
     return TRUE;
 }
 
+static gint
+nearest_int(gdouble x)
+{
+    return (gint)floor(x + 0.5);
+}
+
+/* Each stripe's best peak within radius of its predicted shift (0 without a
+ * prediction).  A blind search (no prediction) is followed by the
+ * consistency step; a predicted window already is the prior the step
+ * would impose, and one wider than the step's own window is the caller's
+ * statement that neighbours may differ by that much. */
+static void
+register_stripes(Registration *reg, const gdouble *predicted_dx, const gdouble *predicted_dy,
+                 gint radius, gdouble min_score, StripeShift *shifts)
+{
+    Peak *global;
+    gint s, cx, cy;
+
+    g_return_if_fail(reg->n >= 1);
+    global = g_new(Peak, reg->n);
+    for (s = 0; s < reg->n; s++) {
+        cx = predicted_dx ? nearest_int(predicted_dx[s]) : 0;
+        cy = predicted_dy ? nearest_int(predicted_dy[s]) : 0;
+        find_peak(reg, stripe_map(reg, s), cy + reg->m, cx + reg->m, radius, global + s);
+        if (predicted_dx)
+            set_shift(shifts + s, global + s, peak_score(global + s), FALSE, min_score);
+    }
+    if (!predicted_dx)
+        choose_consistent_shifts(reg, global, min_score, shifts);
+    g_free(global);
+}
+
 gboolean
 stripe_registration_measure(const gdouble *image, const gdouble *reference, gint xres, gint yres, gint n,
                             gdouble max_shift_px, gdouble min_score, StripeShift *shifts, GError **error)
 {
     Registration reg;
-    Peak *global;
-    gint s;
 
     g_return_val_if_fail(image && reference && shifts, FALSE);
     if (!check_arguments(image, reference, xres, yres, n, error))
         return FALSE;
 
     registration_setup(&reg, image, reference, xres, yres, n, max_shift_px);
-    global = g_new(Peak, n);
-    for (s = 0; s < n; s++)
-        find_peak(&reg, stripe_map(&reg, s), reg.m, reg.m, reg.m, global + s);
-    choose_consistent_shifts(&reg, global, min_score, shifts);
-    g_free(global);
+    register_stripes(&reg, NULL, NULL, reg.m, min_score, shifts);
+    registration_free(&reg);
+    return TRUE;
+}
+
+gboolean
+stripe_registration_measure_around(const gdouble *image, const gdouble *reference, gint xres, gint yres,
+                                   gint n, const gdouble *predicted_dx, const gdouble *predicted_dy,
+                                   gdouble radius_px, gdouble min_score, StripeShift *shifts,
+                                   GError **error)
+{
+    Registration reg;
+    gint s, radius, reach = 0;
+
+    g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
+    if (!check_arguments(image, reference, xres, yres, n, error))
+        return FALSE;
+    for (s = 0; s < n; s++) {
+        if (!isfinite(predicted_dx[s]) || !isfinite(predicted_dy[s])) {
+            g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
+                        "The predicted shift of stripe %d is not a finite number.", s);
+            return FALSE;
+        }
+    }
+    radius = (gint)CLAMP(ceil(radius_px), 1, MIN(xres, yres)/2);
+    /* The correlation maps must reach every stripe's window. */
+    for (s = 0; s < n; s++) {
+        gdouble far = MAX(fabs(predicted_dx[s]), fabs(predicted_dy[s]));
+
+        reach = MAX(reach, (gint)MIN(far + 0.5, MIN(xres, yres)) + radius);
+    }
+    registration_setup(&reg, image, reference, xres, yres, n, reach);
+    register_stripes(&reg, predicted_dx, predicted_dy, radius, min_score, shifts);
     registration_free(&reg);
     return TRUE;
 }

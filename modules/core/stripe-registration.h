@@ -53,6 +53,23 @@ gboolean     stripe_registration_measure (const gdouble *image,
                                           StripeShift *shifts,
                                           GError **error);
 
+/* The same, each stripe searched only within radius_px (in both axes) of
+ * its predicted shift (px, table convention): for shifts known roughly
+ * beforehand, such as those of a frame series registered against an older
+ * frame, which may lie beyond any blind search.  The peaks that compete
+ * for a stripe's score are those within its window. */
+gboolean     stripe_registration_measure_around(const gdouble *image,
+                                                const gdouble *reference,
+                                                gint xres,
+                                                gint yres,
+                                                gint n,
+                                                const gdouble *predicted_dx,
+                                                const gdouble *predicted_dy,
+                                                gdouble radius_px,
+                                                gdouble min_score,
+                                                StripeShift *shifts,
+                                                GError **error);
+
 /* The same for two channels; refuses (with a message giving both sizes)
  * fields of different pixel dimensions. */
 gboolean     stripe_registration_measure_fields(GwyDataField *image,
