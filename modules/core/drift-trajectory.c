@@ -38,18 +38,49 @@
  * values are fitted by penalised least squares, the penalty being the
  * squared third divided differences (whose null space, quadratics, keeps
  * constant velocity and constant acceleration unbiased, also at the frame
- * ends), with the weight chosen per axis by generalised cross-validation:
- * noise-free smooth measurements keep their values (within 1e-3 px on the
- * settling test; on very few knots an exact cubic may lose a few per cent
- * of its range), noisy ones are averaged over as many stripes as their
- * scatter asks for.  A gross outlier (a local scan that found a
- * neighbouring particle) is not rejected: it is spread over its
- * neighbours, as the interpolating spline spreads it too.
+ * ends).  Between close knots the divided differences are large, so the
+ * penalty itself averages them instead of letting them set the slope.
+ *
+ * Why robustly, and how the penalty weight is chosen: a local scan that
+ * found a neighbouring particle is off by several pixels, and a
+ * least-squares fit spreads that over the neighbouring stripes (and into
+ * the end slope, hence the local-scan velocity).  So the fit is iteratively
+ * reweighted (Huber's weights, then Tukey's biweight on the residuals
+ * standardised by their leverage, scale from the median absolute residual
+ * but never below the 0.1 px a displayed centre is found to), and one or
+ * two gross errors get weight 0.  The penalty weight is chosen per axis
+ * together with the robust weights: generalised cross-validation on 16
+ * noisy knots often picks a fit that follows the noise (its score degenerates
+ * where the trace nears the number of knots), whose end slope is then off
+ * by 0.05-0.1 px/s and moves the last half stripe by a pixel.  Instead the
+ * noise variance is estimated by robust leave-one-out cross-validation and
+ * the weight minimises a robust Mallows' C_p that prices each degree of
+ * freedom at 1.4 times its expected cost.  Exact data have zero estimated
+ * noise and keep their values (constant velocity exactly, settling within
+ * 0.01 px); noisy data are smoothed as far as their scatter asks for.  In a
+ * fit's loss a rejected measurement costs a fixed amount, so rejecting
+ * good data never pays.  A genuine sudden change at the first or last
+ * stripe cannot be told from a gross error there and is treated as one.
  */
 
 /* The local scans advance nearly as fast as the stripes are imaged: their
  * drift then cancels from the measurements and cannot be estimated. */
 #define LOCAL_VELOCITY_MIN_DENOMINATOR 0.1
+
+/* The smallest scale of the robust weights, px: a local scan's displayed
+ * centre is found to about 0.1 px, so a residual of a few tenths of a
+ * pixel never marks a measurement as wrong, however well the others
+ * agree (exact measurements keep weight 1). */
+#define ROBUST_SCALE_MIN 0.1
+/* Median absolute deviation to standard deviation, Gaussian noise. */
+#define MAD_TO_SIGMA 1.4826
+/* Huber's and Tukey's constants: 95 % efficiency on Gaussian noise. */
+#define HUBER_K 1.345
+#define TUKEY_C 4.685
+#define ROBUST_CONVERGED 1e-6
+/* Price of a degree of freedom relative to its expected cost (C_p's 1):
+ * Kim and Gu's 1.4 keeps few noisy knots from being followed. */
+#define COMPLEXITY_PRICE 1.4
 
 enum {
     /* Third differences: quadratics go unpenalised. */
@@ -60,22 +91,32 @@ enum {
     SMOOTHING_LOG_MIN = -6,
     SMOOTHING_LOG_MAX = 10,
     SMOOTHING_STEPS_PER_DECADE = 4,
+    /* Convex Huber steps first, so that Tukey's weights start near the
+     * robust solution. */
+    ROBUST_HUBER_ITERATIONS = 3,
+    ROBUST_MAX_ITERATIONS = 30,
 };
 
 /* Penalised least squares over the knot values: minimise
  * sum_i w_i (y_i - f_i)^2 + lambda |D f|^2, D the scaled third divided
- * differences.  W + lambda D'D is a symmetric band matrix of half-width
+ * differences, w_i the measurements per knot times the knot's robustness
+ * weight.  W + lambda D'D is a symmetric band matrix of half-width
  * PENALTY_ORDER, factored as L diag L'. */
 typedef gdouble PenaltyBandRow[PENALTY_ORDER + 1];
 
 typedef struct {
     gint n;
-    const gdouble *w;
+    const gdouble *count;      /* measurements per knot */
+    gdouble *robust;           /* robustness weight of each knot, 0 .. 1 */
+    gdouble *w;                /* count times robust */
     PenaltyBandRow *coeff;     /* D, row r at columns r .. r+PENALTY_ORDER */
     PenaltyBandRow *band;      /* D'D: band[i][k] = (D'D)_{i,i+k} */
     PenaltyBandRow *lower;     /* L: lower[i][k] = L_{i,i-k} */
     gdouble *pivot;            /* diag */
     PenaltyBandRow *inverse;   /* M^-1 within the band */
+    gdouble *leverage;         /* diagonal of the influence matrix */
+    gdouble *student;          /* standardised residuals */
+    gdouble change;            /* largest change of a robustness weight */
     gdouble *fit;
 } Smoother;
 
@@ -87,6 +128,9 @@ struct _DriftTrajectory {
     gdouble t_ref;
     gdouble v_local[2];
     gboolean is_zero;
+    gint n_meas;
+    gdouble *meas_weight;  /* robustness weight per measurement, given order */
+    gint *meas_stripe;     /* stripe per measurement (from a table), or NULL */
 };
 
 GQuark
@@ -246,19 +290,24 @@ spline_eval(const DriftTrajectory *trajectory, gint axis, gdouble t,
 /* D: third divided differences scaled by 6 h^3 (h the mean knot spacing),
  * so that on evenly spaced knots a row is (-1, 3, -3, 1). */
 static void
-smoother_init(Smoother *smoother, gint n, const gdouble *t, const gdouble *w)
+smoother_init(Smoother *smoother, gint n, const gdouble *t,
+              const gdouble *count)
 {
     gint r, j, k, i;
     gdouble h = (t[n-1] - t[0])/(n - 1), scale = 1.0, prod;
 
     smoother->n = n;
-    smoother->w = w;
+    smoother->count = count;
     smoother->coeff = g_new0(PenaltyBandRow, n - PENALTY_ORDER);
     smoother->band = g_new0(PenaltyBandRow, n);
     smoother->lower = g_new0(PenaltyBandRow, n);
     smoother->inverse = g_new0(PenaltyBandRow, n);
-    smoother->pivot = g_new(gdouble, 2*n);
+    smoother->pivot = g_new(gdouble, 6*n);
     smoother->fit = smoother->pivot + n;
+    smoother->robust = smoother->fit + n;
+    smoother->w = smoother->robust + n;
+    smoother->leverage = smoother->w + n;
+    smoother->student = smoother->leverage + n;
     for (k = 1; k <= PENALTY_ORDER; k++)
         scale *= k*h;
     for (r = 0; r < n - PENALTY_ORDER; r++) {
@@ -330,10 +379,11 @@ smoother_solve(Smoother *smoother, const gdouble *y)
     }
 }
 
-/* Trace of the influence matrix (W + lambda D'D)^-1 W: the band of the
- * inverse from the factors, backwards (Takahashi's recurrence), O(n). */
+/* Leverages (the diagonal of the influence matrix (W + lambda D'D)^-1 W)
+ * and their sum: the band of the inverse from the factors, backwards
+ * (Takahashi's recurrence), O(n). */
 static gdouble
-smoother_trace(Smoother *smoother)
+smoother_leverages(Smoother *smoother)
 {
     PenaltyBandRow *lower = smoother->lower;
     PenaltyBandRow *inv = smoother->inverse;
@@ -352,55 +402,225 @@ smoother_trace(Smoother *smoother)
         for (k = i + 1; k <= last; k++)
             sum -= lower[k][k-i]*inv[i][k-i];
         inv[i][0] = sum;
-        trace += smoother->w[i]*sum;
+        smoother->leverage[i] = smoother->w[i]*sum;
+        trace += smoother->leverage[i];
     }
     return trace;
 }
 
-/* Sets smoother->fit to the penalised least-squares fit of y with the
- * weight that minimises the generalised cross-validation score
- * n RSS/(n - trace)^2.  Constant values are fitted exactly. */
+static gint
+compare_doubles(gconstpointer pa, gconstpointer pb)
+{
+    const gdouble *a = pa, *b = pb;
+
+    if (*a < *b)
+        return -1;
+    return *a > *b;
+}
+
+/* Standardises the residuals of the current fit to the noise of one
+ * measurement (a residual's variance is sigma^2 (1 - leverage)/count) into
+ * smoother->student and returns their robust scale: the median absolute
+ * standardised residual as a standard deviation, but never below
+ * ROBUST_SCALE_MIN. */
+static gdouble
+smoother_standardise(Smoother *smoother, const gdouble *y)
+{
+    gint n = smoother->n, i;
+    gdouble *u = smoother->student, *sorted, scale;
+
+    for (i = 0; i < n; i++) {
+        u[i] = fabs(y[i] - smoother->fit[i])*sqrt(smoother->count[i]
+                                                  /fmax(1.0 - smoother->leverage[i],
+                                                        1e-12));
+    }
+    sorted = g_memdup2(u, n*sizeof(gdouble));
+    qsort(sorted, n, sizeof(gdouble), compare_doubles);
+    scale = MAD_TO_SIGMA*(n % 2 ? sorted[n/2]
+                          : 0.5*(sorted[n/2 - 1] + sorted[n/2]));
+    g_free(sorted);
+    return fmax(scale, ROBUST_SCALE_MIN);
+}
+
+/* New robustness weights from the standardised residuals of the current
+ * fit: Huber's while !redescending, then Tukey's biweight, which gives a
+ * gross error weight 0.  Returns the scale; smoother->change becomes the
+ * largest change of a weight. */
+static gdouble
+smoother_reweight(Smoother *smoother, const gdouble *y, gboolean redescending)
+{
+    gint n = smoother->n, i;
+    gdouble scale = smoother_standardise(smoother, y), a, weight;
+
+    smoother->change = 0.0;
+    for (i = 0; i < n; i++) {
+        a = smoother->student[i]/scale;
+        if (redescending)
+            weight = (a < TUKEY_C ? (1.0 - a*a/(TUKEY_C*TUKEY_C))
+                                    *(1.0 - a*a/(TUKEY_C*TUKEY_C)) : 0.0);
+        else
+            weight = (a <= HUBER_K ? 1.0 : HUBER_K/a);
+        smoother->change = fmax(smoother->change,
+                                fabs(weight - smoother->robust[i]));
+        smoother->robust[i] = weight;
+        smoother->w[i] = smoother->count[i]*weight;
+    }
+    return scale;
+}
+
+/* The fit for one penalty weight. */
+static gdouble
+smoother_fit_weighted(Smoother *smoother, const gdouble *y, gdouble lambda)
+{
+    smoother_factor(smoother, lambda);
+    smoother_solve(smoother, y);
+    return smoother_leverages(smoother);
+}
+
+/* Tukey's loss, scaled to u^2 for small u: a gross error costs c^2/3
+ * however far off it is. */
+static gdouble
+tukey_loss(gdouble u)
+{
+    gdouble v = fmin(u*u/(TUKEY_C*TUKEY_C), 1.0);
+
+    return TUKEY_C*TUKEY_C/3.0*(1.0 - (1.0 - v)*(1.0 - v)*(1.0 - v));
+}
+
+/* The robust fit for one penalty weight: iteratively reweighted least
+ * squares from equal weights.  Returns the trace of the influence matrix;
+ * *loss becomes the sum of scale^2 tukey_loss(e_i/scale) over every
+ * measurement, e_i its residual (a measurement given weight 0 still costs
+ * c^2/3 scale^2, so rejecting good data never pays, and a gross error costs
+ * the same at every penalty weight that rejects it).  With scale <= 0 the
+ * loss uses the robust scale of the fit itself. */
+static gdouble
+smoother_fit_robust(Smoother *smoother, const gdouble *y, gdouble lambda,
+                    gdouble scale, gdouble *loss)
+{
+    gint n = smoother->n, i, iter;
+    gdouble trace, e;
+
+    for (i = 0; i < n; i++) {
+        smoother->robust[i] = 1.0;
+        smoother->w[i] = smoother->count[i];
+    }
+    for (iter = 0; iter < ROBUST_MAX_ITERATIONS; iter++) {
+        smoother_fit_weighted(smoother, y, lambda);
+        smoother_reweight(smoother, y, iter >= ROBUST_HUBER_ITERATIONS);
+        if (smoother->change < ROBUST_CONVERGED
+            && iter >= ROBUST_HUBER_ITERATIONS)
+            break;
+    }
+    trace = smoother_fit_weighted(smoother, y, lambda);
+    if (scale <= 0.0)
+        scale = smoother_standardise(smoother, y);
+    *loss = 0.0;
+    for (i = 0; i < n; i++) {
+        e = (y[i] - smoother->fit[i])*sqrt(smoother->count[i]);
+        *loss += scale*scale*tukey_loss(e/scale);
+    }
+    return trace;
+}
+
+static gdouble
+penalty_weight(gint step)
+{
+    return pow(10.0, step/(gdouble)SMOOTHING_STEPS_PER_DECADE);
+}
+
+/* Robust leave-one-out cross-validation: the sum of
+ * scale^2 tukey_loss(e_i/scale) over every measurement, e_i its residual
+ * against the fit to all others (r_i/(1 - leverage_i) for a linear
+ * smoother), scale the fit's robust scale. */
+static gdouble
+smoother_cross_validation(Smoother *smoother, const gdouble *y)
+{
+    gint n = smoother->n, i;
+    gdouble scale = smoother_standardise(smoother, y), e, loss = 0.0;
+
+    for (i = 0; i < n; i++) {
+        e = ((y[i] - smoother->fit[i])*sqrt(smoother->count[i])
+             /fmax(1.0 - smoother->leverage[i], 1e-12));
+        loss += scale*scale*tukey_loss(e/scale);
+    }
+    return loss;
+}
+
+/* The noise variance of one measurement: the robust loss per residual
+ * degree of freedom at the penalty weight preferred by robust
+ * leave-one-out cross-validation (which, unlike generalised
+ * cross-validation, sees that a near-interpolating fit of noisy knots
+ * predicts each knot badly from the others).  Fits leaving less than one
+ * degree of freedom to the residuals do not estimate noise. */
+static gdouble
+smoother_noise_variance(Smoother *smoother, const gdouble *y)
+{
+    gint n = smoother->n, i, step;
+    gdouble total = 0.0, best_score = G_MAXDOUBLE, variance = 0.0;
+    gdouble trace, loss, score;
+
+    for (i = 0; i < n; i++)
+        total += smoother->count[i];
+    for (step = SMOOTHING_LOG_MIN*SMOOTHING_STEPS_PER_DECADE;
+         step <= SMOOTHING_LOG_MAX*SMOOTHING_STEPS_PER_DECADE; step++) {
+        trace = smoother_fit_robust(smoother, y, penalty_weight(step), 0.0,
+                                    &loss);
+        score = smoother_cross_validation(smoother, y);
+        if (score < best_score && total - trace >= 1.0) {
+            best_score = score;
+            variance = loss/(total - trace);
+        }
+    }
+    return variance;
+}
+
+/* Sets smoother->fit to the robust penalised least-squares fit of y whose
+ * penalty weight minimises loss + 2 COMPLEXITY_PRICE sigma^2 trace
+ * (Mallows' C_p with each degree of freedom priced above its expected
+ * cost), sigma^2 the noise variance from robust cross-validation.  Exact
+ * data have sigma = 0 and keep their values; noisy data are not followed
+ * into the near-interpolating fits where cross-validation alone is
+ * erratic on a few knots.  Robustness and smoothing are chosen together:
+ * a fit that follows a gross error also follows the noise and costs
+ * degrees of freedom, a smoother one rejects the error at a fixed price.
+ * Constant values are fitted exactly. */
 static void
 smoother_fit(Smoother *smoother, const gdouble *y)
 {
-    gint n = smoother->n, i, step;
-    gdouble best_score = G_MAXDOUBLE, best_lambda = 0.0, lambda, rss;
-    gdouble wsum = 0.0, trace, score, e;
+    gint n = smoother->n, i, step, best_step = 0;
+    gdouble best_score = G_MAXDOUBLE, variance, scale, trace, loss, score;
     gboolean constant = TRUE;
 
     for (i = 1; i < n; i++)
         constant = constant && (y[i] == y[0]);
     if (constant) {
         memcpy(smoother->fit, y, n*sizeof(gdouble));
+        for (i = 0; i < n; i++)
+            smoother->robust[i] = 1.0;
         return;
     }
-    for (i = 0; i < n; i++)
-        wsum += smoother->w[i];
+    variance = smoother_noise_variance(smoother, y);
+    scale = fmax(sqrt(variance), ROBUST_SCALE_MIN);
     for (step = SMOOTHING_LOG_MIN*SMOOTHING_STEPS_PER_DECADE;
          step <= SMOOTHING_LOG_MAX*SMOOTHING_STEPS_PER_DECADE; step++) {
-        lambda = pow(10.0, step/(gdouble)SMOOTHING_STEPS_PER_DECADE);
-        smoother_factor(smoother, lambda);
-        smoother_solve(smoother, y);
-        trace = smoother_trace(smoother);
-        rss = 0.0;
-        for (i = 0; i < n; i++) {
-            e = y[i] - smoother->fit[i];
-            rss += smoother->w[i]*e*e;
-        }
-        score = wsum*rss/((wsum - trace)*(wsum - trace));
+        trace = smoother_fit_robust(smoother, y, penalty_weight(step), scale,
+                                    &loss);
+        score = loss + 2.0*COMPLEXITY_PRICE*variance*trace;
         if (score < best_score) {
             best_score = score;
-            best_lambda = lambda;
+            best_step = step;
         }
     }
-    smoother_factor(smoother, best_lambda);
-    smoother_solve(smoother, y);
+    smoother_fit_robust(smoother, y, penalty_weight(best_step), scale, &loss);
 }
 
 static gint
-compare_by_image_time(gconstpointer pa, gconstpointer pb)
+compare_by_image_time(gconstpointer pa, gconstpointer pb, gpointer user_data)
 {
-    const DriftMeasurement *a = pa, *b = pb;
+    const DriftMeasurement *meas = user_data;
+    const DriftMeasurement *a = meas + *(const gint*)pa;
+    const DriftMeasurement *b = meas + *(const gint*)pb;
 
     if (a->t_image < b->t_image)
         return -1;
@@ -473,17 +693,24 @@ check_measurements(const DriftMeasurement *meas, gint n, GError **error)
     return TRUE;
 }
 
-/* Smooths the knot values of both axes (weights: measurements per knot). */
+/* Smooths the knot values of both axes (count: measurements per knot);
+ * robust becomes each knot's robustness weight, the smaller of the two
+ * axes'. */
 static void
-smooth_knots(DriftTrajectory *trajectory, const gdouble *weights)
+smooth_knots(DriftTrajectory *trajectory, const gdouble *count,
+             gdouble *robust)
 {
-    gint n = trajectory->n, axis;
+    gint n = trajectory->n, axis, j;
     Smoother smoother;
 
-    smoother_init(&smoother, n, trajectory->t, weights);
+    smoother_init(&smoother, n, trajectory->t, count);
+    for (j = 0; j < n; j++)
+        robust[j] = 1.0;
     for (axis = 0; axis < 2; axis++) {
         smoother_fit(&smoother, trajectory->value[axis]);
         memcpy(trajectory->value[axis], smoother.fit, n*sizeof(gdouble));
+        for (j = 0; j < n; j++)
+            robust[j] = fmin(robust[j], smoother.robust[j]);
     }
     smoother_clear(&smoother);
 }
@@ -493,47 +720,60 @@ trajectory_new(const DriftMeasurement *meas, gint n, gboolean smooth,
                GError **error)
 {
     DriftTrajectory *trajectory;
-    DriftMeasurement *sorted;
-    gdouble *tau, *weights;
+    gdouble *tau, *count, *robust;
     gdouble sum[3];
+    gint *order, *knot_of;
     gint i, k, j, axis;
 
     if (!check_measurements(meas, n, error))
         return NULL;
 
-    sorted = g_memdup2(meas, n*sizeof(DriftMeasurement));
-    qsort(sorted, n, sizeof(DriftMeasurement), compare_by_image_time);
+    order = g_new(gint, 2*n);
+    knot_of = order + n;
+    for (i = 0; i < n; i++)
+        order[i] = i;
+    g_qsort_with_data(order, n, sizeof(gint), compare_by_image_time,
+                      (gpointer)meas);
     trajectory = g_new0(DriftTrajectory, 1);
-    trajectory->t_ref = sorted[0].t_local;
+    trajectory->t_ref = meas[0].t_local;
     for (i = 1; i < n; i++)
-        trajectory->t_ref = MIN(trajectory->t_ref, sorted[i].t_local);
+        trajectory->t_ref = MIN(trajectory->t_ref, meas[i].t_local);
 
     trajectory->t = g_new(gdouble, 5*n);
     trajectory->value[0] = trajectory->t + n;
     trajectory->value[1] = trajectory->value[0] + n;
     trajectory->curv[0] = trajectory->value[1] + n;
     trajectory->curv[1] = trajectory->curv[0] + n;
-    tau = g_new(gdouble, 2*n);
-    weights = tau + n;
+    trajectory->n_meas = n;
+    trajectory->meas_weight = g_new(gdouble, n);
+    tau = g_new(gdouble, 3*n);
+    count = tau + n;
+    robust = count + n;
     /* Measurements at the same image time are averaged into one knot. */
     for (i = 0; i < n; i = k) {
+        const DriftMeasurement *first = meas + order[i];
+
         sum[0] = sum[1] = sum[2] = 0.0;
-        for (k = i; k < n && sorted[k].t_image == sorted[i].t_image; k++) {
-            sum[0] += sorted[k].dx;
-            sum[1] += sorted[k].dy;
-            sum[2] += sorted[k].t_local - trajectory->t_ref;
-        }
         j = trajectory->n++;
-        trajectory->t[j] = sorted[i].t_image;
+        for (k = i; k < n && meas[order[k]].t_image == first->t_image; k++) {
+            sum[0] += meas[order[k]].dx;
+            sum[1] += meas[order[k]].dy;
+            sum[2] += meas[order[k]].t_local - trajectory->t_ref;
+            knot_of[order[k]] = j;
+        }
+        trajectory->t[j] = first->t_image;
         trajectory->value[0][j] = sum[0]/(k - i);
         trajectory->value[1][j] = sum[1]/(k - i);
         tau[j] = sum[2]/(k - i);
-        weights[j] = k - i;
+        count[j] = k - i;
+        robust[j] = 1.0;
     }
-    g_free(sorted);
 
     if (smooth && trajectory->n >= SMOOTHING_MIN_KNOTS)
-        smooth_knots(trajectory, weights);
+        smooth_knots(trajectory, count, robust);
+    for (i = 0; i < n; i++)
+        trajectory->meas_weight[i] = robust[knot_of[i]];
+    g_free(order);
     estimate_local_velocity(trajectory, tau);
     trajectory->is_zero = TRUE;
     for (axis = 0; axis < 2; axis++) {
@@ -658,7 +898,7 @@ drift_trajectory_new_from_table(const DriftTable *table,
 {
     DriftMeasurement *meas;
     DriftTrajectory *trajectory = NULL;
-    gint n;
+    gint n, s, i;
 
     meas = g_new(DriftMeasurement, MAX(table->n_stripes, 1));
     n = drift_trajectory_measurements_from_table(table, x_pixel_size,
@@ -666,6 +906,14 @@ drift_trajectory_new_from_table(const DriftTable *table,
                                                  meas, error);
     if (n >= 0)
         trajectory = drift_trajectory_new(meas, n, error);
+    if (trajectory) {
+        /* The measurements are the measured stripes in order. */
+        trajectory->meas_stripe = g_new(gint, MAX(n, 1));
+        for (s = i = 0; s < table->n_stripes && i < n; s++) {
+            if (table->rows[s].has_drift)
+                trajectory->meas_stripe[i++] = s;
+        }
+    }
     g_free(meas);
     return trajectory;
 }
@@ -676,6 +924,8 @@ drift_trajectory_free(DriftTrajectory *trajectory)
     if (!trajectory)
         return;
     g_free(trajectory->t);
+    g_free(trajectory->meas_weight);
+    g_free(trajectory->meas_stripe);
     g_free(trajectory);
 }
 
@@ -717,4 +967,34 @@ gboolean
 drift_trajectory_is_zero(const DriftTrajectory *trajectory)
 {
     return trajectory->is_zero;
+}
+
+gint
+drift_trajectory_n_measurements(const DriftTrajectory *trajectory)
+{
+    return trajectory->n_meas;
+}
+
+gdouble
+drift_trajectory_measurement_weight(const DriftTrajectory *trajectory, gint i)
+{
+    g_return_val_if_fail(i >= 0 && i < trajectory->n_meas, 0.0);
+    return trajectory->meas_weight[i];
+}
+
+gint
+drift_trajectory_measurement_stripe(const DriftTrajectory *trajectory, gint i)
+{
+    g_return_val_if_fail(i >= 0 && i < trajectory->n_meas, -1);
+    return trajectory->meas_stripe ? trajectory->meas_stripe[i] : i;
+}
+
+gint
+drift_trajectory_n_downweighted(const DriftTrajectory *trajectory)
+{
+    gint i, count = 0;
+
+    for (i = 0; i < trajectory->n_meas; i++)
+        count += (trajectory->meas_weight[i] < DRIFT_TRAJECTORY_DOWNWEIGHTED);
+    return count;
 }

@@ -37,10 +37,13 @@ GQuark            drift_trajectory_error_quark  (void);
 
 /* Builds the displacement D(t) = p(t) - p(t_ref), t_ref the earliest t_local
  * of the measurements, from n measurements in any order.  With six or more
- * distinct image times the measured values are smoothed first (penalised
- * least squares, third differences, weight by generalised cross-validation),
- * so measurement noise is averaged over instead of interpolated; exact
- * measurements of smooth drift keep their values to far below 0.01 px. */
+ * distinct image times the measured values are smoothed first, robustly
+ * (penalised least squares on third differences, iteratively reweighted
+ * with Tukey's biweight, penalty weight by a robust C_p), so measurement
+ * noise is averaged over instead of interpolated and a gross error (a
+ * local scan that found the wrong particle) gets weight 0 instead of
+ * moving its neighbours; exact measurements of smooth drift keep their
+ * values to far below 0.01 px. */
 DriftTrajectory*  drift_trajectory_new          (const DriftMeasurement *meas,
                                                  gint n,
                                                  GError **error);
@@ -94,6 +97,24 @@ void              drift_trajectory_local_velocity(const DriftTrajectory *traject
                                                   gdouble *vy);
 /* TRUE when D(t) is zero at every t. */
 gboolean          drift_trajectory_is_zero      (const DriftTrajectory *trajectory);
+
+/* A measurement whose weight is below this is reported as down-weighted. */
+#define DRIFT_TRAJECTORY_DOWNWEIGHTED 0.5
+
+/* The measurements the trajectory was built from: for
+ * drift_trajectory_new() and _interpolating() those given, in their order;
+ * for drift_trajectory_new_from_table() the measured stripes in order. */
+gint              drift_trajectory_n_measurements(const DriftTrajectory *trajectory);
+/* Weight 0 .. 1 the robust fit gave measurement i: 1 for a measurement
+ * consistent with the others, 0 for a gross error that was ignored (always
+ * 1 without smoothing).  The smaller of the x and y weights. */
+gdouble           drift_trajectory_measurement_weight(const DriftTrajectory *trajectory,
+                                                      gint i);
+/* The stripe of measurement i for a trajectory from a table, else i. */
+gint              drift_trajectory_measurement_stripe(const DriftTrajectory *trajectory,
+                                                      gint i);
+/* Measurements with weight below DRIFT_TRAJECTORY_DOWNWEIGHTED. */
+gint              drift_trajectory_n_downweighted(const DriftTrajectory *trajectory);
 
 G_END_DECLS
 
