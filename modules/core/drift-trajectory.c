@@ -81,6 +81,8 @@
 /* Price of a degree of freedom relative to its expected cost (C_p's 1):
  * Kim and Gu's 1.4 keeps few noisy knots from being followed. */
 #define COMPLEXITY_PRICE 1.4
+/* Scores closer than this (px^2) are equal. */
+#define SCORE_ROUNDING 1e-24
 
 enum {
     /* Third differences: quadratics go unpenalised. */
@@ -547,11 +549,12 @@ smoother_cross_validation(Smoother *smoother, const gdouble *y)
     return loss;
 }
 
-/* The noise variance of one measurement: the robust loss per residual
- * degree of freedom at the penalty weight preferred by robust
+/* The noise variance of one measurement, from the fit preferred by robust
  * leave-one-out cross-validation (which, unlike generalised
  * cross-validation, sees that a near-interpolating fit of noisy knots
- * predicts each knot badly from the others).  Fits leaving less than one
+ * predicts each knot badly from the others): its robust loss per residual
+ * degree of freedom.  A rejected gross error adds its fixed cost, so data
+ * with gross errors are smoothed somewhat more.  Fits leaving less than one
  * degree of freedom to the residuals do not estimate noise. */
 static gdouble
 smoother_noise_variance(Smoother *smoother, const gdouble *y)
@@ -607,7 +610,9 @@ smoother_fit(Smoother *smoother, const gdouble *y)
         trace = smoother_fit_robust(smoother, y, penalty_weight(step), scale,
                                     &loss);
         score = loss + 2.0*COMPLEXITY_PRICE*variance*trace;
-        if (score < best_score) {
+        /* Exact data score zero up to rounding at every weight: keep the
+         * smallest, best conditioned one. */
+        if (score < best_score - SCORE_ROUNDING) {
             best_score = score;
             best_step = step;
         }
