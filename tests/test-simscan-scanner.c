@@ -215,6 +215,7 @@ check_velocity_centroid(ScanDirection direction, guint32 seed)
     DriftModel drift;
     GwyDataField *frame;
     gdouble x, y, pc = -1.0, pr = -1.0, cc, cr, still_c, still_r;
+    gdouble frame_start;
     gint attempt;
 
     drift_model_init(&drift, DRIFT_MODEL_NONE);
@@ -224,13 +225,20 @@ check_velocity_centroid(ScanDirection direction, guint32 seed)
     drift.v[1] = g_rand_double_range(rng, -0.4e-9, 0.4e-9);
     drift.p0[0] = copysign(g_rand_double_range(rng, 6e-9, 20e-9), drift.v[0]);
     drift.p0[1] = copysign(g_rand_double_range(rng, 6e-9, 20e-9), drift.v[1]);
-    /* A particle the drift keeps well inside the frame. */
+    /* The frame starts up to 100 s late: p reaches 154 nm (31 px) at most,
+     * so most particles, placed at random, stay inside. */
+    frame_start = g_rand_double_range(rng, 0.0, 100.0);
+    /* A particle the drift keeps well inside the frame.  Every attempt is an
+     * independent sample with the same drift and timing: seeds in a plain
+     * progression (seed + 1000 k) start the simulator's PCG streams so close
+     * that the first particle's x hardly moves (3 px per attempt), and a
+     * frame start growing with the attempt let the drift outrun it. */
     for (attempt = 0; attempt < 50; attempt++) {
         sim_sample_free(sample);
-        sample = small_particle_sample(seed + 1000*attempt, 1, 0.0);
+        sample = small_particle_sample(g_rand_int(rng), 1, 0.0);
         sim_scan_params_init(&sp, sample, 200, 200);
         sp.direction = direction;
-        sp.frame_start = 100.0*attempt;
+        sp.frame_start = frame_start;
         sim_sample_particle(sample, 0, &x, &y, NULL);
         predicted_apparent_pixel(&sp, &drift, x, y, &pc, &pr);
         if (pc > 15.0 && pc < 184.0 && pr > 15.0 && pr < 184.0)
