@@ -33,6 +33,17 @@
 #define KERNEL_INLINE static inline
 #endif
 
+/* The hot loops are compiled twice where GCC can pick the version when
+ * the library is loaded: for the x86-64 baseline (SSE2, two doubles per
+ * vector) and for x86-64-v3 (AVX2 and FMA, four), which halves their
+ * instruction count.  Results differ by rounding only (FMA). */
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11 \
+    && defined(__x86_64__) && defined(__linux__)
+#define VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define VECTOR_CLONES /* */
+#endif
+
 enum {
     KERNEL_TAPS = 4,
     /* Columns per inner loop.  A constant count lets GCC vectorise at -O2,
@@ -44,7 +55,7 @@ enum {
     /* Rows whose x prefilter recursions run side by side, interleaved. */
     PREFILTER_BATCH = 8,
     /* Padding of the x coefficient rows: rows 32 KiB apart would share
-     * cache sets while the interleaved coefficients are scattered. */
+     * cache sets while they are read and written across. */
     PREFILTER_ROW_PAD = 8,
     /* Coefficient rows made per back substitution along y. */
     COEFF_BLOCK = 64,
@@ -271,44 +282,120 @@ prefilter_row(const Prefilter *prefilter, gdouble *data)
         data[i] = (data[i] - side*data[i+1])*inv_diag[i];
 }
 
-/* Coefficients of PREFILTER_BATCH rows of src (src_stride apart) into
- * dest (dest_stride apart).  Each row's recursion is a serial chain; in
- * lanes (n groups of PREFILTER_BATCH) the rows' values at one column lie
- * side by side, so the chains run together in one vector loop. */
-static void
-prefilter_batch(const Prefilter *prefilter, const gdouble *restrict src,
-                gsize src_stride, gdouble *restrict lanes,
-                gdouble *restrict dest, gsize dest_stride)
+#if defined(__GNUC__)
+/* Four doubles as one value.  The running values of the x prefilter's
+ * recursions stay in (vector) registers this way; in an array GCC keeps
+ * them in memory, and every step of the chain waits for a store to be
+ * forwarded to the next load.  Aligned as a double: the buffers are. */
+typedef gdouble Quad __attribute__((vector_size(4*sizeof(gdouble)),
+                                    aligned(sizeof(gdouble))));
+
+/* Quads go through pointers: passed by value they would have a different
+ * calling convention in the two compiled versions (GCC warns). */
+static inline void
+quad_gather(const gdouble *p, gsize stride, Quad *q)
+{
+    Quad v = { p[0], p[stride], p[2*stride], p[3*stride] };
+
+    *q = v;
+}
+
+static inline void
+quad_scatter(gdouble *p, gsize stride, const Quad *q)
+{
+    p[0] = (*q)[0];
+    p[stride] = (*q)[1];
+    p[2*stride] = (*q)[2];
+    p[3*stride] = (*q)[3];
+}
+
+/* Data values to coefficients along PREFILTER_BATCH rows (stride apart),
+ * in place.  Each row's recursion is a serial chain; the eight rows' chains
+ * run side by side in two Quads, and lanes keeps the forward pass (n
+ * groups of eight) for the backward one.  The rows should be padded
+ * (stride not a multiple of 4 KiB) so that reading them across does not
+ * keep evicting the same cache set. */
+static void VECTOR_CLONES
+prefilter_batch(const Prefilter *prefilter, Quad *restrict lanes,
+                gdouble *restrict rows, gsize stride)
 {
     const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
     gdouble side = prefilter->side, f, inv;
-    gdouble *restrict lane, *restrict next;
+    gint n = prefilter->n, i;
+    /* x set only to keep GCC 12 from a false may-be-uninitialised. */
+    Quad upper, lower, x = { 0.0, 0.0, 0.0, 0.0 };
+
+    G_STATIC_ASSERT(PREFILTER_BATCH == 8);
+    quad_gather(rows, stride, &upper);
+    quad_gather(rows + 4*stride, stride, &lower);
+    lanes[0] = upper;
+    lanes[1] = lower;
+    for (i = 1; i < n; i++) {
+        f = factor[i];
+        quad_gather(rows + i, stride, &x);
+        upper = x - f*upper;
+        quad_gather(rows + 4*stride + i, stride, &x);
+        lower = x - f*lower;
+        lanes[2*i] = upper;
+        lanes[2*i + 1] = lower;
+    }
+    inv = inv_diag[n-1];
+    upper *= inv;
+    lower *= inv;
+    quad_scatter(rows + n-1, stride, &upper);
+    quad_scatter(rows + 4*stride + n-1, stride, &lower);
+    /* (x - side c) inv as x inv - (side inv) c: the chain waits for one
+     * multiply-add per step instead of two operations. */
+    for (i = n-2; i >= 0; i--) {
+        inv = inv_diag[i];
+        f = side*inv;
+        upper = lanes[2*i]*inv - f*upper;
+        lower = lanes[2*i + 1]*inv - f*lower;
+        quad_scatter(rows + i, stride, &upper);
+        quad_scatter(rows + 4*stride + i, stride, &lower);
+    }
+}
+#else
+typedef gdouble Quad;
+
+/* Data values to coefficients along PREFILTER_BATCH rows (stride apart),
+ * in place.  Each row's recursion is a serial chain; in lanes (n groups of
+ * PREFILTER_BATCH) the rows' values at one column lie side by side, so the
+ * chains run together. */
+static void
+prefilter_batch(const Prefilter *prefilter, Quad *restrict lanes,
+                gdouble *restrict rows, gsize stride)
+{
+    const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
+    gdouble side = prefilter->side, f, inv;
+    gdouble *restrict lane;
     gint n = prefilter->n, i, k;
 
     for (k = 0; k < PREFILTER_BATCH; k++)
-        lanes[k] = src[k*src_stride];
+        lanes[k] = rows[k*stride];
     for (i = 1; i < n; i++) {
         f = factor[i];
         lane = lanes + i*PREFILTER_BATCH;
         for (k = 0; k < PREFILTER_BATCH; k++)
-            lane[k] = src[k*src_stride + i] - f*lane[k - PREFILTER_BATCH];
+            lane[k] = rows[k*stride + i] - f*lane[k - PREFILTER_BATCH];
     }
     lane = lanes + (n-1)*PREFILTER_BATCH;
     inv = inv_diag[n-1];
     for (k = 0; k < PREFILTER_BATCH; k++) {
         lane[k] *= inv;
-        dest[k*dest_stride + n-1] = lane[k];
+        rows[k*stride + n-1] = lane[k];
     }
     for (i = n-2; i >= 0; i--) {
         inv = inv_diag[i];
+        f = side*inv;
         lane = lanes + i*PREFILTER_BATCH;
-        next = lane + PREFILTER_BATCH;
         for (k = 0; k < PREFILTER_BATCH; k++) {
-            lane[k] = (lane[k] - side*next[k])*inv;
-            dest[k*dest_stride + i] = lane[k];
+            lane[k] = lane[k]*inv - f*lane[k + PREFILTER_BATCH];
+            rows[k*stride + i] = lane[k];
         }
     }
 }
+#endif
 
 /* One output pixel at source position x (clamped to the image's extent:
  * values beyond it only feed neighbours of filled pixels), with mirrored
@@ -367,18 +454,36 @@ kernel_apply(GwyInterpolationType type, const gdouble *s, const gdouble *w)
     return w[0]*s[-1] + w[1]*s[0] + w[2]*s[1] + w[3]*s[2];
 }
 
+/* row -= q prev: the forward elimination of the y prefilter. */
+static void VECTOR_CLONES
+eliminate_row(gdouble *restrict row, const gdouble *restrict prev, gdouble q,
+              gint n)
+{
+    gint c = 0, j;
+
+    for (; c + CHUNK <= n; c += CHUNK) {
+        for (j = 0; j < CHUNK; j++)
+            row[c + j] -= q*prev[c + j];
+    }
+    for (; c < n; c++)
+        row[c] -= q*prev[c];
+}
+
 /* Output pixels first .. last, all reading the source at the offset
  * d = i - c with four taps inside.  The position is computed from the
  * column as in row_valid_range() at the start of each chunk, and within
  * the chunk stepped on by x_step - 1 (exact) times j: the two differ by
- * rounding only, far below the 1e-12 px that matter. */
+ * rounding only, far below the 1e-12 px that matter.  With eliminate, q
+ * times prev is subtracted (the y prefilter's forward elimination, done
+ * while the values are at hand). */
 KERNEL_INLINE void
-resample_run(GwyInterpolationType type, const gdouble *restrict src, gint d,
+resample_run(GwyInterpolationType type, gboolean eliminate,
+             const gdouble *restrict src, gint d,
              gdouble x_start, gdouble x_step, gint first, gint last,
-             gdouble *restrict dest)
+             const gdouble *restrict prev, gdouble q, gdouble *restrict dest)
 {
     const gdouble *s = src + d;
-    gdouble w[KERNEL_TAPS], step[CHUNK], frac;
+    gdouble w[KERNEL_TAPS], step[CHUNK], frac, v;
     gint c = first, j;
 
     for (j = 0; j < CHUNK; j++)
@@ -387,21 +492,26 @@ resample_run(GwyInterpolationType type, const gdouble *restrict src, gint d,
         frac = (x_start + x_step*c) - (c + d);
         for (j = 0; j < CHUNK; j++) {
             kernel_weights(type, frac + step[j], w);
-            dest[c + j] = kernel_apply(type, s + c + j, w);
+            v = kernel_apply(type, s + c + j, w);
+            dest[c + j] = eliminate ? v - q*prev[c + j] : v;
         }
     }
     for (; c <= last; c++) {
         kernel_weights(type, (x_start + x_step*c) - (c + d), w);
-        dest[c] = kernel_apply(type, s + c, w);
+        v = kernel_apply(type, s + c, w);
+        dest[c] = eliminate ? v - q*prev[c] : v;
     }
 }
 
-/* Resamples one row: dest[c] = src at x_start + x_step*c.  Within runs of
- * constant tap offset the taps are read without index arithmetic or edge
- * checks, so the loop is a straight polynomial-and-dot-product. */
+/* Resamples one row: dest[c] = src at x_start + x_step*c (minus q prev[c]
+ * with eliminate).  Within runs of constant tap offset the taps are read
+ * without index arithmetic or edge checks, so the loop is a straight
+ * polynomial-and-dot-product. */
 KERNEL_INLINE void
-resample_row_with(GwyInterpolationType type, const gdouble *restrict src,
-                  gint n, gdouble x_start, gdouble x_step,
+resample_row_with(GwyInterpolationType type, gboolean eliminate,
+                  const gdouble *restrict src, gint n,
+                  gdouble x_start, gdouble x_step,
+                  const gdouble *restrict prev, gdouble q,
                   gdouble *restrict dest)
 {
     gint c = 0, d, last;
@@ -410,59 +520,77 @@ resample_row_with(GwyInterpolationType type, const gdouble *restrict src,
         last = constant_offset_run(x_start, x_step, n, c, &d);
         if (last < c) {
             dest[c] = resample_pixel(type, src, n, x_start + x_step*c);
+            if (eliminate)
+                dest[c] -= q*prev[c];
             c++;
             continue;
         }
-        resample_run(type, src, d, x_start, x_step, c, last, dest);
+        resample_run(type, eliminate, src, d, x_start, x_step, c, last,
+                     prev, q, dest);
         c = last + 1;
     }
 }
 
-/* One specialised loop per kernel, so the weights are computed inline. */
-static void
+/* One specialised loop per kernel, so the weights are computed inline;
+ * the elimination is fused only for the kernels that need it (prev may be
+ * NULL for none). */
+static void VECTOR_CLONES
 resample_row(GwyInterpolationType type, const gdouble *restrict src, gint n,
-             gdouble x_start, gdouble x_step, gdouble *restrict dest)
+             gdouble x_start, gdouble x_step,
+             const gdouble *restrict prev, gdouble q, gdouble *restrict dest)
 {
     switch (type) {
         case GWY_INTERPOLATION_ROUND:
-        resample_row_with(GWY_INTERPOLATION_ROUND, src, n, x_start, x_step,
-                          dest);
+        resample_row_with(GWY_INTERPOLATION_ROUND, FALSE, src, n,
+                          x_start, x_step, NULL, 0.0, dest);
         break;
 
         case GWY_INTERPOLATION_LINEAR:
-        resample_row_with(GWY_INTERPOLATION_LINEAR, src, n, x_start, x_step,
-                          dest);
+        resample_row_with(GWY_INTERPOLATION_LINEAR, FALSE, src, n,
+                          x_start, x_step, NULL, 0.0, dest);
         break;
 
         case GWY_INTERPOLATION_KEY:
-        resample_row_with(GWY_INTERPOLATION_KEY, src, n, x_start, x_step,
-                          dest);
+        resample_row_with(GWY_INTERPOLATION_KEY, FALSE, src, n,
+                          x_start, x_step, NULL, 0.0, dest);
         break;
 
         case GWY_INTERPOLATION_SCHAUM:
-        resample_row_with(GWY_INTERPOLATION_SCHAUM, src, n, x_start, x_step,
-                          dest);
-        break;
-
-        case GWY_INTERPOLATION_BSPLINE:
-        resample_row_with(GWY_INTERPOLATION_BSPLINE, src, n, x_start, x_step,
-                          dest);
-        break;
-
-        case GWY_INTERPOLATION_OMOMS:
-        resample_row_with(GWY_INTERPOLATION_OMOMS, src, n, x_start, x_step,
-                          dest);
+        resample_row_with(GWY_INTERPOLATION_SCHAUM, FALSE, src, n,
+                          x_start, x_step, NULL, 0.0, dest);
         break;
 
         case GWY_INTERPOLATION_NNA:
-        resample_row_with(GWY_INTERPOLATION_NNA, src, n, x_start, x_step,
-                          dest);
+        resample_row_with(GWY_INTERPOLATION_NNA, FALSE, src, n,
+                          x_start, x_step, NULL, 0.0, dest);
+        break;
+
+        case GWY_INTERPOLATION_BSPLINE:
+        if (prev) {
+            resample_row_with(GWY_INTERPOLATION_BSPLINE, TRUE, src, n,
+                              x_start, x_step, prev, q, dest);
+            return;
+        }
+        resample_row_with(GWY_INTERPOLATION_BSPLINE, FALSE, src, n,
+                          x_start, x_step, NULL, 0.0, dest);
+        break;
+
+        case GWY_INTERPOLATION_OMOMS:
+        if (prev) {
+            resample_row_with(GWY_INTERPOLATION_OMOMS, TRUE, src, n,
+                              x_start, x_step, prev, q, dest);
+            return;
+        }
+        resample_row_with(GWY_INTERPOLATION_OMOMS, FALSE, src, n,
+                          x_start, x_step, NULL, 0.0, dest);
         break;
 
         default:
-        resample_row_with(type, src, n, x_start, x_step, dest);
+        g_assert_not_reached();
         break;
     }
+    if (prev)
+        eliminate_row(dest, prev, q, n);
 }
 
 /* dest = src shifted by a whole number of columns, edge values beyond. */
@@ -634,7 +762,7 @@ typedef struct {
     GwyInterpolationType interpolation;
     gboolean prefilter_x;
     Prefilter x_prefilter;
-    gdouble *lanes;        /* interleaved rows of prefilter_batch() */
+    Quad *lanes;           /* interleaved rows of prefilter_batch() */
     gdouble *coeffs;       /* x coefficients of rows batch_first .. */
     gsize coeff_stride;
     gint batch_first;
@@ -661,13 +789,14 @@ row_shifter_init(RowShifter *shifter, const gdouble *a, gint xres, gint yres,
     shifter->interpolation = interpolation;
     shifter->prefilter_x = kernel_needs_prefilter(interpolation,
                                                   &centre, &side);
-    shifter->lanes = shifter->coeffs = NULL;
+    shifter->lanes = NULL;
+    shifter->coeffs = NULL;
     shifter->coeff_stride = xres + PREFILTER_ROW_PAD;
     shifter->batch_first = -1;
     shifter->batch_count = 0;
     if (shifter->prefilter_x) {
         prefilter_init(&shifter->x_prefilter, xres, centre, side);
-        shifter->lanes = g_new(gdouble, PREFILTER_BATCH*(gsize)xres);
+        shifter->lanes = g_malloc(PREFILTER_BATCH*(gsize)xres*sizeof(gdouble));
         shifter->coeffs = g_new(gdouble,
                                 PREFILTER_BATCH*shifter->coeff_stride);
     }
@@ -696,7 +825,7 @@ row_shift_is_whole(const ResamplePlan *plan, gint i, gint xres)
 static const gdouble*
 row_shifter_coeffs(RowShifter *shifter, gint i)
 {
-    gint xres = shifter->xres, yres = shifter->yres, first;
+    gint xres = shifter->xres, yres = shifter->yres, first, k;
 
     if (i < shifter->batch_first
         || i >= shifter->batch_first + shifter->batch_count) {
@@ -709,10 +838,13 @@ row_shifter_coeffs(RowShifter *shifter, gint i)
         }
         else {
             first = MIN(i, yres - PREFILTER_BATCH);
-            prefilter_batch(&shifter->x_prefilter,
-                            shifter->a + first*(gsize)xres, xres,
-                            shifter->lanes, shifter->coeffs,
-                            shifter->coeff_stride);
+            for (k = 0; k < PREFILTER_BATCH; k++) {
+                memcpy(shifter->coeffs + k*shifter->coeff_stride,
+                       shifter->a + (first + k)*(gsize)xres,
+                       xres*sizeof(gdouble));
+            }
+            prefilter_batch(&shifter->x_prefilter, shifter->lanes,
+                            shifter->coeffs, shifter->coeff_stride);
             shifter->batch_first = first;
             shifter->batch_count = PREFILTER_BATCH;
         }
@@ -720,9 +852,11 @@ row_shifter_coeffs(RowShifter *shifter, gint i)
     return shifter->coeffs + (i - shifter->batch_first)*shifter->coeff_stride;
 }
 
-/* Source row i shifted in x into dest. */
+/* Source row i shifted in x into dest, minus q times prev unless prev is
+ * NULL. */
 static void
-row_shifter_shift(RowShifter *shifter, gint i, gdouble *restrict dest)
+row_shifter_shift(RowShifter *shifter, gint i, const gdouble *restrict prev,
+                  gdouble q, gdouble *restrict dest)
 {
     const ResamplePlan *plan = shifter->plan;
     gint xres = shifter->xres;
@@ -730,12 +864,14 @@ row_shifter_shift(RowShifter *shifter, gint i, gdouble *restrict dest)
 
     if (row_shift_is_whole(plan, i, xres)) {
         shift_row_whole(src, xres, (gint)plan->x_start[i], dest);
+        if (prev)
+            eliminate_row(dest, prev, q, xres);
         return;
     }
     if (shifter->prefilter_x)
         src = row_shifter_coeffs(shifter, i);
     resample_row(shifter->interpolation, src, xres,
-                 plan->x_start[i], plan->x_step[i], dest);
+                 plan->x_start[i], plan->x_step[i], prev, q, dest);
 }
 
 static void
@@ -756,7 +892,7 @@ row_ring_shifted(RowRing *ring, RowShifter *shifter, gint i)
     gdouble *row = ring->rows + (i % RING_ROWS)*(gsize)ring->xres;
 
     if (ring->tags[i % RING_ROWS] != i) {
-        row_shifter_shift(shifter, i, row);
+        row_shifter_shift(shifter, i, NULL, 0.0, row);
         ring->tags[i % RING_ROWS] = i;
     }
     return row;
@@ -775,7 +911,7 @@ rows_need_interpolation(const ResamplePlan *plan, gint yres)
 }
 
 /* dest = w1 r1 + w2 r2. */
-static void
+static void VECTOR_CLONES
 combine_two_rows(const gdouble *restrict r1, const gdouble *restrict r2,
                  gdouble w1, gdouble w2, gint n, gdouble *restrict dest)
 {
@@ -791,7 +927,7 @@ combine_two_rows(const gdouble *restrict r1, const gdouble *restrict r2,
 
 /* dest = sum of w[k] times rows[k]; the outer rows are not read (and may
  * be NULL) when both their weights are zero. */
-static void
+static void VECTOR_CLONES
 combine_rows(const gdouble **rows, const gdouble *w, gint n,
              gdouble *restrict dest)
 {
@@ -906,23 +1042,8 @@ rebuild_rows_streaming(RowShifter *shifter, gint yres,
     g_free(ring.rows);
 }
 
-/* row -= q prev: the forward elimination of the y prefilter. */
-static void
-eliminate_row(gdouble *restrict row, const gdouble *restrict prev, gdouble q,
-              gint n)
-{
-    gint c = 0, j;
-
-    for (; c + CHUNK <= n; c += CHUNK) {
-        for (j = 0; j < CHUNK; j++)
-            row[c + j] -= q*prev[c + j];
-    }
-    for (; c < n; c++)
-        row[c] -= q*prev[c];
-}
-
 /* row = (row - side below) inv: one back substitution step. */
-static void
+static void VECTOR_CLONES
 substitute_row(gdouble *restrict row, const gdouble *restrict below,
                gdouble side, gdouble inv, gint n)
 {
@@ -938,7 +1059,7 @@ substitute_row(gdouble *restrict row, const gdouble *restrict below,
 
 /* row = (eliminated - side row) inv: a back substitution step within one
  * buffer, for the steps whose result is not kept. */
-static void
+static void VECTOR_CLONES
 substitute_row_over(gdouble *restrict row, const gdouble *restrict eliminated,
                     gdouble side, gdouble inv, gint n)
 {
@@ -952,13 +1073,13 @@ substitute_row_over(gdouble *restrict row, const gdouble *restrict eliminated,
         row[c] = (eliminated[c] - side*row[c])*inv;
 }
 
-/* The y coefficients of the x-corrected rows, made in blocks through a
- * ring of rows.  Rows from next_coeff on hold the forward elimination, rows
- * before it the coefficients.  The back substitution of a block starts
- * warmup rows below it from the elimination alone (as if the coefficient
- * below were zero); the error that makes shrinks by side/pivot per row,
- * to below 2^-60 of itself at the block, so no full-size image of
- * eliminated rows is needed. */
+/* The y coefficients of the x-corrected rows, made in blocks of
+ * COEFF_BLOCK rows through a ring.  Rows from the block being made on hold
+ * the forward elimination, rows before it coefficients.  The back
+ * substitution of a block starts warmup rows below it from the elimination
+ * alone (as if the coefficient below were zero); the error that makes
+ * shrinks by side/pivot per row, to below 2^-60 of itself at the block, so
+ * no full-size image of eliminated rows is needed. */
 typedef struct {
     RowShifter *shifter;
     Prefilter prefilter;
@@ -967,8 +1088,16 @@ typedef struct {
     gdouble *rows;
     gdouble *scratch;      /* the warm-up's coefficient row */
     gint next_source;      /* first row not yet x-shifted and eliminated */
-    gint next_coeff;       /* first row not yet back-substituted */
 } ColumnCoeffs;
+
+/* Where an output row takes its data from the coefficient rows, worked out
+ * once per row; ready is the coefficient row whose making completes its
+ * taps (-1: the row has no source). */
+typedef struct {
+    gint taps[KERNEL_TAPS];
+    gdouble w[KERNEL_TAPS];
+    gint ready;
+} OutputRow;
 
 static void
 column_coeffs_init(ColumnCoeffs *cc, RowShifter *shifter,
@@ -980,13 +1109,13 @@ column_coeffs_init(ColumnCoeffs *cc, RowShifter *shifter,
     kernel_needs_prefilter(interpolation, &centre, &side);
     prefilter_init(&cc->prefilter, yres, centre, side);
     cc->shifter = shifter;
-    cc->warmup = prefilter_warmup(&cc->prefilter);
-    /* Alive at once: three coefficient rows before a block (taps of the
-     * output row that asks for it), the block and its warm-up rows. */
+    cc->warmup = MAX(prefilter_warmup(&cc->prefilter), 1);
+    /* Alive at once: three coefficient rows before a block (taps of output
+     * rows that straddle it), the block and its warm-up rows. */
     cc->ring_rows = MIN(yres, 3 + COEFF_BLOCK + cc->warmup + 1);
     cc->rows = g_new(gdouble, cc->ring_rows*(gsize)xres);
     cc->scratch = g_new(gdouble, xres);
-    cc->next_source = cc->next_coeff = 0;
+    cc->next_source = 0;
 }
 
 static void
@@ -1007,93 +1136,133 @@ column_coeffs_row(const ColumnCoeffs *cc, gint i)
 static void
 column_coeffs_eliminate(ColumnCoeffs *cc, gint last)
 {
-    gint xres = cc->shifter->xres, i;
-    gdouble *row;
+    gint i;
 
     for (i = cc->next_source; i <= last; i++) {
-        row = column_coeffs_row(cc, i);
-        row_shifter_shift(cc->shifter, i, row);
-        if (i > 0) {
-            eliminate_row(row, column_coeffs_row(cc, i-1),
-                          cc->prefilter.factor[i], xres);
-        }
+        row_shifter_shift(cc->shifter, i,
+                          i ? column_coeffs_row(cc, i-1) : NULL,
+                          cc->prefilter.factor[i], column_coeffs_row(cc, i));
     }
     cc->next_source = MAX(cc->next_source, last + 1);
 }
 
-/* Makes the coefficient rows up to and including last (and the rest of
- * their block). */
-static void
-column_coeffs_make(ColumnCoeffs *cc, gint last)
+/* Eliminates down to the warm-up rows below the block ending at end and
+ * runs the warm-up: the coefficient row below the block, or NULL at the
+ * bottom of the image (where the substitution starts exactly). */
+static const gdouble*
+column_coeffs_warm_up(ColumnCoeffs *cc, gint end)
 {
-    const gdouble *inv_diag = cc->prefilter.inv_diag;
-    gint xres = cc->shifter->xres, yres = cc->shifter->yres;
-    gint first, end, start, i, c;
-    gdouble side = cc->prefilter.side, *row;
-    const gdouble *below, *eliminated;
+    const gdouble *inv_diag = cc->prefilter.inv_diag, *eliminated;
+    gint xres = cc->shifter->xres, yres = cc->shifter->yres, start, i, c;
 
-    while (cc->next_coeff <= last) {
-        first = cc->next_coeff;
-        end = MIN(first + COEFF_BLOCK, yres);
-        start = MIN(end - 1 + cc->warmup, yres - 1);
-        column_coeffs_eliminate(cc, start);
-        below = NULL;
-        if (start >= end) {
-            eliminated = column_coeffs_row(cc, start);
-            for (c = 0; c < xres; c++)
-                cc->scratch[c] = eliminated[c]*inv_diag[start];
-            for (i = start - 1; i >= end; i--) {
-                substitute_row_over(cc->scratch, column_coeffs_row(cc, i),
-                                    side, inv_diag[i], xres);
-            }
-            below = cc->scratch;
+    start = MIN(end - 1 + cc->warmup, yres - 1);
+    column_coeffs_eliminate(cc, start);
+    if (start < end)
+        return NULL;
+    eliminated = column_coeffs_row(cc, start);
+    for (c = 0; c < xres; c++)
+        cc->scratch[c] = eliminated[c]*inv_diag[start];
+    for (i = start - 1; i >= end; i--) {
+        substitute_row_over(cc->scratch, column_coeffs_row(cc, i),
+                            cc->prefilter.side, inv_diag[i], xres);
+    }
+    return cc->scratch;
+}
+
+/* Coefficient row i from its eliminated values and the row below. */
+static void
+column_coeffs_substitute(ColumnCoeffs *cc, gint i, const gdouble *below)
+{
+    gdouble *row = column_coeffs_row(cc, i), inv = cc->prefilter.inv_diag[i];
+    gint xres = cc->shifter->xres, c;
+
+    if (below) {
+        substitute_row(row, below, cc->prefilter.side, inv, xres);
+        return;
+    }
+    for (c = 0; c < xres; c++)
+        row[c] *= inv;
+}
+
+/* Taps, weights and the coefficient row completing them, for every output
+ * row.  Rows come in blocks top-down, bottom-up within a block, so taps
+ * in an earlier block are done before those in the block of the highest
+ * tap. */
+static void
+output_rows_plan(const ResamplePlan *plan, gint yres,
+                 GwyInterpolationType interpolation, OutputRow *out)
+{
+    gint r, i, k, lowest, highest;
+    gdouble frac;
+
+    for (r = 0; r < yres; r++) {
+        out[r].ready = -1;
+        if (isnan(plan->rho[r]))
+            continue;
+        i = source_row_below(plan->rho[r], &frac);
+        lowest = yres;
+        highest = 0;
+        for (k = 0; k < KERNEL_TAPS; k++) {
+            out[r].taps[k] = mirror_index(i - 1 + k, yres);
+            lowest = MIN(lowest, out[r].taps[k]);
+            highest = MAX(highest, out[r].taps[k]);
         }
-        for (i = end - 1; i >= first; i--) {
-            row = column_coeffs_row(cc, i);
-            if (below)
-                substitute_row(row, below, side, inv_diag[i], xres);
-            else {
-                for (c = 0; c < xres; c++)
-                    row[c] *= inv_diag[i];
-            }
-            below = row;
-        }
-        cc->next_coeff = end;
+        kernel_weights(interpolation, frac, out[r].w);
+        out[r].ready = MAX(lowest, highest - highest % COEFF_BLOCK);
     }
 }
 
+static void
+output_row_make(const ColumnCoeffs *cc, const OutputRow *out, gint r,
+                gdouble *result)
+{
+    const gdouble *rows[KERNEL_TAPS];
+    gint xres = cc->shifter->xres, k;
+
+    for (k = 0; k < KERNEL_TAPS; k++)
+        rows[k] = column_coeffs_row(cc, out->taps[k]);
+    combine_rows(rows, out->w, xres, result + r*(gsize)xres);
+}
+
 /* B-spline and o-MOMS with fractional source rows need coefficients along
- * y, the solution of a tridiagonal system over each whole column, made
- * block by block as the output rows (top to bottom) ask for them. */
+ * y, the solution of a tridiagonal system over each whole column.  They
+ * are made block by block, bottom-up within a block, and each output row
+ * is made as soon as its last tap is, while its taps are still in cache
+ * (output rows are independent, so their order does not matter). */
 static void
 rebuild_rows_prefiltered(RowShifter *shifter, gint yres,
                          GwyInterpolationType interpolation,
                          gdouble fill_value, gdouble *result, gdouble *mask)
 {
     const ResamplePlan *plan = shifter->plan;
-    gint xres = shifter->xres, r, i, k, taps[KERNEL_TAPS], highest;
-    const gdouble *rows[KERNEL_TAPS];
-    gdouble w[KERNEL_TAPS], frac;
+    gint xres = shifter->xres, first, end, i, r, r_first, r_end = 0;
+    OutputRow *out = g_new(OutputRow, yres);
+    const gdouble *below;
     ColumnCoeffs cc;
 
+    output_rows_plan(plan, yres, interpolation, out);
     column_coeffs_init(&cc, shifter, interpolation);
-    for (r = 0; r < yres; r++) {
-        if (!isnan(plan->rho[r])) {
-            i = source_row_below(plan->rho[r], &frac);
-            highest = 0;
-            for (k = 0; k < KERNEL_TAPS; k++) {
-                taps[k] = mirror_index(i - 1 + k, yres);
-                highest = MAX(highest, taps[k]);
+    for (first = 0; first < yres; first += COEFF_BLOCK) {
+        end = MIN(first + COEFF_BLOCK, yres);
+        /* The output rows completed in this block (ready is monotonic). */
+        r_first = r_end;
+        while (r_end < yres && out[r_end].ready < end)
+            r_end++;
+        below = column_coeffs_warm_up(&cc, end);
+        r = r_end - 1;
+        for (i = end - 1; i >= first; i--) {
+            column_coeffs_substitute(&cc, i, below);
+            below = column_coeffs_row(&cc, i);
+            for (; r >= r_first && out[r].ready >= i; r--) {
+                output_row_make(&cc, out + r, r, result);
+                finish_row(plan, xres, yres, r, fill_value, result, mask);
             }
-            column_coeffs_make(&cc, highest);
-            for (k = 0; k < KERNEL_TAPS; k++)
-                rows[k] = column_coeffs_row(&cc, taps[k]);
-            kernel_weights(interpolation, frac, w);
-            combine_rows(rows, w, xres, result + r*(gsize)xres);
+            for (; r >= r_first && out[r].ready < 0; r--)
+                finish_row(plan, xres, yres, r, fill_value, result, mask);
         }
-        finish_row(plan, xres, yres, r, fill_value, result, mask);
     }
     column_coeffs_clear(&cc);
+    g_free(out);
 }
 
 static void
