@@ -119,6 +119,7 @@ typedef struct {
     gdouble *leverage;         /* diagonal of the influence matrix */
     gdouble *student;          /* standardised residuals */
     gdouble change;            /* largest change of a robustness weight */
+    gdouble penalty_unit;      /* penalty weight of step 0 */
     gdouble *fit;
 } Smoother;
 
@@ -327,6 +328,15 @@ smoother_init(Smoother *smoother, gint n, const gdouble *t,
                 smoother->band[i][k] += smoother->coeff[r][j]*smoother->coeff[r][j+k];
         }
     }
+    /* Knots a line apart make their divided differences, and so D'D,
+     * thousands of times larger than even spacing does (where the largest
+     * diagonal is 1 + 9 + 9 + 1); the penalty weights tried are scaled to
+     * the largest, so that the heaviest stays a well-conditioned quadratic
+     * fit instead of losing every digit to rounding. */
+    prod = 0.0;
+    for (i = 0; i < n; i++)
+        prod = fmax(prod, smoother->band[i][0]);
+    smoother->penalty_unit = (prod > 20.0 ? 20.0/prod : 1.0);
 }
 
 static void
@@ -526,9 +536,10 @@ smoother_fit_robust(Smoother *smoother, const gdouble *y, gdouble lambda,
 }
 
 static gdouble
-penalty_weight(gint step)
+penalty_weight(const Smoother *smoother, gint step)
 {
-    return pow(10.0, step/(gdouble)SMOOTHING_STEPS_PER_DECADE);
+    return smoother->penalty_unit*pow(10.0,
+                                      step/(gdouble)SMOOTHING_STEPS_PER_DECADE);
 }
 
 /* Robust leave-one-out cross-validation: the sum of
@@ -567,7 +578,7 @@ smoother_noise_variance(Smoother *smoother, const gdouble *y)
         total += smoother->count[i];
     for (step = SMOOTHING_LOG_MIN*SMOOTHING_STEPS_PER_DECADE;
          step <= SMOOTHING_LOG_MAX*SMOOTHING_STEPS_PER_DECADE; step++) {
-        trace = smoother_fit_robust(smoother, y, penalty_weight(step), 0.0,
+        trace = smoother_fit_robust(smoother, y, penalty_weight(smoother, step), 0.0,
                                     &loss);
         score = smoother_cross_validation(smoother, y);
         if (score < best_score && total - trace >= 1.0) {
@@ -607,7 +618,7 @@ smoother_fit(Smoother *smoother, const gdouble *y)
     scale = fmax(sqrt(variance), ROBUST_SCALE_MIN);
     for (step = SMOOTHING_LOG_MIN*SMOOTHING_STEPS_PER_DECADE;
          step <= SMOOTHING_LOG_MAX*SMOOTHING_STEPS_PER_DECADE; step++) {
-        trace = smoother_fit_robust(smoother, y, penalty_weight(step), scale,
+        trace = smoother_fit_robust(smoother, y, penalty_weight(smoother, step), scale,
                                     &loss);
         score = loss + 2.0*COMPLEXITY_PRICE*variance*trace;
         /* Exact data score zero up to rounding at every weight: keep the
@@ -617,7 +628,7 @@ smoother_fit(Smoother *smoother, const gdouble *y)
             best_step = step;
         }
     }
-    smoother_fit_robust(smoother, y, penalty_weight(best_step), scale, &loss);
+    smoother_fit_robust(smoother, y, penalty_weight(smoother, best_step), scale, &loss);
 }
 
 static gint
