@@ -924,6 +924,8 @@ START_TEST(test_help_lists_options)
     ck_assert_int_eq(run.status, 0);
     for (i = 0; i < G_N_ELEMENTS(options); i++)
         ck_assert_msg(strstr(run.out, options[i]), "--help does not list %s:\n%s", options[i], run.out);
+    ck_assert_msg(strstr(run.out, "timed by the file's metadata"), "--help does not say where continuous mode's "
+                  "timing comes from:\n%s", run.out);
     tool_run_clear(&run);
 
     run_tool(&run, (const gchar *const[]){ "--version", NULL });

@@ -72,7 +72,9 @@ static const GOptionEntry option_table[] = {
     { "channel", 'c', 0, G_OPTION_ARG_INT, &options.channel,
       N_("Compensate channel ID (default: the first channel)"), N_("ID") },
     { "mode", 'm', 0, G_OPTION_ARG_STRING, &options.mode_name,
-      N_("Compensation mode: paper (default) or continuous"),
+      N_("Compensation mode: paper (default) or continuous (line by line, "
+         "timed by the file's metadata: line time or line rate, slow-scan "
+         "direction, frame start)"),
       N_("paper|continuous") },
     { "reference", 0, 0, G_OPTION_ARG_FILENAME, &options.reference,
       N_("Measure the drift by registering stripes of the image against "
