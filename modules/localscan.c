@@ -817,7 +817,7 @@ append_registration(GString *status, ModuleArgs *args)
     g_free(dx);
 }
 
-/* Where each part of the scan timing came from, in two short lines. */
+/* Where each part of the scan timing came from, in three short lines. */
 static void
 append_timing(GString *status, const ScanTiming *timing, LocalscanTimingFound found)
 {
@@ -827,11 +827,10 @@ append_timing(GString *status, const ScanTiming *timing, LocalscanTimingFound fo
                            (found & LOCALSCAN_TIMING_LINE_TIME) ? from_meta : assumed);
     g_string_append_c(status, '\n');
     g_string_append_printf(status,
-                           timing->direction == SCAN_DIRECTION_UP
-                           ? _("scan up (%s), frame start %g s (%s).")
-                           : _("scan down (%s), frame start %g s (%s)."),
-                           (found & LOCALSCAN_TIMING_DIRECTION) ? from_meta : _("setting"),
-                           timing->frame_start,
+                           timing->direction == SCAN_DIRECTION_UP ? _("slow scan up (%s),") : _("slow scan down (%s),"),
+                           (found & LOCALSCAN_TIMING_DIRECTION) ? from_meta : _("setting"));
+    g_string_append_c(status, '\n');
+    g_string_append_printf(status, _("frame start %g s (%s)."), timing->frame_start,
                            (found & LOCALSCAN_TIMING_FRAME_START) ? from_meta : assumed);
 }
 

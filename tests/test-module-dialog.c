@@ -204,10 +204,10 @@ END_TEST
 START_TEST(test_status_names_timing_source)
 {
     static const gchar gentle_table[] = "stripe,dx,dy\n0,0,0\n1,0.5,0\n2,1,0\n";
-    DialogProbe with_meta = { "scan up (metadata), frame start 2.5 s (metadata).", GTK_RESPONSE_CANCEL,
-                              0, FALSE, FALSE, FALSE, FALSE, "Line time 1.5 s (metadata),", FALSE };
-    DialogProbe without = { "scan down (setting), frame start 0 s (assumed).", GTK_RESPONSE_CANCEL,
-                            0, FALSE, FALSE, FALSE, FALSE, "Line time 1 s (assumed),", FALSE };
+    DialogProbe with_meta = { "frame start 2.5 s (metadata).", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, FALSE, FALSE,
+                              "Line time 1.5 s (metadata),\nslow scan up (metadata),\n", FALSE };
+    DialogProbe without = { "frame start 0 s (assumed).", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, FALSE, FALSE,
+                            "Line time 1 s (assumed),\nslow scan down (setting),\n", FALSE };
     GwyContainer *settings = gwy_app_settings_get(), *data, *meta;
 
     set_stored_table_settings();
@@ -399,12 +399,13 @@ probe_reference_dialog(gpointer user_data)
         ok_button = gtk_dialog_get_widget_for_response(GTK_DIALOG(dialog), GTK_RESPONSE_OK);
         probe->ok_sensitive = ok_button && gtk_widget_is_sensitive(ok_button);
         probe->graph_points = graph_points(dialog);
-        probe->saved = save_screenshot(dialog, SCREENSHOT);
         widget = find_widget(dialog, GTK_TYPE_RADIO_BUTTON, "Continuous (line by line)");
         ck_assert_msg(widget, "no Continuous radio button");
         gtk_toggle_button_set_active(GTK_TOGGLE_BUTTON(widget), TRUE);
     }
     else if (probe->step == STEP_CONTINUOUS) {
+        /* The longest status: registration and scan timing. */
+        probe->saved = save_screenshot(dialog, SCREENSHOT);
         widget = find_labelled_spin(dialog, "Stripes:");
         ck_assert_msg(widget, "no stripes slider");
         move_stripes(widget, probe);
