@@ -1079,6 +1079,53 @@ START_TEST(test_reference_unrelated_refused)
 }
 END_TEST
 
+/* What the importers of the measured files put into metadata gives their
+ * timing (shared/data/measured/MANIFEST.md: FastScan 2.325 Hz scanning
+ * down, HS-AFM 0.413 s frames 6.189 s apart, nanoIR 0.25-1 Hz, Asylum). */
+typedef struct {
+    const gchar *file;
+    gint id;
+    LocalscanTimingFound found;
+    gdouble line_time;
+    ScanDirection direction;
+    gdouble frame_start;
+} MeasuredTiming;
+
+static const MeasuredTiming measured_timings[] = {
+    { "fastscan-series/09261606.001", 0, LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_DIRECTION,
+      1.0/2.32515, SCAN_DIRECTION_DOWN, 0.0 },
+    { "hsafm-minicircles/hsafm_sample0_frames50-140.gwy", 1, LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_FRAME_START,
+      0.41263/256, SCAN_DIRECTION_UP, 6.189 },
+    { "afmir-film/PEA_BDA_film.axz", 10, LOCALSCAN_TIMING_LINE_TIME, 4.0, SCAN_DIRECTION_UP, 0.0 },
+    { "particles-film/PTO_110_Virgin0001.gwy", 0, LOCALSCAN_TIMING_LINE_TIME, 1.0/1.0016, SCAN_DIRECTION_UP, 0.0 },
+};
+
+START_TEST(test_measured_files_timing)
+{
+    const MeasuredTiming *mt = measured_timings + _i;
+    const gchar *dir = g_getenv("LOCALSCAN_MEASURED_DIR");
+    gchar *path = g_build_filename(dir ? dir : "", mt->file, NULL);
+    GwyContainer *data;
+    ScanTiming t;
+
+    if (!dir || !g_file_test(path, G_FILE_TEST_EXISTS)) {
+        printf("test-module-immediate: SKIPPED %s timing: the measured data is absent (%s)\n", mt->file, path);
+        g_free(path);
+        return;
+    }
+    data = gwy_file_load(path, GWY_RUN_NONINTERACTIVE, NULL);
+    ck_assert_msg(data, "cannot load %s", path);
+    ck_assert_int_eq(localscan_channel_scan_timing(data, mt->id, SCAN_DIRECTION_UP, &t), mt->found);
+    printf("test-module-immediate: %s channel %d: line time %g s, slow scan %s, frame start %g s\n",
+           mt->file, mt->id, t.line_time, t.direction == SCAN_DIRECTION_UP ? "up" : "down", t.frame_start);
+    ck_assert_double_eq_tol(t.line_time, mt->line_time, 1e-12);
+    ck_assert_int_eq(t.direction, mt->direction);
+    ck_assert_double_eq_tol(t.frame_start, mt->frame_start, 1e-12);
+    g_object_unref(data);
+    g_free(path);
+}
+END_TEST
+
 /************************************************************************
  * Continuous mode on simscan's files: timing from their metadata
  ************************************************************************/
@@ -1310,6 +1357,7 @@ main(void)
     tcase_add_test(tc, test_continuous_mode_passes_timing);
     tcase_add_test(tc, test_bad_sources_refused);
     tcase_add_test(tc, test_scan_timing_from_metadata);
+    tcase_add_loop_test(tc, test_measured_files_timing, 0, G_N_ELEMENTS(measured_timings));
     tcase_add_test(tc, test_simscan_default_timing);
     tcase_add_test(tc, test_simscan_up_timing);
     tcase_add_test(tc, test_simscan_frame_start);
