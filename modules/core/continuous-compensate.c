@@ -7,6 +7,9 @@
 #include "config.h"
 #include <math.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include "continuous-compensate.h"
 
 /*
@@ -55,7 +58,7 @@ enum {
     /* Rows whose x prefilter recursions run side by side, interleaved. */
     PREFILTER_BATCH = 8,
     /* Padding of the x coefficient rows: rows 32 KiB apart would share
-     * cache sets while they are read and written across. */
+     * cache sets while they are written across. */
     PREFILTER_ROW_PAD = 8,
     /* Coefficient rows made per back substitution along y. */
     COEFF_BLOCK = 64,
@@ -309,14 +312,15 @@ quad_scatter(gdouble *p, gsize stride, const Quad *q)
     p[3*stride] = (*q)[3];
 }
 
-/* Data values to coefficients along PREFILTER_BATCH rows (stride apart),
- * in place.  Each row's recursion is a serial chain; the eight rows' chains
- * run side by side in two Quads, and lanes keeps the forward pass (n
- * groups of eight) for the backward one.  The rows should be padded
- * (stride not a multiple of 4 KiB) so that reading them across does not
- * keep evicting the same cache set. */
+/* Data values of PREFILTER_BATCH rows of src (src_stride apart) to
+ * coefficients in rows (stride apart).  Each row's recursion is a serial
+ * chain; the eight rows' chains run side by side in two Quads, and lanes
+ * keeps the forward pass (n groups of eight) for the backward one.  rows
+ * should be padded (stride not a multiple of 4 KiB) so that writing them
+ * across does not keep evicting the same cache set. */
 static void VECTOR_CLONES
 prefilter_batch(const Prefilter *prefilter, Quad *restrict lanes,
+                const gdouble *restrict src, gsize src_stride,
                 gdouble *restrict rows, gsize stride)
 {
     const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
@@ -326,15 +330,15 @@ prefilter_batch(const Prefilter *prefilter, Quad *restrict lanes,
     Quad upper, lower, x = { 0.0, 0.0, 0.0, 0.0 };
 
     G_STATIC_ASSERT(PREFILTER_BATCH == 8);
-    quad_gather(rows, stride, &upper);
-    quad_gather(rows + 4*stride, stride, &lower);
+    quad_gather(src, src_stride, &upper);
+    quad_gather(src + 4*src_stride, src_stride, &lower);
     lanes[0] = upper;
     lanes[1] = lower;
     for (i = 1; i < n; i++) {
         f = factor[i];
-        quad_gather(rows + i, stride, &x);
+        quad_gather(src + i, src_stride, &x);
         upper = x - f*upper;
-        quad_gather(rows + 4*stride + i, stride, &x);
+        quad_gather(src + 4*src_stride + i, src_stride, &x);
         lower = x - f*lower;
         lanes[2*i] = upper;
         lanes[2*i + 1] = lower;
@@ -358,12 +362,13 @@ prefilter_batch(const Prefilter *prefilter, Quad *restrict lanes,
 #else
 typedef gdouble Quad;
 
-/* Data values to coefficients along PREFILTER_BATCH rows (stride apart),
- * in place.  Each row's recursion is a serial chain; in lanes (n groups of
- * PREFILTER_BATCH) the rows' values at one column lie side by side, so the
- * chains run together. */
+/* Data values of PREFILTER_BATCH rows of src (src_stride apart) to
+ * coefficients in rows (stride apart).  Each row's recursion is a serial
+ * chain; in lanes (n groups of PREFILTER_BATCH) the rows' values at one
+ * column lie side by side, so the chains run together. */
 static void
 prefilter_batch(const Prefilter *prefilter, Quad *restrict lanes,
+                const gdouble *restrict src, gsize src_stride,
                 gdouble *restrict rows, gsize stride)
 {
     const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
@@ -372,12 +377,12 @@ prefilter_batch(const Prefilter *prefilter, Quad *restrict lanes,
     gint n = prefilter->n, i, k;
 
     for (k = 0; k < PREFILTER_BATCH; k++)
-        lanes[k] = rows[k*stride];
+        lanes[k] = src[k*src_stride];
     for (i = 1; i < n; i++) {
         f = factor[i];
         lane = lanes + i*PREFILTER_BATCH;
         for (k = 0; k < PREFILTER_BATCH; k++)
-            lane[k] = rows[k*stride + i] - f*lane[k - PREFILTER_BATCH];
+            lane[k] = src[k*src_stride + i] - f*lane[k - PREFILTER_BATCH];
     }
     lane = lanes + (n-1)*PREFILTER_BATCH;
     inv = inv_diag[n-1];
@@ -825,7 +830,7 @@ row_shift_is_whole(const ResamplePlan *plan, gint i, gint xres)
 static const gdouble*
 row_shifter_coeffs(RowShifter *shifter, gint i)
 {
-    gint xres = shifter->xres, yres = shifter->yres, first, k;
+    gint xres = shifter->xres, yres = shifter->yres, first;
 
     if (i < shifter->batch_first
         || i >= shifter->batch_first + shifter->batch_count) {
@@ -838,12 +843,8 @@ row_shifter_coeffs(RowShifter *shifter, gint i)
         }
         else {
             first = MIN(i, yres - PREFILTER_BATCH);
-            for (k = 0; k < PREFILTER_BATCH; k++) {
-                memcpy(shifter->coeffs + k*shifter->coeff_stride,
-                       shifter->a + (first + k)*(gsize)xres,
-                       xres*sizeof(gdouble));
-            }
             prefilter_batch(&shifter->x_prefilter, shifter->lanes,
+                            shifter->a + first*(gsize)xres, xres,
                             shifter->coeffs, shifter->coeff_stride);
             shifter->batch_first = first;
             shifter->batch_count = PREFILTER_BATCH;
@@ -910,30 +911,73 @@ rows_need_interpolation(const ResamplePlan *plan, gint yres)
     return FALSE;
 }
 
-/* dest = w1 r1 + w2 r2. */
+/* Writes CHUNK values to dest, past the caches where the processor can
+ * (x86: non-temporal stores, dest 16-byte aligned).  Output rows are
+ * written once and not read here; an ordinary store first reads every line
+ * it writes, and for an image beyond the caches that read doubles the
+ * traffic of writing it. */
+static inline void
+stream_chunk(gdouble *dest, const gdouble *block)
+{
+#if defined(__SSE2__)
+    gint j;
+
+    if (((guintptr)dest & 15) == 0) {
+        for (j = 0; j < CHUNK; j += 2)
+            _mm_stream_pd(dest + j, _mm_loadu_pd(block + j));
+        return;
+    }
+#endif
+    memcpy(dest, block, CHUNK*sizeof(gdouble));
+}
+
+/* Orders the non-temporal stores before anything after the call. */
+static inline void
+stream_finish(void)
+{
+#if defined(__SSE2__)
+    _mm_sfence();
+#endif
+}
+
+/* dest = src, streamed. */
+static void
+copy_row(const gdouble *restrict src, gint n, gdouble *restrict dest)
+{
+    gint c = 0;
+
+    for (; c + CHUNK <= n; c += CHUNK)
+        stream_chunk(dest + c, src + c);
+    for (; c < n; c++)
+        dest[c] = src[c];
+}
+
+/* dest = w1 r1 + w2 r2, streamed. */
 static void VECTOR_CLONES
 combine_two_rows(const gdouble *restrict r1, const gdouble *restrict r2,
                  gdouble w1, gdouble w2, gint n, gdouble *restrict dest)
 {
+    gdouble block[CHUNK];
     gint c = 0, j;
 
     for (; c + CHUNK <= n; c += CHUNK) {
         for (j = 0; j < CHUNK; j++)
-            dest[c + j] = w1*r1[c + j] + w2*r2[c + j];
+            block[j] = w1*r1[c + j] + w2*r2[c + j];
+        stream_chunk(dest + c, block);
     }
     for (; c < n; c++)
         dest[c] = w1*r1[c] + w2*r2[c];
 }
 
-/* dest = sum of w[k] times rows[k]; the outer rows are not read (and may
- * be NULL) when both their weights are zero. */
+/* dest = sum of w[k] times rows[k], streamed; the outer rows are not read
+ * (and may be NULL) when both their weights are zero. */
 static void VECTOR_CLONES
 combine_rows(const gdouble **rows, const gdouble *w, gint n,
              gdouble *restrict dest)
 {
     const gdouble *restrict r0 = rows[0], *restrict r1 = rows[1];
     const gdouble *restrict r2 = rows[2], *restrict r3 = rows[3];
-    gdouble w0 = w[0], w1 = w[1], w2 = w[2], w3 = w[3];
+    gdouble w0 = w[0], w1 = w[1], w2 = w[2], w3 = w[3], block[CHUNK];
     gint c = 0, j;
 
     if (w0 == 0.0 && w3 == 0.0) {
@@ -941,8 +985,11 @@ combine_rows(const gdouble **rows, const gdouble *w, gint n,
         return;
     }
     for (; c + CHUNK <= n; c += CHUNK) {
-        for (j = 0; j < CHUNK; j++)
-            dest[c + j] = w0*r0[c + j] + w1*r1[c + j] + w2*r2[c + j] + w3*r3[c + j];
+        for (j = 0; j < CHUNK; j++) {
+            block[j] = (w0*r0[c + j] + w1*r1[c + j]
+                        + w2*r2[c + j] + w3*r3[c + j]);
+        }
+        stream_chunk(dest + c, block);
     }
     for (; c < n; c++)
         dest[c] = w0*r0[c] + w1*r1[c] + w2*r2[c] + w3*r3[c];
@@ -1021,9 +1068,8 @@ rebuild_rows_streaming(RowShifter *shifter, gint yres,
         if (!isnan(plan->rho[r])) {
             i = source_row_below(plan->rho[r], &frac);
             if (frac == 0.0) {
-                memcpy(result + r*(gsize)xres,
-                       row_ring_shifted(&ring, shifter, i),
-                       xres*sizeof(gdouble));
+                copy_row(row_ring_shifted(&ring, shifter, i), xres,
+                         result + r*(gsize)xres);
             }
             else {
                 kernel_weights(interpolation, frac, w);
@@ -1326,6 +1372,7 @@ continuous_compensate_trajectory(const gdouble *a,
             rebuild_rows_streaming(&shifter, yres, interpolation,
                                    fill_value, result, mask);
         }
+        stream_finish();
         row_shifter_clear(&shifter);
     }
     resample_plan_clear(&plan);
