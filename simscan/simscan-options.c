@@ -15,6 +15,14 @@
 #define NM 1e-9
 #define UM 1e-6
 
+/* Limits beyond which a simulation would only exhaust memory or time; --help
+ * states them. */
+#define MAX_SIZE_UM    1000.0
+#define MIN_RES        8
+#define MAX_RES        16384
+#define MAX_PIXELS     (4096*4096)
+#define MAX_PARTICLES  1000000
+
 /* The options as the user writes them (nm, um, s). */
 typedef struct {
     gchar *preset, *sample, *size, *direction, *drift;
@@ -101,9 +109,11 @@ make_entries(RawOptions *raw)
         { "radius-spread", 0, 0, G_OPTION_ARG_DOUBLE, &raw->radius_spread,
           N_("relative RMS spread of the radii (0)"), "F" },
         { "count", 0, 0, G_OPTION_ARG_INT, &raw->count,
-          N_("number of particles (0: use --density)"), "N" },
+          N_("number of particles (0: use --density; at most 1000000)"),
+          "N" },
         { "density", 0, 0, G_OPTION_ARG_DOUBLE, &raw->density,
-          N_("particles per um^2 when --count is 0 (4)"), "D" },
+          N_("particles per um^2 when --count is 0 (4; density times the "
+             "area at most 1000000 particles)"), "D" },
         { "spacing", 0, 0, G_OPTION_ARG_DOUBLE, &raw->spacing,
           N_("least distance between particle centres, nm (100)"), "NM" },
         { "roughness", 0, 0, G_OPTION_ARG_DOUBLE, &raw->roughness,
@@ -111,12 +121,13 @@ make_entries(RawOptions *raw)
         { "correlation", 0, 0, G_OPTION_ARG_DOUBLE, &raw->correlation,
           N_("substrate correlation length, nm (50)"), "NM" },
         { "xres", 0, 0, G_OPTION_ARG_INT, &raw->xres,
-          N_("pixels per line (256)"), "N" },
+          N_("pixels per line (256; 8 to 16384, xres times yres at most "
+             "16777216)"), "N" },
         { "yres", 0, 0, G_OPTION_ARG_INT, &raw->yres,
-          N_("lines per image (256)"), "N" },
+          N_("lines per image (256; 8 to 16384)"), "N" },
         { "size", 0, 0, G_OPTION_ARG_STRING, &raw->size,
-          N_("scan size, um, square or width,height (5; not with --sample)"),
-          "UM[,UM]" },
+          N_("scan size, um, square or width,height (5; at most 1000, more "
+             "than the particle diameter; not with --sample)"), "UM[,UM]" },
         { "line-time", 0, 0, G_OPTION_ARG_DOUBLE, &raw->line_time,
           N_("seconds per line, trace and retrace (300/256)"), "S" },
         { "direction", 0, 0, G_OPTION_ARG_STRING, &raw->direction,
@@ -250,14 +261,15 @@ check_numbers(const RawOptions *raw, GError **error)
     return (check_range(raw->radius, 0, 1e6, TRUE, "radius", error)
             && check_range(raw->radius_spread, 0, 1, FALSE, "radius-spread",
                            error)
-            && check_range(raw->count, 0, 1e6, FALSE, "count", error)
+            && check_range(raw->count, 0, MAX_PARTICLES, FALSE, "count",
+                           error)
             && check_range(raw->density, 0, 1e6, TRUE, "density", error)
             && check_range(raw->spacing, 0, 1e9, FALSE, "spacing", error)
             && check_range(raw->roughness, 0, 1e6, FALSE, "roughness", error)
             && check_range(raw->correlation, 0, 1e9, TRUE, "correlation",
                            error)
-            && check_range(raw->xres, 8, 16384, FALSE, "xres", error)
-            && check_range(raw->yres, 8, 16384, FALSE, "yres", error)
+            && check_range(raw->xres, MIN_RES, MAX_RES, FALSE, "xres", error)
+            && check_range(raw->yres, MIN_RES, MAX_RES, FALSE, "yres", error)
             && check_range(raw->line_time, 0, 1e6, TRUE, "line-time", error)
             && check_range(raw->noise, 0, 1e6, FALSE, "noise", error)
             && check_range(raw->tip_radius, 0, 1e6, FALSE, "tip-radius", error)
@@ -365,13 +377,13 @@ raw_to_config(const RawOptions *raw, SimscanConfig *config, GError **error)
     config->xres = raw->xres;
     config->yres = raw->yres;
     if (raw->size) {
-        if (!parse_pair(raw->size, "size", TRUE, UM, size, error))
+        if (!parse_pair(raw->size, "size", TRUE, 1.0, size, error))
             return FALSE;
-        if (!check_range(size[0]/UM, 0, 1e6, TRUE, "size", error)
-            || !check_range(size[1]/UM, 0, 1e6, TRUE, "size", error))
+        if (!check_range(size[0], 0, MAX_SIZE_UM, TRUE, "size", error)
+            || !check_range(size[1], 0, MAX_SIZE_UM, TRUE, "size", error))
             return FALSE;
-        config->xreal = pp->xreal = size[0];
-        config->yreal = pp->yreal = size[1];
+        config->xreal = pp->xreal = size[0]*UM;
+        config->yreal = pp->yreal = size[1]*UM;
     }
     config->line_time = raw->line_time;
     if (raw->direction) {
@@ -440,6 +452,44 @@ restore_not_given(RawOptions *raw, const RawOptions *defaults)
     if (raw->velocity)
         given |= SIMSCAN_GIVEN_VELOCITY;
     return given;
+}
+
+/* What the options allow one by one may still be too much together. */
+static gboolean
+check_scene_limits(const SimscanConfig *config, GError **error)
+{
+    const SimParticleParams *pp = &config->particles;
+    gdouble pixels = (gdouble)config->xres*config->yres, particles;
+    gchar *msg;
+
+    if (pixels > MAX_PIXELS) {
+        msg = g_strdup_printf(_("%d x %d is more than %d pixels"),
+                              config->xres, config->yres, MAX_PIXELS);
+        bad_value(error, "xres", msg);
+        g_free(msg);
+        return FALSE;
+    }
+    if (config->sample_file)
+        return TRUE;
+    if (2.0*pp->radius >= MIN(pp->xreal, pp->yreal)) {
+        msg = g_strdup_printf(_("particles %g nm across do not fit a scan "
+                                "of %g x %g um"), 2e9*pp->radius,
+                              1e6*pp->xreal, 1e6*pp->yreal);
+        bad_value(error, "radius", msg);
+        g_free(msg);
+        return FALSE;
+    }
+    particles = pp->density*pp->xreal*pp->yreal;
+    if (!pp->count && particles > MAX_PARTICLES) {
+        msg = g_strdup_printf(_("%g particles per um^2 over %g x %g um are "
+                                "%.3g particles, more than %d"),
+                              pp->density*UM*UM, 1e6*pp->xreal, 1e6*pp->yreal,
+                              particles, MAX_PARTICLES);
+        bad_value(error, "density", msg);
+        g_free(msg);
+        return FALSE;
+    }
+    return TRUE;
 }
 
 /* A measured sample sets the defaults of what the user did not give. */
@@ -524,6 +574,7 @@ simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
         given = restore_not_given(&raw, &defaults);
     ok = ok && raw_to_config(&raw, config, error);
     ok = ok && (!config->sample_file || adopt_sample(config, &raw, given, error));
+    ok = ok && check_scene_limits(config, error);
     g_strfreev(args);
     raw_clear(&raw);
     g_free(entries);

@@ -44,7 +44,8 @@ local_scan_time_bound(const SimscanConfig *config, gint n_stripes)
            + n_stripes*lines*local_scan_line_time(lp);
 }
 
-static void
+/* FALSE when the sample cannot be made from the configuration. */
+static gboolean
 make_sample_and_scan(SimscanScene *scene, GwyDataField *sample_field)
 {
     const SimscanConfig *config = scene->config;
@@ -54,6 +55,8 @@ make_sample_and_scan(SimscanScene *scene, GwyDataField *sample_field)
     else
         scene->sample = sim_sample_new_particles(&config->particles,
                                                  config->seed);
+    if (!scene->sample)
+        return FALSE;
     sim_scan_params_init(&scene->scan, scene->sample,
                          config->xres, config->yres);
     if (!sample_field) {
@@ -67,6 +70,7 @@ make_sample_and_scan(SimscanScene *scene, GwyDataField *sample_field)
     scene->scan.tip_radius = config->tip_radius;
     scene->scan.noise_seed = config->seed ^ NOISE_SEED_SALT;
     sim_scan_params_timing(&scene->scan, &scene->timing);
+    return TRUE;
 }
 
 SimscanScene*
@@ -76,8 +80,8 @@ simscan_scene_new(const SimscanConfig *config, GwyDataField *sample_field,
     SimscanScene *scene = g_new0(SimscanScene, 1);
 
     scene->config = config;
-    make_sample_and_scan(scene, config->sample_file ? sample_field : NULL);
-    if (!scene->sample) {
+    if (!make_sample_and_scan(scene,
+                              config->sample_file ? sample_field : NULL)) {
         g_set_error(error, SIMSCAN_ERROR, 0,
                     _("cannot make the sample from these parameters"));
         simscan_scene_free(scene);

@@ -79,6 +79,11 @@ bad_case --ls-threshold 1.5
 bad_case --radius abc
 bad_case --sample "$tmp/missing.gwy"
 bad_case unexpected-argument
+# Absurd scenes are refused before anything is simulated.
+bad_case --size 1e6
+bad_case --size 1000 --density 10
+bad_case --size 2 --radius 2000
+bad_case --xres 8192 --yres 4096
 
 # One output unwritable: none of the others is left behind.
 rm -f "$tmp"/e.*
@@ -101,6 +106,11 @@ for opt in preset sample radius radius-spread count density spacing \
         prefer-whole-particles seed output table json quiet; do
     check
     grep -q -- "--$opt" "$tmp/help" || fail "--help does not list --$opt"
+done
+# ... and the limits of the scene.
+for limit in "at most 1000000" "8 to 16384" "at most 16777216" "at most 1000,"; do
+    check
+    grep -q -- "$limit" "$tmp/help" || fail "--help does not state the limit '$limit'"
 done
 
 # --prefer-whole-particles reaches the local scans.  Figure 6 with seed 31
