@@ -14,20 +14,22 @@
 #include "continuous-simscan-case.h"
 
 /* Continuous mode's bound, px RMS.  The study (bench/study-accuracy,
- * docs/accuracy.md) finds 0.17 px on average over 20 seeds, 0.24 at worst;
- * with perfect local scans 0.15, the detector's own error on a drift-free
- * scan 0.12. */
+ * docs/accuracy.md) finds 0.152 px on average over seeds 1-100, 0.19 at
+ * worst; with perfect local scans 0.14, the detector's own error on a
+ * drift-free scan 0.12. */
 #define CONTINUOUS_RMS_MAX 0.2
 
-/* The paper scenario (simscan --preset paper) with simulator seeds 1-4
- * (continuous 0.18, 0.16, 0.16, 0.15 px; paper mode 0.36, 0.37, 0.35,
- * 0.34 px): fixed, since 3 seeds in 60 exceed the bound.  Continuous mode
- * within CONTINUOUS_RMS_MAX and better than paper mode, each judged
- * against the moment it shows; it must also still match nine in ten
- * particles. */
+static guint32 base_seed;
+
+/* The paper scenario (simscan --preset paper) with four consecutive
+ * simulator seeds from a random one (printed; LOCALSCAN_TEST_SEED repeats
+ * it): all of seeds 1-100 keep the bound since the trajectory is fitted
+ * robustly.  Continuous mode within CONTINUOUS_RMS_MAX and better than
+ * paper mode, each judged against the moment it shows; it must also still
+ * match nine in ten particles. */
 START_TEST(test_paper_scenario)
 {
-    guint32 seed = 1 + _i;
+    guint32 seed = base_seed + _i;
     SimscanConfig config;
     AccuracyCase c;
     GError *error = NULL;
@@ -60,10 +62,18 @@ END_TEST
 int
 main(void)
 {
+    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
     Suite *suite = suite_create("continuous-simscan");
     TCase *tc = tcase_create("core");
     SRunner *sr;
     gint failed;
+
+    /* Small and non-zero, as simscan seeds are given. */
+    base_seed = env ? (guint32)strtoul(env, NULL, 10) : g_random_int();
+    base_seed = MAX(base_seed % 1000000u, 1u);
+    printf("test-continuous-simscan: simscan seeds %u-%u (set "
+           "LOCALSCAN_TEST_SEED to repeat)\n", base_seed, base_seed + 3);
+    fflush(stdout);
 
     tcase_add_loop_test(tc, test_paper_scenario, 0, 4);
     tcase_set_timeout(tc, 120);
