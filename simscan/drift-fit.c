@@ -26,6 +26,20 @@ typedef struct {
     gdouble longest_gap;   /* longest stretch without a measured time */
 } Prepared;
 
+/* What is fitted: a DriftModelType, or a creep form after them. */
+typedef gint FitKind;
+
+#define KIND_ACCELERATION (DRIFT_MODEL_NTYPES + DRIFT_FIT_CREEP_ACCELERATION)
+#define KIND_LOG_CREEP (DRIFT_MODEL_NTYPES + DRIFT_FIT_CREEP_LOGARITHMIC)
+
+static FitKind
+fit_kind(const DriftFit *fit)
+{
+    if (fit->creep != DRIFT_FIT_CREEP_NONE)
+        return DRIFT_MODEL_NTYPES + fit->creep;
+    return fit->type;
+}
+
 static const DriftModelType candidate_types[] = {
     DRIFT_MODEL_NONE, DRIFT_MODEL_SETTLING, DRIFT_MODEL_OSCILLATION,
     DRIFT_MODEL_JUMP,
@@ -50,12 +64,18 @@ drift_fit_options_init(DriftFitOptions *options)
     options->min_cycles = 1.5;
 }
 
+gdouble
+drift_fit_min_period(gdouble line_time, gint lines, gint n_blocks)
+{
+    return 3.0*line_time*lines/MAX(n_blocks, 1);
+}
+
 /* Basis functions of the trajectory at t for nonlinear parameter theta. */
 static gint
-model_basis(DriftModelType type, gdouble theta, gdouble t, gdouble *f)
+model_basis(FitKind kind, gdouble theta, gdouble t, gdouble *f)
 {
     f[0] = t;
-    switch (type) {
+    switch (kind) {
         case DRIFT_MODEL_SETTLING:
         f[1] = -theta*expm1(-t/theta);
         return 2;
@@ -69,16 +89,24 @@ model_basis(DriftModelType type, gdouble theta, gdouble t, gdouble *f)
         f[1] = (t >= theta) ? 1.0 : 0.0;
         return 2;
 
+        case KIND_ACCELERATION:
+        f[1] = t*t;
+        return 2;
+
+        case KIND_LOG_CREEP:
+        f[1] = theta*log1p(t/theta);
+        return 2;
+
         default:
         return 1;
     }
 }
 
 static gboolean
-model_has_nonlinear(DriftModelType type)
+model_has_nonlinear(FitKind kind)
 {
-    return (type == DRIFT_MODEL_SETTLING || type == DRIFT_MODEL_OSCILLATION
-            || type == DRIFT_MODEL_JUMP);
+    return (kind == DRIFT_MODEL_SETTLING || kind == DRIFT_MODEL_OSCILLATION
+            || kind == DRIFT_MODEL_JUMP || kind == KIND_LOG_CREEP);
 }
 
 static gint
@@ -140,9 +168,12 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
     pm->t_max = 0.0;
     for (i = 0; i < n; i++) {
         const DriftMeasurement *m = meas + i;
+        /* Content seen again no later than it was first scanned means
+         * frames overlapping in time (wrong timing): no drift to read. */
         gboolean usable = (m->weight > 0.0 && isfinite(m->weight)
                            && isfinite(m->dx) && isfinite(m->dy)
                            && isfinite(m->t_a) && isfinite(m->t_b)
+                           && m->t_a > m->t_b
                            && (!mask || mask[i]));
 
         pm->ta[i] = m->t_a;
@@ -227,7 +258,7 @@ solve_small(gdouble *a, gdouble *b, gint k, gdouble *x)
 /* Weighted least squares for a fixed nonlinear parameter; returns the
  * weighted residual sum of squares (nm^2) over both axes. */
 static gdouble
-solve_fixed(const Prepared *pm, DriftModelType type, gdouble theta,
+solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
             gdouble coef[2][MAX_BASIS], gint *n_basis)
 {
     gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], fa[MAX_BASIS],
@@ -237,11 +268,12 @@ solve_fixed(const Prepared *pm, DriftModelType type, gdouble theta,
 
     memset(ata, 0, sizeof(ata));
     memset(atb, 0, sizeof(atb));
+    memset(coef, 0, 2*MAX_BASIS*sizeof(gdouble));
     for (i = 0; i < pm->n; i++) {
         if (pm->w[i] <= 0.0)
             continue;
-        k = model_basis(type, theta, pm->ta[i], fa);
-        model_basis(type, theta, pm->tb[i], fb);
+        k = model_basis(kind, theta, pm->ta[i], fa);
+        model_basis(kind, theta, pm->tb[i], fb);
         for (j = 0; j < k; j++)
             row[j] = fa[j] - fb[j];
         for (j = 0; j < k; j++) {
@@ -251,6 +283,10 @@ solve_fixed(const Prepared *pm, DriftModelType type, gdouble theta,
             atb[1][j] += pm->w[i]*row[j]*pm->d[1][i];
         }
     }
+    for (j = 0; j < k*k; j++) {
+        if (!isfinite(ata[j]))
+            return NAN;
+    }
     for (ax = 0; ax < 2; ax++) {
         memcpy(a, ata, sizeof(a));
         solve_small(a, atb[ax], k, coef[ax]);
@@ -258,8 +294,8 @@ solve_fixed(const Prepared *pm, DriftModelType type, gdouble theta,
     for (i = 0; i < pm->n; i++) {
         if (pm->w[i] <= 0.0)
             continue;
-        model_basis(type, theta, pm->ta[i], fa);
-        model_basis(type, theta, pm->tb[i], fb);
+        model_basis(kind, theta, pm->ta[i], fa);
+        model_basis(kind, theta, pm->tb[i], fb);
         for (ax = 0; ax < 2; ax++) {
             gdouble r = pm->d[ax][i];
             for (j = 0; j < k; j++)
@@ -315,7 +351,7 @@ oscillation_visibility(const Prepared *pm, gdouble period)
 
 /* Candidate values of the nonlinear parameter; 0 when there are none. */
 static gint
-parameter_grid(const Prepared *pm, DriftModelType type,
+parameter_grid(const Prepared *pm, FitKind kind,
                const DriftFitOptions *options, gdouble **grid)
 {
     gdouble tmin = MAX(2.0*pm->t_resolution, options->min_period);
@@ -323,13 +359,13 @@ parameter_grid(const Prepared *pm, DriftModelType type,
     gdouble pshort, plong;
     gint i, m, nt;
 
-    if (type == DRIFT_MODEL_SETTLING) {
+    if (kind == DRIFT_MODEL_SETTLING || kind == KIND_LOG_CREEP) {
         m = 80;
         g = g_new(gdouble, m);
         for (i = 0; i < m; i++)
             g[i] = 0.5*tmin*pow(6.0*tmax/(0.5*tmin), i/(m - 1.0));
     }
-    else if (type == DRIFT_MODEL_OSCILLATION) {
+    else if (kind == DRIFT_MODEL_OSCILLATION) {
         /* Uniform in frequency, fine enough that no alias is missed. */
         gdouble fmin, fmax, df = 0.125/tmax;
 
@@ -369,7 +405,7 @@ parameter_grid(const Prepared *pm, DriftModelType type,
 }
 
 static gdouble
-refine_golden(const Prepared *pm, DriftModelType type, gdouble lo, gdouble hi,
+refine_golden(const Prepared *pm, FitKind kind, gdouble lo, gdouble hi,
               gdouble best_theta, gdouble best_rss, gdouble *theta)
 {
     const gdouble r = 0.5*(sqrt(5.0) - 1.0);
@@ -378,22 +414,22 @@ refine_golden(const Prepared *pm, DriftModelType type, gdouble lo, gdouble hi,
 
     x1 = b - r*(b - a);
     x2 = a + r*(b - a);
-    f1 = solve_fixed(pm, type, x1, coef, &k);
-    f2 = solve_fixed(pm, type, x2, coef, &k);
+    f1 = solve_fixed(pm, kind, x1, coef, &k);
+    f2 = solve_fixed(pm, kind, x2, coef, &k);
     for (i = 0; i < GOLDEN_STEPS; i++) {
         if (f1 < f2) {
             b = x2;
             x2 = x1;
             f2 = f1;
             x1 = b - r*(b - a);
-            f1 = solve_fixed(pm, type, x1, coef, &k);
+            f1 = solve_fixed(pm, kind, x1, coef, &k);
         }
         else {
             a = x1;
             x1 = x2;
             f1 = f2;
             x2 = a + r*(b - a);
-            f2 = solve_fixed(pm, type, x2, coef, &k);
+            f2 = solve_fixed(pm, kind, x2, coef, &k);
         }
     }
     if (MIN(f1, f2) < best_rss) {
@@ -404,28 +440,50 @@ refine_golden(const Prepared *pm, DriftModelType type, gdouble lo, gdouble hi,
     return best_rss;
 }
 
+/* Every coefficient and the nonlinear parameter finite. */
 static gboolean
-fit_prepared(const Prepared *pm, DriftModelType type,
+fit_is_finite(const DriftFit *fit, gdouble rss)
+{
+    gint ax, j;
+
+    if (!isfinite(rss) || !isfinite(fit->nonlinear))
+        return FALSE;
+    for (ax = 0; ax < 2; ax++) {
+        for (j = 0; j < fit->n_basis; j++) {
+            if (!isfinite(fit->coef[ax][j]))
+                return FALSE;
+        }
+    }
+    return TRUE;
+}
+
+static gboolean
+fit_prepared(const Prepared *pm, FitKind kind,
              const DriftFitOptions *options, DriftFit *fit)
 {
     gdouble coef[2][MAX_BASIS], *grid = NULL, theta = 0.0, rss, best;
     gint i, m, k, ibest = 0, nn;
 
     memset(fit, 0, sizeof(DriftFit));
-    fit->type = type;
+    if (kind >= DRIFT_MODEL_NTYPES) {
+        fit->type = DRIFT_MODEL_NONE;
+        fit->creep = kind - DRIFT_MODEL_NTYPES;
+    }
+    else
+        fit->type = kind;
     fit->cv_rms_nm = NAN;
     fit->bic = fit->rms_nm = NAN;
     if (pm->n_used < 3)
         return FALSE;
 
-    if (model_has_nonlinear(type)) {
-        if (!(m = parameter_grid(pm, type, options, &grid)))
+    if (model_has_nonlinear(kind)) {
+        if (!(m = parameter_grid(pm, kind, options, &grid)))
             return FALSE;
         fit->range[0] = MIN(grid[0], grid[m-1]);
         fit->range[1] = MAX(grid[0], grid[m-1]);
         best = G_MAXDOUBLE;
         for (i = 0; i < m; i++) {
-            rss = solve_fixed(pm, type, grid[i], coef, &k);
+            rss = solve_fixed(pm, kind, grid[i], coef, &k);
             if (rss < best) {
                 best = rss;
                 ibest = i;
@@ -433,25 +491,29 @@ fit_prepared(const Prepared *pm, DriftModelType type,
         }
         theta = grid[ibest];
         fit->at_limit = (theta == fit->range[1]) ? 1 : (theta == fit->range[0]) ? -1 : 0;
-        if (type != DRIFT_MODEL_JUMP && m > 2)
-            best = refine_golden(pm, type, grid[MAX(ibest - 1, 0)],
+        if (kind != DRIFT_MODEL_JUMP && m > 2)
+            best = refine_golden(pm, kind, grid[MAX(ibest - 1, 0)],
                                  grid[MIN(ibest + 1, m - 1)],
                                  theta, best, &theta);
-        if (type == DRIFT_MODEL_OSCILLATION
+        if (kind == DRIFT_MODEL_OSCILLATION
             && oscillation_visibility(pm, theta) < MIN_VISIBILITY)
             theta = grid[ibest];
         g_free(grid);
     }
-    rss = solve_fixed(pm, type, theta, coef, &k);
+    rss = solve_fixed(pm, kind, theta, coef, &k);
     fit->n_basis = k;
     memcpy(fit->coef, coef, sizeof(coef));
     fit->nonlinear = theta;
-    fit->n_params = 2*k + (model_has_nonlinear(type) ? 1 : 0);
+    fit->n_params = 2*k + (model_has_nonlinear(kind) ? 1 : 0);
     nn = fit->n_used = 2*pm->n_used;
+    /* A non-finite fit (times whose squares overflow, say) must not reach
+     * the criterion: clamping its NaN residual would make it the best. */
+    if (!fit_is_finite(fit, rss) || nn <= fit->n_params)
+        return FALSE;
     fit->rms_nm = sqrt(rss/nn);
     fit->bic = nn*log(MAX(rss/nn, 1e-30)) + fit->n_params*log(nn);
-    fit->ok = (nn > fit->n_params);
-    return fit->ok;
+    fit->ok = TRUE;
+    return TRUE;
 }
 
 gboolean
@@ -478,7 +540,7 @@ drift_fit_eval(const DriftFit *fit, gdouble t, gdouble *px, gdouble *py)
     gdouble f[MAX_BASIS], p[2] = { 0.0, 0.0 };
     gint j, k, ax;
 
-    k = model_basis(fit->type, fit->nonlinear, t, f);
+    k = model_basis(fit_kind(fit), fit->nonlinear, t, f);
     for (ax = 0; ax < 2; ax++) {
         for (j = 0; j < MIN(k, fit->n_basis); j++)
             p[ax] += fit->coef[ax][j]*f[j];
@@ -501,7 +563,7 @@ drift_fit_predict(const DriftFit *fit, const DriftMeasurement *m,
 
 static gdouble
 cross_validate_masked(const DriftMeasurement *meas, gint n,
-                      const gboolean *mask, DriftModelType type,
+                      const gboolean *mask, FitKind kind,
                       const DriftFitOptions *options)
 {
     gint folds = MAX(options->n_folds, 2), f, i, count = 0;
@@ -521,7 +583,7 @@ cross_validate_masked(const DriftMeasurement *meas, gint n,
         if (!any)
             continue;
         prepare(meas, n, train, &pm);
-        if (fit_prepared(&pm, type, options, &fit)) {
+        if (fit_prepared(&pm, kind, options, &fit)) {
             for (i = 0; i < n; i++) {
                 gdouble dx, dy, rx, ry;
 
@@ -571,6 +633,28 @@ drift_fit_cross_validate(const DriftMeasurement *meas, gint n,
         options = &defaults;
     }
     return cross_validate_masked(meas, n, NULL, type, options);
+}
+
+gboolean
+drift_fit_creep(const DriftMeasurement *meas, gint n, DriftFitCreep creep,
+                const DriftFitOptions *options, DriftFit *fit)
+{
+    DriftFitOptions defaults;
+    FitKind kind = DRIFT_MODEL_NTYPES + creep;
+    Prepared pm;
+
+    g_return_val_if_fail(creep == DRIFT_FIT_CREEP_ACCELERATION
+                         || creep == DRIFT_FIT_CREEP_LOGARITHMIC, FALSE);
+    if (!options) {
+        drift_fit_options_init(&defaults);
+        options = &defaults;
+    }
+    prepare(meas, n, NULL, &pm);
+    fit_prepared(&pm, kind, options, fit);
+    prepared_free(&pm);
+    if (fit->ok)
+        fit->cv_rms_nm = cross_validate_masked(meas, n, NULL, kind, options);
+    return fit->ok;
 }
 
 static gint
@@ -630,7 +714,7 @@ static void
 drop_outliers(const DriftMeasurement *meas, gint n,
               const DriftFitOptions *options, DriftFit *fit, gboolean *mask)
 {
-    DriftModelType type = fit->type;
+    FitKind kind = fit_kind(fit);
     Prepared pm;
     gint dropped, worst;
 
@@ -640,7 +724,7 @@ drop_outliers(const DriftMeasurement *meas, gint n,
             break;
         mask[worst] = FALSE;
         prepare(meas, n, mask, &pm);
-        fit_prepared(&pm, type, options, fit);
+        fit_prepared(&pm, kind, options, fit);
         prepared_free(&pm);
         if (!fit->ok)
             break;
@@ -755,7 +839,7 @@ drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
         params->u_nm_per_s[ax] = params->amplitude_nm[ax] = NAN;
         params->step_nm[ax] = params->accel_nm_per_s2[ax] = NAN;
     }
-    switch (fit->type) {
+    switch (fit_kind(fit)) {
         case DRIFT_MODEL_SETTLING:
         params->tau_s = fit->nonlinear;
         params->u_nm_per_s[0] = fit->coef[0][1];
@@ -771,6 +855,17 @@ drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
         params->t_s = fit->nonlinear;
         params->step_nm[0] = fit->coef[0][1];
         params->step_nm[1] = fit->coef[1][1];
+        break;
+
+        case KIND_ACCELERATION:
+        params->accel_nm_per_s2[0] = 2.0*fit->coef[0][1];
+        params->accel_nm_per_s2[1] = 2.0*fit->coef[1][1];
+        break;
+
+        case KIND_LOG_CREEP:
+        params->tau_s = fit->nonlinear;
+        params->u_nm_per_s[0] = fit->coef[0][1];
+        params->u_nm_per_s[1] = fit->coef[1][1];
         break;
 
         default:

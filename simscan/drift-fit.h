@@ -18,6 +18,8 @@ G_BEGIN_DECLS
  * displaced by (dx, dy) when scanned again at time t_a, so
  *     (dx, dy) = p(t_a) - p(t_b)
  * for the trajectory p of interfaces.md section 4.  The constant p0 cancels.
+ * A measurement with t_a not later than t_b (frames overlapping in time) is
+ * not used.
  */
 typedef struct {
     gdouble t_a, t_b;      /* s */
@@ -26,6 +28,16 @@ typedef struct {
     gint group;            /* unit held out together in cross-validation */
     gint frame_a, frame_b; /* frames the times belong to (informative) */
 } DriftMeasurement;
+
+/* Slow-creep forms fitted beside the drift models so that a study can
+ * compare them on measured data (docs/validation-study.c).  They are no
+ * simulator drift models, so drift_fit_select never names them. */
+typedef enum {
+    DRIFT_FIT_CREEP_NONE = 0,      /* not a creep form: a drift model */
+    DRIFT_FIT_CREEP_ACCELERATION,  /* p = v t + b t^2 */
+    DRIFT_FIT_CREEP_LOGARITHMIC,   /* p = v t + c t0 log(1 + t/t0), t0
+                                      searched like settling's tau */
+} DriftFitCreep;
 
 /* A fitted trajectory: p(t) = sum_j coef[axis][j] basis_j(t; nonlinear),
  * with basis_0(t) = t (the constant velocity) and p(0) = 0. */
@@ -45,6 +57,7 @@ typedef struct {
     gdouble cv_rms_nm;     /* cross-validated RMS prediction error, NaN if
                               not computed */
     gdouble bic;           /* Bayesian information criterion (lower better) */
+    DriftFitCreep creep;   /* a creep form (type is then NONE), else NONE */
 } DriftFit;
 
 typedef struct {
@@ -68,12 +81,23 @@ typedef struct {
 
 void           drift_fit_options_init (DriftFitOptions *options);
 
+/* The shortest period or time constant worth searching (s, for
+ * DriftFitOptions.min_period) when frames of `lines` lines of line_time s
+ * are registered in n_blocks blocks of lines: a block averages the drift
+ * over its lines, so periods and time constants shorter than a few blocks
+ * cannot be told from registration error. */
+gdouble        drift_fit_min_period   (gdouble line_time,
+                                       gint lines,
+                                       gint n_blocks);
+
 /* The model types drift_fit_select tries, in order; n gets their count. */
 const DriftModelType* drift_fit_candidates(gint *n);
 
 /* Fits one model type to n measurements (weighted least squares, the
  * nonlinear parameter by a grid search refined by golden section).  FALSE
- * (fit->ok FALSE) when there are too few usable measurements. */
+ * (fit->ok FALSE) when there are too few usable measurements or the fit is
+ * not finite (times so large that their squares overflow, say); such a fit
+ * is never selected. */
 gboolean       drift_fit_model        (const DriftMeasurement *meas,
                                        gint n,
                                        DriftModelType type,
@@ -94,12 +118,24 @@ gboolean       drift_fit_observable_periods(const DriftMeasurement *meas,
                                             gdouble *shortest,
                                             gdouble *longest);
 
-/* Cross-validated RMS prediction error (nm): groups split into folds, each
- * fold predicted by the model fitted to the others. */
+/* Cross-validated RMS prediction error (nm): groups split into folds
+ * (group modulo n_folds), each fold predicted by the model fitted to the
+ * others, its nonlinear parameter searched again; NaN when no fold could be
+ * fitted.  drift_fit_select fills DriftFit.cv_rms_nm the same way over the
+ * measurements it kept. */
 gdouble        drift_fit_cross_validate(const DriftMeasurement *meas,
                                         gint n,
                                         DriftModelType type,
                                         const DriftFitOptions *options);
+
+/* Fits a creep form (not DRIFT_FIT_CREEP_NONE) like drift_fit_model and
+ * fills fit->cv_rms_nm by the cross-validation of drift_fit_cross_validate.
+ * fit->type is DRIFT_MODEL_NONE, fit->creep the form. */
+gboolean       drift_fit_creep        (const DriftMeasurement *meas,
+                                       gint n,
+                                       DriftFitCreep creep,
+                                       const DriftFitOptions *options,
+                                       DriftFit *fit);
 
 /* Fits every candidate (fits gets drift_fit_candidates' count of entries),
  * drops gross outliers (weights set to 0 in a private copy) and returns the
@@ -133,12 +169,15 @@ void           drift_fit_predict      (const DriftFit *fit,
                                        gdouble *dy);
 /* The fit as a simulator drift model (p0 = 0).  An oscillation fitted with
  * independent phases per axis gets the phase of its larger axis and the
- * other axis' signed projection on it. */
+ * other axis' signed projection on it.  A creep form has no simulator
+ * model: it gives its constant velocity alone. */
 void           drift_fit_to_model     (const DriftFit *fit,
                                        DriftModel *model);
 
-/* The reported effect parameters, physical units: tau_s; period_s,
- * amplitude_nm[2], phase_rad; t_s, step_nm[2].  Unused fields are NaN. */
+/* The reported effect parameters, physical units: tau_s, u_nm_per_s[2]
+ * (settling; logarithmic creep: t0 and c, its initial excess velocity);
+ * period_s, amplitude_nm[2], phase_rad; t_s, step_nm[2]; accel_nm_per_s2[2]
+ * (constant acceleration, 2 b).  Unused fields are NaN. */
 typedef struct {
     gdouble velocity_nm_per_s[2];
     gdouble tau_s;
