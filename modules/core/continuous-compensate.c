@@ -475,12 +475,12 @@ eliminate_row(gdouble *restrict row, const gdouble *restrict prev, gdouble q,
 }
 
 /* Output pixels first .. last, all reading the source at the offset
- * d = i - c with four taps inside.  The position is computed from the
- * column as in row_valid_range() at the start of each chunk, and within
- * the chunk stepped on by x_step - 1 (exact) times j: the two differ by
- * rounding only, far below the 1e-12 px that matter.  With eliminate, q
- * times prev is subtracted (the y prefilter's forward elimination, done
- * while the values are at hand). */
+ * d = i - c with four taps inside.  The position is computed per pixel
+ * from the column, never stepped on (x_start + x_step c rounds differently
+ * from one column to the next, exactly as Gwyddion's c + shift does), with
+ * columns counted in doubles, which hold integers exactly.  With
+ * eliminate, q times prev is subtracted (the y prefilter's forward
+ * elimination, done while the values are at hand). */
 KERNEL_INLINE void
 resample_run(GwyInterpolationType type, gboolean eliminate,
              const gdouble *restrict src, gint d,
@@ -488,15 +488,14 @@ resample_run(GwyInterpolationType type, gboolean eliminate,
              const gdouble *restrict prev, gdouble q, gdouble *restrict dest)
 {
     const gdouble *s = src + d;
-    gdouble w[KERNEL_TAPS], step[CHUNK], frac, v;
+    gdouble w[KERNEL_TAPS], column, offset = d, v;
     gint c = first, j;
 
-    for (j = 0; j < CHUNK; j++)
-        step[j] = (x_step - 1.0)*j;
     for (; c + CHUNK - 1 <= last; c += CHUNK) {
-        frac = (x_start + x_step*c) - (c + d);
+        column = c;
         for (j = 0; j < CHUNK; j++) {
-            kernel_weights(type, frac + step[j], w);
+            kernel_weights(type, ((x_start + x_step*(column + j))
+                                  - ((column + j) + offset)), w);
             v = kernel_apply(type, s + c + j, w);
             dest[c + j] = eliminate ? v - q*prev[c + j] : v;
         }
