@@ -1,0 +1,200 @@
+/*
+ *  Tests of continuous compensation on images larger than its row buffers:
+ *  the y prefilter solved block by block through a ring of rows (each block
+ *  from a truncated back substitution), the x prefilter in batches of rows,
+ *  rows in chunks with a remainder, and rows not aligned for streaming
+ *  stores must all give Gwyddion's values.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <check.h>
+#include <glib.h>
+#include <libprocess/interpolation.h>
+#include "continuous-compensate.h"
+
+static guint32 test_seed;
+
+static const GwyInterpolationType all_kernels[] = {
+    GWY_INTERPOLATION_ROUND, GWY_INTERPOLATION_LINEAR, GWY_INTERPOLATION_KEY,
+    GWY_INTERPOLATION_BSPLINE, GWY_INTERPOLATION_OMOMS, GWY_INTERPOLATION_NNA,
+    GWY_INTERPOLATION_SCHAUM,
+};
+
+static GRand*
+test_rand(guint32 salt)
+{
+    return g_rand_new_with_seed(test_seed ^ (salt*2654435761u));
+}
+
+static gdouble*
+random_image(gint xres, gint yres, GRand *rng)
+{
+    gdouble *a = g_new(gdouble, xres*yres);
+    gint k;
+
+    for (k = 0; k < xres*yres; k++)
+        a[k] = g_rand_double_range(rng, -5.0, 10.0);
+    return a;
+}
+
+/* The same drift (px) in every one of n stripes. */
+static DriftTable*
+constant_table(gint n, gdouble dx, gdouble dy)
+{
+    DriftTable *table = drift_table_new(n, DRIFT_UNIT_PX);
+    gint s;
+
+    for (s = 0; s < n; s++) {
+        table->rows[s].has_drift = TRUE;
+        table->rows[s].dx = dx;
+        table->rows[s].dy = dy;
+    }
+    return table;
+}
+
+/* A fractional shift of either sign, at least 0.1 px from whole, in
+ * 1/1024 px: then c + shift is exact for any column, in Gwyddion's
+ * positions here as in the module's, and the comparison sees the filters
+ * alone (a position rounded near column 1000 moves a value by 1e-12). */
+static gdouble
+random_fractional_shift(GRand *rng)
+{
+    gdouble shift;
+
+    do {
+        shift = g_rand_int_range(rng, -2969, 2970)/1024.0;
+    } while (fabs(shift - floor(shift + 0.5)) < 0.1);
+    return shift;
+}
+
+/* Gwyddion's interpolation of n values (stride apart) at every position
+ * first + shift .. last + shift: coefficients resolved once for the line. */
+static void
+gwyddion_line(const gdouble *data, gint n, gsize stride, gdouble shift,
+              gint first, gint last, GwyInterpolationType type,
+              gdouble *values)
+{
+    gdouble *coeffs = g_new(gdouble, n), x;
+    gint support = gwy_interpolation_get_support_size(type), k, i, from;
+
+    for (k = 0; k < n; k++)
+        coeffs[k] = data[k*stride];
+    gwy_interpolation_resolve_coeffs_1d(n, coeffs, type);
+    for (k = first; k <= last; k++) {
+        x = k + shift;
+        i = (gint)floor(x);
+        from = (support == 4) ? i - 1 : i;
+        g_assert(from >= 0 && from + support <= n);
+        values[k] = gwy_interpolation_interpolate_1d(x - i, coeffs + from,
+                                                     type);
+    }
+    g_free(coeffs);
+}
+
+/* A constant fractional y shift of an image several y blocks tall (and of
+ * odd width, so every other row is not 16-byte aligned): every column is
+ * Gwyddion's interpolation of the column, prefilter included, to 1e-12. */
+START_TEST(test_tall_shift_matches_gwyddion)
+{
+    GRand *rng = test_rand(10);
+    gint xres = 23, yres = 397, size = xres*yres, r, c, checked = 0;
+    gdouble *a = random_image(xres, yres, rng);
+    gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
+    gdouble *expected = g_new(gdouble, yres);
+    gdouble shift = random_fractional_shift(rng);
+    GwyInterpolationType type = all_kernels[_i];
+    DriftTable *table = constant_table(9, 0.0, shift);
+
+    ck_assert(continuous_compensate_table(a, xres, yres, table, 1.0, 1.0,
+                                          NULL, type, -1.0, result, mask,
+                                          NULL));
+    for (c = 0; c < xres; c++) {
+        gwyddion_line(a + c, yres, xres, shift, 4, yres - 5, type, expected);
+        for (r = 4; r < yres - 4; r++) {
+            ck_assert_msg(fabs(result[r*xres + c] - expected[r]) < 1e-12,
+                          "kernel %d, shift %g, (%d,%d): %.15g vs %.15g",
+                          type, shift, r, c, result[r*xres + c], expected[r]);
+            checked++;
+        }
+    }
+    ck_assert_int_eq(checked, xres*(yres - 8));
+    drift_table_free(table);
+    g_free(expected);
+    g_free(result);
+    g_free(a);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* A constant fractional x shift of a wide image of nine rows (x prefilter
+ * batches of eight rows overlap at the bottom; rows run in chunks with a
+ * remainder): every row is Gwyddion's interpolation of the row. */
+START_TEST(test_wide_shift_matches_gwyddion)
+{
+    GRand *rng = test_rand(20);
+    gint xres = 1031, yres = 9, size = xres*yres, r, c;
+    gdouble *a = random_image(xres, yres, rng);
+    gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
+    gdouble *expected = g_new(gdouble, xres);
+    gdouble shift = random_fractional_shift(rng);
+    GwyInterpolationType type = all_kernels[_i];
+    DriftTable *table = constant_table(3, shift, 0.0);
+
+    ck_assert(continuous_compensate_table(a, xres, yres, table, 1.0, 1.0,
+                                          NULL, type, -1.0, result, mask,
+                                          NULL));
+    for (r = 0; r < yres; r++) {
+        gwyddion_line(a + r*xres, xres, 1, shift, 4, xres - 5, type,
+                      expected);
+        for (c = 4; c < xres - 4; c++) {
+            ck_assert_msg(fabs(result[r*xres + c] - expected[c]) < 1e-12,
+                          "kernel %d, shift %g, (%d,%d): %.15g vs %.15g",
+                          type, shift, r, c, result[r*xres + c], expected[c]);
+        }
+    }
+    drift_table_free(table);
+    g_free(expected);
+    g_free(result);
+    g_free(a);
+    g_rand_free(rng);
+}
+END_TEST
+
+static Suite*
+continuous_blocks_suite(void)
+{
+    Suite *suite = suite_create("continuous-blocks");
+    TCase *tc = tcase_create("core");
+
+    tcase_set_timeout(tc, 60);
+    tcase_add_loop_test(tc, test_tall_shift_matches_gwyddion,
+                        0, G_N_ELEMENTS(all_kernels));
+    tcase_add_loop_test(tc, test_wide_shift_matches_gwyddion,
+                        0, G_N_ELEMENTS(all_kernels));
+    suite_add_tcase(suite, tc);
+    return suite;
+}
+
+int
+main(void)
+{
+    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
+    SRunner *runner;
+    gint failed;
+
+    test_seed = (env
+                 ? (guint32)strtoul(env, NULL, 10)
+                 : (guint32)g_random_int());
+    printf("test-continuous-blocks: seed %u (set LOCALSCAN_TEST_SEED to "
+           "repeat)\n", test_seed);
+    fflush(stdout);
+    runner = srunner_create(continuous_blocks_suite());
+    srunner_run_all(runner, CK_NORMAL);
+    failed = srunner_ntests_failed(runner);
+    srunner_free(runner);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
