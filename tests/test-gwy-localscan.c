@@ -1689,6 +1689,23 @@ run_simscan_mode(const gchar *input, const gchar *mode, gchar **message)
     return out;
 }
 
+/* Equal but for continuous compensation's rounding, which depends on the
+ * buffers' alignment (2e-14 of the range seen); a wrong timing moves a good
+ * fraction of the range. */
+static gboolean
+fields_equal_to_rounding(GwyDataField *a, GwyDataField *b)
+{
+    gint xres = gwy_data_field_get_xres(a), yres = gwy_data_field_get_yres(a), i;
+    const gdouble *da = gwy_data_field_get_data_const(a), *db = gwy_data_field_get_data_const(b);
+    gdouble range = gwy_data_field_get_max(b) - gwy_data_field_get_min(b), worst = 0.0;
+
+    if (xres != gwy_data_field_get_xres(b) || yres != gwy_data_field_get_yres(b))
+        return FALSE;
+    for (i = 0; i < xres*yres; i++)
+        worst = fmax(worst, fabs(da[i] - db[i]));
+    return worst <= 1e-9*range;
+}
+
 /* The continuous result is continuous_compensate_table()'s with the timing
  * simscan was told; the input's metadata gives exactly that timing. */
 static void
@@ -1708,7 +1725,7 @@ check_simscan_timing(const SimscanFileCase *fcase, guint32 seed, GwyContainer *i
     ck_assert_msg((expected != NULL) == (out != NULL), "%s, seed %u: the tool %s, the expected result %s",
                   fcase->name, seed, out ? "succeeded" : "failed", expected ? "exists" : "does not");
     if (expected) {
-        ck_assert_msg(fields_identical(get_field(out, gwy_app_get_data_key_for_id(2)), expected),
+        ck_assert_msg(fields_equal_to_rounding(get_field(out, gwy_app_get_data_key_for_id(2)), expected),
                       "%s, seed %u: the result is not continuous mode's with simscan's timing",
                       fcase->name, seed);
         g_object_unref(expected);
