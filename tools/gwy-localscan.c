@@ -169,14 +169,105 @@ find_mode(const gchar *name, GError **error)
     return NULL;
 }
 
+/* A file as the file system knows it: its inode when it exists, else the
+ * absolute path it would get (its folder resolved, so that "out/../x" and
+ * "x" or a symlinked folder name one file). */
+typedef struct {
+    gboolean exists;
+    dev_t dev;
+    ino_t ino;
+    gchar *path;
+} FileIdentity;
+
+static gchar*
+resolved_path(const gchar *filename)
+{
+    gchar *absolute = g_canonicalize_filename(filename, NULL);
+    gchar *dir = g_path_get_dirname(absolute), *base = g_path_get_basename(absolute);
+    gchar *realdir = realpath(dir, NULL), *path;
+
+    path = realdir ? g_build_filename(realdir, base, NULL) : g_strdup(absolute);
+    free(realdir);
+    g_free(base);
+    g_free(dir);
+    g_free(absolute);
+    return path;
+}
+
+static void
+file_identity_init(FileIdentity *identity, const gchar *filename)
+{
+    GStatBuf st;
+
+    identity->exists = (g_stat(filename, &st) == 0);
+    identity->dev = identity->exists ? st.st_dev : 0;
+    identity->ino = identity->exists ? st.st_ino : 0;
+    identity->path = resolved_path(filename);
+}
+
+static gboolean
+file_identity_equal(const FileIdentity *a, const FileIdentity *b)
+{
+    if (a->exists && b->exists)
+        return a->dev == b->dev && a->ino == b->ino;
+    if (a->exists != b->exists)
+        return FALSE;
+    return gwy_strequal(a->path, b->path);
+}
+
 static gboolean
 is_same_file(const gchar *a, const gchar *b)
 {
-    GStatBuf sa, sb;
+    FileIdentity ia, ib;
+    gboolean same;
 
-    if (g_stat(a, &sa) != 0 || g_stat(b, &sb) != 0)
-        return FALSE;
-    return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    file_identity_init(&ia, a);
+    file_identity_init(&ib, b);
+    same = file_identity_equal(&ia, &ib);
+    g_free(ia.path);
+    g_free(ib.path);
+    return same;
+}
+
+/* The reference file named by --reference (NULL when none, or INPUT). */
+static gchar*
+reference_file_name(void);
+
+/* An output may be none of the files read, nor the other output: each is
+ * written by renaming a finished temporary over it, so an input would be
+ * replaced (and the tool promises never to modify one). */
+static gboolean
+check_outputs_distinct(GError **error)
+{
+    const gchar *outputs[2] = { options.output, options.write_drift };
+    const gchar *output_options[2] = { "-o", "--write-drift" };
+    gchar *reference = reference_file_name();
+    const gchar *inputs[3] = { options.inputs[0], options.table_file, reference };
+    /* Whole sentences, so that translations can order them. */
+    const gchar *refusals[3] = {
+        N_("refusing to overwrite the input file %s (named by %s)"),
+        N_("refusing to overwrite the drift table %s given with -d (named by %s)"),
+        N_("refusing to overwrite the reference file %s (named by %s)"),
+    };
+    gboolean ok = TRUE;
+    guint i, j;
+
+    for (i = 0; ok && i < G_N_ELEMENTS(outputs); i++) {
+        for (j = 0; ok && outputs[i] && j < G_N_ELEMENTS(inputs); j++) {
+            if (inputs[j] && is_same_file(outputs[i], inputs[j])) {
+                g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                            _(refusals[j]), inputs[j], output_options[i]);
+                ok = FALSE;
+            }
+        }
+    }
+    if (ok && options.write_drift && is_same_file(options.output, options.write_drift)) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                    _("-o and --write-drift name the same file %s"), options.write_drift);
+        ok = FALSE;
+    }
+    g_free(reference);
+    return ok;
 }
 
 static const CompensationMode*
@@ -214,12 +305,8 @@ check_command_line(GError **error)
                     options.stripes);
         return NULL;
     }
-    if (is_same_file(options.inputs[0], options.output)) {
-        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
-                    _("refusing to overwrite the input file %s"),
-                    options.inputs[0]);
+    if (!check_outputs_distinct(error))
         return NULL;
-    }
     return find_mode(options.mode_name, error);
 }
 
@@ -303,6 +390,17 @@ parse_reference(const gchar *arg, ReferenceSpec *spec)
         }
     }
     spec->file = g_strdup(arg);
+}
+
+static gchar*
+reference_file_name(void)
+{
+    ReferenceSpec spec;
+
+    if (!options.reference)
+        return NULL;
+    parse_reference(options.reference, &spec);
+    return spec.file;
 }
 
 static gchar*
