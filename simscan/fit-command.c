@@ -11,6 +11,7 @@
 #include <libgwyddion/gwyddion.h>
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
+#include "option-values.h"
 #include "fit-command.h"
 
 #undef _
@@ -222,18 +223,79 @@ fit_report_to_json(const FitReport *report, const FrameSeries *series)
     return text;
 }
 
-/* Options of the command line. */
+/* Lines a registered block needs at least. */
+#define MIN_BLOCK_LINES 4
+
+/* Options of the command line.  Numbers stay text until checked, so that an
+ * option given with any value counts as given. */
 typedef struct {
     gchar *json;
-    gdouble line_time;
+    gchar *line_time;
     gchar *frame_times;
     gchar *direction;
     gchar *channel;
     gchar *channels;
-    gint blocks;
+    gchar *blocks;
     gboolean keep_duplicates;
-    gdouble bic_margin;
+    gchar *bic_margin;
 } FitArgs;
+
+/* The numbers of the options, checked. */
+typedef struct {
+    gint blocks;               /* 0: not given */
+    gdouble bic_margin;        /* < 0: not given */
+} FitNumbers;
+
+static gboolean
+parse_fit_numbers(const FitArgs *args, FrameSeriesOptions *options,
+                  FitNumbers *numbers, GError **error)
+{
+    numbers->blocks = 0;
+    numbers->bic_margin = -1.0;
+    if (args->line_time
+        && !option_value_parse_double(args->line_time, 0.0, 1e6, TRUE,
+                                      "line-time", &options->line_time,
+                                      error))
+        return FALSE;
+    if (args->bic_margin
+        && !option_value_parse_double(args->bic_margin, 0.0, 1e6, FALSE,
+                                      "bic-margin", &numbers->bic_margin,
+                                      error))
+        return FALSE;
+    if (args->blocks
+        && !option_value_parse_int(args->blocks, 1, G_MAXINT/MIN_BLOCK_LINES,
+                                   "blocks", &numbers->blocks, error))
+        return FALSE;
+    return TRUE;
+}
+
+/* Every block needs MIN_BLOCK_LINES lines of the frames. */
+static gboolean
+choose_blocks(const FrameSeries *series, gint wanted, gint *n_blocks,
+              GError **error)
+{
+    gint yres = series->frames[0].timing.yres;
+    gint most = yres/MIN_BLOCK_LINES;
+    gchar *msg;
+
+    if (most < 1) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
+                    _("%s: frames of %d lines are too short to register "
+                      "(at least %d lines)"),
+                    series->frames[0].label, yres, MIN_BLOCK_LINES);
+        return FALSE;
+    }
+    if (wanted > most) {
+        msg = g_strdup_printf(_("%d blocks of at least %d lines do not fit "
+                                "frames of %d lines (at most %d)"),
+                              wanted, MIN_BLOCK_LINES, yres, most);
+        option_value_refuse("blocks", msg, error);
+        g_free(msg);
+        return FALSE;
+    }
+    *n_blocks = wanted ? wanted : MIN(*n_blocks, most);
+    return TRUE;
+}
 
 static gboolean
 parse_frame_times(const gchar *text, FrameSeriesOptions *options,
@@ -260,17 +322,31 @@ parse_frame_times(const gchar *text, FrameSeriesOptions *options,
 }
 
 static gboolean
+parse_channel_id(const gchar *text, gint *id)
+{
+    guint64 v;
+
+    if (!g_ascii_string_to_unsigned(text, 10, 0, G_MAXINT, &v, NULL))
+        return FALSE;
+    *id = (gint)v;
+    return TRUE;
+}
+
+static gboolean
 parse_channel_range(const gchar *text, FrameSeriesOptions *options,
                     GError **error)
 {
-    gchar *end;
+    const gchar *dash = strchr(text, '-');
+    gchar *first = dash ? g_strndup(text, dash - text) : g_strdup(text);
+    gboolean ok;
 
-    options->first_id = strtol(text, &end, 10);
-    if (end != text && *end == '-')
-        options->last_id = strtol(end + 1, &end, 10);
+    ok = parse_channel_id(first, &options->first_id);
+    if (ok && dash)
+        ok = parse_channel_id(dash + 1, &options->last_id);
     else
         options->last_id = options->first_id;
-    if (*end || options->first_id < 0 || options->last_id < options->first_id) {
+    g_free(first);
+    if (!ok || options->last_id < options->first_id) {
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("--channels: '%s' is not a range FIRST-LAST of "
                       "channel ids"), text);
@@ -281,18 +357,11 @@ parse_channel_range(const gchar *text, FrameSeriesOptions *options,
 
 static gboolean
 args_to_options(const FitArgs *args, FrameSeriesOptions *options,
-                GError **error)
+                FitNumbers *numbers, GError **error)
 {
     frame_series_options_init(options);
-    if (args->line_time != 0.0) {
-        if (!(args->line_time > 0.0) || !isfinite(args->line_time)) {
-            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
-                        _("--line-time must be a positive number of "
-                          "seconds"));
-            return FALSE;
-        }
-        options->line_time = args->line_time;
-    }
+    if (!parse_fit_numbers(args, options, numbers, error))
+        return FALSE;
     if (args->direction) {
         if (g_ascii_strcasecmp(args->direction, "down") == 0)
             options->direction = SCAN_DIRECTION_DOWN;
@@ -334,26 +403,26 @@ run_fit(const FitArgs *args, gchar **files, gint n_files, GError **error)
     DisplacementOptions doptions;
     DriftFitOptions foptions;
     FrameSeries *series = NULL;
+    FitNumbers numbers;
     FitReport report;
     gboolean ok = FALSE;
     gchar *text;
 
     memset(&report, 0, sizeof(report));
-    if (!args_to_options(args, &soptions, error))
+    if (!args_to_options(args, &soptions, &numbers, error))
         goto end;
     if (!(series = frame_series_load(files, n_files, &soptions, error)))
         goto end;
     displacement_options_init(&doptions);
-    if (args->blocks)
-        doptions.n_blocks = CLAMP(args->blocks, 1,
-                                  series->frames[0].timing.yres/4);
+    if (!choose_blocks(series, numbers.blocks, &doptions.n_blocks, error))
+        goto end;
     drift_fit_options_init(&foptions);
     /* A block averages the drift over its lines: periods and time constants
      * shorter than a few blocks cannot be told from registration error. */
     foptions.min_period = 3.0*series->frames[0].timing.line_time
                           * series->frames[0].timing.yres/doptions.n_blocks;
-    if (args->bic_margin >= 0.0)
-        foptions.bic_margin = args->bic_margin;
+    if (numbers.bic_margin >= 0.0)
+        foptions.bic_margin = numbers.bic_margin;
     if (!fit_report_compute(series, &doptions, &foptions, &report)) {
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("too few frames could be registered to fit a drift "
@@ -385,12 +454,12 @@ ensure_gwyddion(void)
 int
 simscan_fit_main(int argc, char **argv)
 {
-    FitArgs args = { NULL, 0.0, NULL, NULL, NULL, NULL, 0, FALSE, -1.0 };
+    FitArgs args = { NULL, NULL, NULL, NULL, NULL, NULL, NULL, FALSE, NULL };
     gchar **files = NULL;
     GOptionEntry entries[] = {
         { "json", 0, 0, G_OPTION_ARG_FILENAME, &args.json,
           N_("Write the JSON to FILE (default: standard output)"), N_("FILE") },
-        { "line-time", 0, 0, G_OPTION_ARG_DOUBLE, &args.line_time,
+        { "line-time", 0, 0, G_OPTION_ARG_STRING, &args.line_time,
           N_("Seconds per scan line, trace and retrace together"), N_("S") },
         { "frame-times", 0, 0, G_OPTION_ARG_STRING, &args.frame_times,
           N_("Start time of each frame, seconds"), N_("T0,T1,...") },
@@ -401,12 +470,14 @@ simscan_fit_main(int argc, char **argv)
              "number matches too)"), N_("TITLE") },
         { "channels", 0, 0, G_OPTION_ARG_STRING, &args.channels,
           N_("Channel ids of a one-file series"), N_("FIRST-LAST") },
-        { "blocks", 0, 0, G_OPTION_ARG_INT, &args.blocks,
-          N_("Blocks of lines registered per frame (default 16)"), N_("N") },
+        { "blocks", 0, 0, G_OPTION_ARG_STRING, &args.blocks,
+          N_("Blocks of lines registered per frame, each at least 4 lines "
+             "(default 16, fewer in frames under 64 lines)"), N_("N") },
         { "keep-duplicates", 0, 0, G_OPTION_ARG_NONE, &args.keep_duplicates,
           N_("Keep frames whose data are identical"), NULL },
-        { "bic-margin", 0, 0, G_OPTION_ARG_DOUBLE, &args.bic_margin,
-          N_("BIC gain an effect needs over constant drift (default 20)"),
+        { "bic-margin", 0, 0, G_OPTION_ARG_STRING, &args.bic_margin,
+          N_("BIC gain an effect needs over constant drift, 0 or more "
+             "(default 20)"),
           N_("X") },
         { G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &files,
           NULL, N_("FRAME...") },
@@ -442,5 +513,8 @@ end:
     g_free(args.direction);
     g_free(args.channel);
     g_free(args.channels);
+    g_free(args.line_time);
+    g_free(args.blocks);
+    g_free(args.bic_margin);
     return status;
 }

@@ -9,6 +9,7 @@
 #include <math.h>
 #include "simscan-presets.h"
 #include "simscan-sample-file.h"
+#include "option-values.h"
 #include "simscan-options.h"
 #include "simscan-i18n.h"
 
@@ -38,6 +39,9 @@ typedef struct {
     gint64 seed;
     gchar *output, *table, *json;
     gboolean quiet;
+    /* Options whose defaults a measured sample replaces: text, so that
+     * whether the user gave them is known. */
+    gchar *radius_text, *ls_rmax_text, *xres_text, *yres_text;
 } RawOptions;
 
 static void
@@ -82,6 +86,8 @@ raw_clear(RawOptions *raw)
         &raw->preset, &raw->sample, &raw->size, &raw->direction, &raw->drift,
         &raw->velocity, &raw->offset, &raw->settle_velocity, &raw->amplitude,
         &raw->jump_step, &raw->output, &raw->table, &raw->json,
+        &raw->radius_text, &raw->ls_rmax_text, &raw->xres_text,
+        &raw->yres_text,
     };
     guint i;
 
@@ -103,7 +109,7 @@ make_entries(RawOptions *raw)
              "first), scanned over its own size and by default at its own "
              "resolution, with the paper's drift scaled to its pixel size"),
           "FILE[:ID]" },
-        { "radius", 0, 0, G_OPTION_ARG_DOUBLE, &raw->radius,
+        { "radius", 0, 0, G_OPTION_ARG_STRING, &raw->radius_text,
           N_("particle radius, nm (25; with --sample: the typical radius of "
              "the particles found on it)"), "NM" },
         { "radius-spread", 0, 0, G_OPTION_ARG_DOUBLE, &raw->radius_spread,
@@ -120,10 +126,10 @@ make_entries(RawOptions *raw)
           N_("substrate RMS roughness, nm (0.3)"), "NM" },
         { "correlation", 0, 0, G_OPTION_ARG_DOUBLE, &raw->correlation,
           N_("substrate correlation length, nm (50)"), "NM" },
-        { "xres", 0, 0, G_OPTION_ARG_INT, &raw->xres,
+        { "xres", 0, 0, G_OPTION_ARG_STRING, &raw->xres_text,
           N_("pixels per line (256; 8 to 16384, xres times yres at most "
              "16777216)"), "N" },
-        { "yres", 0, 0, G_OPTION_ARG_INT, &raw->yres,
+        { "yres", 0, 0, G_OPTION_ARG_STRING, &raw->yres_text,
           N_("lines per image (256; 8 to 16384)"), "N" },
         { "size", 0, 0, G_OPTION_ARG_STRING, &raw->size,
           N_("scan size, um, square or width,height (5; at most 1000, more "
@@ -168,7 +174,7 @@ make_entries(RawOptions *raw)
           N_("samples per local-scan line (64)"), "N" },
         { "ls-speed", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_speed,
           N_("tip speed along a local-scan line, um/s (4)"), "UM_S" },
-        { "ls-rmax", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_rmax,
+        { "ls-rmax", 0, 0, G_OPTION_ARG_STRING, &raw->ls_rmax_text,
           N_("largest drift expected, nm; lines are 2(R + rmax) long (100; "
              "with --sample scaled like the velocity)"), "NM" },
         { "ls-overhead", 0, 0, G_OPTION_ARG_DOUBLE, &raw->ls_overhead,
@@ -206,9 +212,7 @@ make_entries(RawOptions *raw)
 static gboolean
 bad_value(GError **error, const gchar *option, const gchar *what)
 {
-    g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
-                _("--%s: %s"), option, what);
-    return FALSE;
+    return option_value_refuse(option, what, error);
 }
 
 /* "A" or "A,B" (single: both the same when allow_single). */
@@ -243,16 +247,7 @@ static gboolean
 check_range(gdouble value, gdouble min, gdouble max, gboolean min_open,
             const gchar *option, GError **error)
 {
-    gchar *msg;
-
-    if (isfinite(value) && (min_open ? value > min : value >= min)
-        && value <= max)
-        return TRUE;
-    msg = g_strdup_printf(_("%g is out of range (%s %g to %g)"), value,
-                          min_open ? _("above") : _("from"), min, max);
-    bad_value(error, option, msg);
-    g_free(msg);
-    return FALSE;
+    return option_value_check_range(value, min, max, min_open, option, error);
 }
 
 static gboolean
@@ -417,41 +412,39 @@ raw_to_config(const RawOptions *raw, SimscanConfig *config, GError **error)
     return TRUE;
 }
 
-/* Options whose defaults a measured sample replaces start out as these
- * markers, so that what the user gave is known after parsing. */
-#define NOT_GIVEN_INT G_MININT
-
-static void
-mark_not_given(RawOptions *raw)
+/* Parses the options whose defaults a measured sample replaces; given gets
+ * the SimscanGiven flags of those the user gave. */
+static gboolean
+parse_given(RawOptions *raw, guint *given, GError **error)
 {
-    raw->radius = NAN;
-    raw->ls_rmax = NAN;
-    raw->xres = raw->yres = NOT_GIVEN_INT;
-}
-
-/* Which options the user gave; the others get back their defaults. */
-static guint
-restore_not_given(RawOptions *raw, const RawOptions *defaults)
-{
-    guint given = 0;
-
-    if (isnan(raw->radius))
-        raw->radius = defaults->radius;
-    else
-        given |= SIMSCAN_GIVEN_RADIUS;
-    if (isnan(raw->ls_rmax))
-        raw->ls_rmax = defaults->ls_rmax;
-    else
-        given |= SIMSCAN_GIVEN_RMAX;
-    if (raw->xres != NOT_GIVEN_INT || raw->yres != NOT_GIVEN_INT)
-        given |= SIMSCAN_GIVEN_RESOLUTION;
-    if (raw->xres == NOT_GIVEN_INT)
-        raw->xres = defaults->xres;
-    if (raw->yres == NOT_GIVEN_INT)
-        raw->yres = defaults->yres;
+    *given = 0;
+    if (raw->radius_text) {
+        if (!option_value_parse_double(raw->radius_text, 0, 1e6, TRUE,
+                                       "radius", &raw->radius, error))
+            return FALSE;
+        *given |= SIMSCAN_GIVEN_RADIUS;
+    }
+    if (raw->ls_rmax_text) {
+        if (!option_value_parse_double(raw->ls_rmax_text, 0, 1e9, FALSE,
+                                       "ls-rmax", &raw->ls_rmax, error))
+            return FALSE;
+        *given |= SIMSCAN_GIVEN_RMAX;
+    }
+    if (raw->xres_text) {
+        if (!option_value_parse_int(raw->xres_text, MIN_RES, MAX_RES, "xres",
+                                    &raw->xres, error))
+            return FALSE;
+        *given |= SIMSCAN_GIVEN_RESOLUTION;
+    }
+    if (raw->yres_text) {
+        if (!option_value_parse_int(raw->yres_text, MIN_RES, MAX_RES, "yres",
+                                    &raw->yres, error))
+            return FALSE;
+        *given |= SIMSCAN_GIVEN_RESOLUTION;
+    }
     if (raw->velocity)
-        given |= SIMSCAN_GIVEN_VELOCITY;
-    return given;
+        *given |= SIMSCAN_GIVEN_VELOCITY;
+    return TRUE;
 }
 
 /* What the options allow one by one may still be too much together. */
@@ -542,7 +535,7 @@ simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
     GOptionContext *context;
     GOptionEntry *entries;
     SimscanPreset preset;
-    RawOptions raw, defaults;
+    RawOptions raw;
     gchar **args;
     gboolean ok;
     guint given = 0;
@@ -552,8 +545,6 @@ simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
         return FALSE;
     simscan_preset_apply(config, preset);
     raw_from_config(&raw, config);
-    defaults = raw;
-    mark_not_given(&raw);
     entries = make_entries(&raw);
     context = g_option_context_new(usage);
     g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
@@ -570,8 +561,7 @@ simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
                     _("unexpected argument %s"), args[1]);
         ok = FALSE;
     }
-    if (ok)
-        given = restore_not_given(&raw, &defaults);
+    ok = ok && parse_given(&raw, &given, error);
     ok = ok && raw_to_config(&raw, config, error);
     ok = ok && (!config->sample_file || adopt_sample(config, &raw, given, error));
     ok = ok && check_scene_limits(config, error);

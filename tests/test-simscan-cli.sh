@@ -79,6 +79,13 @@ bad_case --ls-threshold 1.5
 bad_case --radius abc
 bad_case --sample "$tmp/missing.gwy"
 bad_case unexpected-argument
+# Not-a-number and out-of-range values are refused, not taken for "not
+# given" (these options' defaults depend on a measured sample).
+bad_case --radius nan
+bad_case --radius inf
+bad_case --ls-rmax nan
+bad_case --xres -2147483648
+bad_case --yres 99999999999999999999
 # Absurd scenes are refused before anything is simulated.
 bad_case --size 1e6
 bad_case --size 1000 --density 10
@@ -95,6 +102,67 @@ check
 if ls -A "$tmp" | grep -q 'e\.gwy'; then
     fail "unwritable table left the .gwy: $(ls -A "$tmp")"
 fi
+
+# simscan fit: three frames of one sample drifting at (1, 0.5) nm/s, 100 s
+# apart, and a pair of frames of 3 lines (too short to register), written
+# as Gwyddion's serialised GwyContainer.
+fit_frames="$tmp/f0.gwy $tmp/f1.gwy $tmp/f2.gwy"
+for k in 0 1 2; do
+    "$simscan" -q --xres 64 --yres 64 --size 1.25 --stripes 4 --seed $seed \
+        --velocity 1,0.5 --offset $((100 * k)),$((50 * k)) -o "$tmp/f$k.gwy" \
+        || fail "frame $k exited non-zero"
+done
+write_tiny_gwy() {
+    python3 - "$1" <<'PY'
+import struct, sys
+def obj(name, comps):
+    body = b''.join(comps)
+    return name.encode() + b'\0' + struct.pack('<I', len(body)) + body
+def comp(name, kind, payload):
+    return name.encode() + b'\0' + kind.encode() + payload
+xres, yres = 16, 3
+data = [((i * 7919 + len(sys.argv[1])) % 13) * 1e-10 for i in range(xres * yres)]
+field = obj('GwyDataField', [
+    comp('xres', 'i', struct.pack('<i', xres)),
+    comp('yres', 'i', struct.pack('<i', yres)),
+    comp('xreal', 'd', struct.pack('<d', 1e-6)),
+    comp('yreal', 'd', struct.pack('<d', 1e-6 * yres / xres)),
+    comp('data', 'D', struct.pack('<I', len(data))
+         + struct.pack('<%dd' % len(data), *data))])
+with open(sys.argv[1], 'wb') as fh:
+    fh.write(b'GWYP' + obj('GwyContainer', [comp('/0/data', 'o', field)]))
+PY
+}
+write_tiny_gwy "$tmp/tiny0.gwy"
+write_tiny_gwy "$tmp/tiny-frame1.gwy"
+
+# A bad fit option: non-zero, one line naming what is wrong, no JSON.
+fit_bad_case() {
+    expect=$1
+    shift
+    rm -f "$tmp/fit-e.json"
+    "$simscan" fit "$@" --json "$tmp/fit-e.json" >"$tmp/out" 2>"$tmp/err"
+    status=$?
+    check
+    [ $status -ne 0 ] || fail "fit $* exited 0"
+    [ "$(wc -l <"$tmp/err")" -eq 1 ] || fail "fit $*: stderr is not one line: $(cat "$tmp/err")"
+    grep -q -- "$expect" "$tmp/err" || fail "fit $*: message does not say '$expect': $(cat "$tmp/err")"
+    [ ! -e "$tmp/fit-e.json" ] || fail "fit $* wrote its JSON"
+}
+fit_timing="--line-time 1 --frame-times 0,100,200"
+fit_bad_case "--line-time: " --line-time 0 --frame-times 0,100,200 $fit_frames
+fit_bad_case "--line-time: " --line-time -0 --frame-times 0,100,200 $fit_frames
+fit_bad_case "--line-time: " --line-time nan --frame-times 0,100,200 $fit_frames
+fit_bad_case "--bic-margin" $fit_timing --bic-margin nan $fit_frames
+fit_bad_case "--bic-margin" $fit_timing --bic-margin -1 $fit_frames
+fit_bad_case "--blocks" $fit_timing --blocks 0 $fit_frames
+fit_bad_case "--blocks" $fit_timing --blocks -2 $fit_frames
+fit_bad_case "--blocks" $fit_timing --blocks 17 $fit_frames
+fit_bad_case "--channels" $fit_timing --channels 4294967296 $fit_frames
+fit_bad_case "3 lines" --line-time 1 --frame-times 0,100 --blocks 1 \
+    "$tmp/tiny0.gwy" "$tmp/tiny-frame1.gwy"
+fit_bad_case "3 lines" --line-time 1 --frame-times 0,100 \
+    "$tmp/tiny0.gwy" "$tmp/tiny-frame1.gwy"
 
 # --help lists every option.
 "$simscan" --help >"$tmp/help" || fail "--help exited non-zero"
