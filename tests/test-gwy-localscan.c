@@ -1171,6 +1171,44 @@ START_TEST(test_error_output_not_writable)
 }
 END_TEST
 
+/* A --write-drift that cannot be written (its folder missing: no temporary
+ * file; a folder at its name: the rename fails after OUT's) leaves an older
+ * OUT as it was, and nothing else behind. */
+START_TEST(test_write_drift_failure_keeps_old_output)
+{
+    static const gchar *const targets[2] = { "nowhere/used.csv", "adir" };
+    static const gchar *const reasons[2] = { "No such file or directory", "Is a directory" };
+    gchar *input = simple_input(GOOD_TABLE), *output = out_path("out.gwy"), *adir = out_path("adir");
+    gchar *used, *contents, *message, *listing;
+    ToolRun run;
+    guint i;
+
+    for (i = 0; i < G_N_ELEMENTS(targets); i++) {
+        write_text(output, "an older result\n");
+        g_mkdir(adir, 0700);
+        used = out_path(targets[i]);
+        run_tool(&run, (const gchar *const[]){ "-o", output, "--write-drift", used, input, NULL });
+        message = g_strdup_printf("gwy-localscan: cannot write %s: %s\n", used, reasons[i]);
+        printf("write-drift failure %u: %s", i, run.err);
+        ck_assert_int_eq(run.status, 1);
+        ck_assert_str_eq(run.err, message);
+        ck_assert(g_file_get_contents(output, &contents, NULL, NULL));
+        ck_assert_str_eq(contents, "an older result\n");
+        listing = folder_listing(out_dir);
+        ck_assert_str_eq(listing, "adir out.gwy");
+        g_free(listing);
+        g_free(contents);
+        g_free(message);
+        g_free(used);
+        tool_run_clear(&run);
+    }
+    g_rmdir(adir);
+    g_free(adir);
+    g_free(output);
+    g_free(input);
+}
+END_TEST
+
 /* The same table that paper mode refuses is fine for continuous mode. */
 START_TEST(test_continuous_mode_accepts_fractions)
 {
@@ -1823,6 +1861,7 @@ gwy_localscan_suite(void)
     tcase_add_loop_test(tc, test_table_file_physical_units, 0, G_N_ELEMENTS(unit_names));
     tcase_add_loop_test(tc, test_random_cases, 0, N_RANDOM_CASES);
     tcase_add_test(tc, test_write_drift);
+    tcase_add_test(tc, test_write_drift_failure_keeps_old_output);
     tcase_add_test(tc, test_user_settings_do_not_leak);
     tcase_add_test(tc, test_nanoscope_input);
     tcase_add_test(tc, test_continuous_mode_accepts_fractions);

@@ -588,17 +588,28 @@ compensate_with_measured(GwyContainer *data, gint id, const DriftTable *table,
     return ok;
 }
 
+/* OUT and the --write-drift table appear together or not at all, and an
+ * older file at either name survives any failure. */
 static gboolean
 save_results(GwyContainer *data, const DriftTable *table, GError **error)
 {
-    if (!headless_run_save_gwy(data, options.output, error))
-        return FALSE;
-    if (options.write_drift && !drift_table_save(table, options.write_drift,
-                                                 error)) {
-        g_unlink(options.output);
-        return FALSE;
+    const gchar *finals[2] = { options.output, options.write_drift };
+    gchar *temps[2] = { NULL, NULL }, *text;
+    guint n = options.write_drift ? 2 : 1;
+    gboolean ok;
+
+    temps[0] = headless_run_save_gwy_temp(data, options.output, error);
+    if (temps[0] && options.write_drift) {
+        text = drift_table_to_string(table);
+        temps[1] = headless_run_write_text_temp(text, options.write_drift, error);
+        g_free(text);
     }
-    return TRUE;
+    ok = (temps[0] && temps[n-1] && headless_run_commit(temps, finals, n, error));
+    if (!ok && temps[0] && n == 2 && !temps[1])
+        g_unlink(temps[0]);
+    g_free(temps[0]);
+    g_free(temps[1]);
+    return ok;
 }
 
 static gboolean

@@ -229,46 +229,139 @@ set_save_error(GError **error, const gchar *filename, const gchar *reason)
                 _("cannot write %s: %s"), filename, reason);
 }
 
-gboolean
-headless_run_save_gwy(GwyContainer *data, const gchar *filename,
-                      GError **error)
+/* An empty temporary file beside filename (same folder, so a rename puts it
+ * in place atomically), with the usual permissions; NULL on failure. */
+static gchar*
+make_temp_beside(const gchar *filename, GError **error)
 {
-    gchar *dir, *base, *tmpl, *tmpname;
-    GError *err = NULL;
-    gboolean ok = FALSE;
-    gint fd;
+    gchar *dir = g_path_get_dirname(filename), *base = g_path_get_basename(filename);
+    gchar *tmpl = g_strconcat(".", base, ".XXXXXX.tmp", NULL);
+    gchar *tmpname = g_build_filename(dir, tmpl, NULL);
+    gint fd = g_mkstemp(tmpname);
 
-    dir = g_path_get_dirname(filename);
-    base = g_path_get_basename(filename);
-    tmpl = g_strconcat(".", base, ".XXXXXX.tmp", NULL);
-    tmpname = g_build_filename(dir, tmpl, NULL);
-    fd = g_mkstemp(tmpname);
     if (fd < 0) {
         set_save_error(error, filename, g_strerror(errno));
-        goto end;
+        g_free(tmpname);
+        tmpname = NULL;
     }
-    close(fd);
-    give_default_permissions(tmpname);
-
-    if (!gwy_file_func_run_save(GWY_NATIVE_SAVER, data, tmpname,
-                                GWY_RUN_NONINTERACTIVE, &err)) {
-        set_save_error(error, filename,
-                       err ? err->message : _("the .gwy writer failed"));
-        g_clear_error(&err);
-        g_unlink(tmpname);
-        goto end;
+    else {
+        close(fd);
+        give_default_permissions(tmpname);
     }
-    if (g_rename(tmpname, filename) != 0) {
-        set_save_error(error, filename, g_strerror(errno));
-        g_unlink(tmpname);
-        goto end;
-    }
-    ok = TRUE;
-
-end:
-    g_free(tmpname);
     g_free(tmpl);
     g_free(base);
     g_free(dir);
+    return tmpname;
+}
+
+gchar*
+headless_run_save_gwy_temp(GwyContainer *data, const gchar *filename, GError **error)
+{
+    GError *err = NULL;
+    gchar *tmpname;
+
+    if (!(tmpname = make_temp_beside(filename, error)))
+        return NULL;
+    if (!gwy_file_func_run_save(GWY_NATIVE_SAVER, data, tmpname, GWY_RUN_NONINTERACTIVE, &err)) {
+        set_save_error(error, filename, err ? err->message : _("the .gwy writer failed"));
+        g_clear_error(&err);
+        g_unlink(tmpname);
+        g_free(tmpname);
+        return NULL;
+    }
+    return tmpname;
+}
+
+gchar*
+headless_run_write_text_temp(const gchar *text, const gchar *filename, GError **error)
+{
+    GError *err = NULL;
+    gchar *tmpname;
+
+    if (!(tmpname = make_temp_beside(filename, error)))
+        return NULL;
+    if (!g_file_set_contents(tmpname, text, -1, &err)) {
+        set_save_error(error, filename, err->message);
+        g_clear_error(&err);
+        g_unlink(tmpname);
+        g_free(tmpname);
+        return NULL;
+    }
+    /* g_file_set_contents() replaced the file with a private one. */
+    give_default_permissions(tmpname);
+    return tmpname;
+}
+
+/* A second name for an existing file, so it can be put back; NULL when
+ * there is no file (or no hard links on this file system). */
+static gchar*
+keep_old_file(const gchar *filename)
+{
+    gchar *backup;
+
+    if (!g_file_test(filename, G_FILE_TEST_EXISTS))
+        return NULL;
+    if (!(backup = make_temp_beside(filename, NULL)))
+        return NULL;
+    g_unlink(backup);
+    if (link(filename, backup) != 0) {
+        g_free(backup);
+        return NULL;
+    }
+    return backup;
+}
+
+/* Undoes the first n renames of a commit: the older file back, or none. */
+static void
+restore_old_files(const gchar *const *finals, gchar **backups, guint n)
+{
+    guint i;
+
+    for (i = 0; i < n; i++) {
+        if (backups[i])
+            g_rename(backups[i], finals[i]);
+        else
+            g_unlink(finals[i]);
+    }
+}
+
+gboolean
+headless_run_commit(gchar **temps, const gchar *const *finals, guint n, GError **error)
+{
+    gchar **backups = g_new0(gchar*, n);
+    gboolean ok = TRUE;
+    guint i, done;
+
+    for (i = 0; i < n; i++)
+        backups[i] = keep_old_file(finals[i]);
+    for (done = 0; done < n; done++) {
+        if (g_rename(temps[done], finals[done]) != 0) {
+            set_save_error(error, finals[done], g_strerror(errno));
+            restore_old_files(finals, backups, done);
+            ok = FALSE;
+            break;
+        }
+    }
+    for (i = 0; i < n; i++) {
+        if (!ok && i >= done)
+            g_unlink(temps[i]);
+        if (ok && backups[i])
+            g_unlink(backups[i]);
+        g_free(backups[i]);
+    }
+    g_free(backups);
+    return ok;
+}
+
+gboolean
+headless_run_save_gwy(GwyContainer *data, const gchar *filename, GError **error)
+{
+    gchar *tmpname = headless_run_save_gwy_temp(data, filename, error);
+    gboolean ok;
+
+    if (!tmpname)
+        return FALSE;
+    ok = headless_run_commit(&tmpname, &filename, 1, error);
+    g_free(tmpname);
     return ok;
 }
