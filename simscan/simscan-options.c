@@ -4,9 +4,9 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
-#include <stdlib.h>
 #include <string.h>
 #include <math.h>
+#include "channel-spec.h"
 #include "simscan-presets.h"
 #include "simscan-sample-file.h"
 #include "option-values.h"
@@ -288,20 +288,18 @@ check_numbers(const RawOptions *raw, GError **error)
             && check_range(raw->seed, 0, G_MAXUINT32, FALSE, "seed", error));
 }
 
-/* FILE or FILE:ID; a file name may hold colons, so only an all-digit tail
- * is an id. */
 static gboolean
 parse_sample(const gchar *text, SimscanConfig *config, GError **error)
 {
-    const gchar *colon = strrchr(text, ':');
+    GError *err = NULL;
+    gint id;
 
-    if (colon && colon[1] && strspn(colon + 1, "0123456789")
-                             == strlen(colon + 1)) {
-        config->sample_file = g_strndup(text, colon - text);
-        config->sample_channel = atoi(colon + 1);
+    if (!channel_spec_parse(text, &config->sample_file, &id, &err)) {
+        bad_value(error, "sample", err->message);
+        g_error_free(err);
+        return FALSE;
     }
-    else
-        config->sample_file = g_strdup(text);
+    config->sample_channel = (id == CHANNEL_SPEC_NO_ID) ? -1 : id;
     if (!*config->sample_file)
         return bad_value(error, "sample", _("empty file name"));
     return TRUE;

@@ -78,6 +78,8 @@ bad_case --direction sideways
 bad_case --ls-threshold 1.5
 bad_case --radius abc
 bad_case --sample "$tmp/missing.gwy"
+# FILE:ID with an id past the int range (atoi made channel 0 of it).
+bad_case --sample "$tmp/a.gwy:4294967296"
 bad_case unexpected-argument
 # Not-a-number and out-of-range values are refused, not taken for "not
 # given" (these options' defaults depend on a measured sample).
