@@ -1030,6 +1030,11 @@ static const ErrorCase error_cases[] = {
     { "--write-drift is the reference file", GOOD_TABLE, "x\n",
       { "-o", "@OUT", "--write-drift", "@CSV", "--reference", "@CSV", "@IN", }, 2,
       "gwy-localscan: refusing to overwrite the reference file @CSV (named by --write-drift)" },
+    { "reference id beyond gint", GOOD_TABLE, NULL, { "--reference", ":99999999999999", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --reference :99999999999999: channel id 99999999999999 is out of range (0 to 2147483647)" },
+    { "reference id one beyond gint", GOOD_TABLE, NULL,
+      { "--reference", "@IN:2147483648", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --reference @IN:2147483648: channel id 2147483648 is out of range (0 to 2147483647)" },
     { "both outputs one file", GOOD_TABLE, NULL, { "-o", "@OUT", "--write-drift", "@OUTDIR/./out.gwy", "@IN", }, 2,
       "gwy-localscan: -o and --write-drift name the same file @OUTDIR/./out.gwy" },
 };

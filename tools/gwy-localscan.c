@@ -15,6 +15,7 @@
 #include <app/gwyapp.h>
 #include "drift-table.h"
 #include "stripe-registration.h"
+#include "channel-spec.h"
 #include "headless-run.h"
 #include "localscan-settings.h"
 
@@ -59,6 +60,8 @@ typedef struct {
     gchar *file;       /* NULL: the INPUT itself */
     gint channel;      /* CHANNEL_FIRST: the first channel of file */
 } ReferenceSpec;
+
+static ReferenceSpec reference_spec = { NULL, CHANNEL_FIRST };
 
 /* Every option gwy-localscan knows; --help is generated from this table.
  * A new option is one entry here plus its handling in run_batch() (drift
@@ -129,6 +132,7 @@ free_options(void)
     g_free(options.mode_name);
     g_free(options.write_drift);
     g_free(options.reference);
+    g_free(reference_spec.file);
     g_strfreev(options.inputs);
 }
 
@@ -167,6 +171,26 @@ find_mode(const gchar *name, GError **error)
     g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
                 _("unknown mode '%s' (known: paper, continuous)"), name);
     return NULL;
+}
+
+/* FILE[:ID] (channel-spec.h); an empty FILE is the INPUT. */
+static gboolean
+parse_reference(const gchar *arg, ReferenceSpec *spec, GError **error)
+{
+    GError *err = NULL;
+    gchar *file;
+    gint id;
+
+    if (!channel_spec_parse(arg, &file, &id, &err)) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE, "--reference %s", err->message);
+        g_error_free(err);
+        return FALSE;
+    }
+    spec->channel = (id == CHANNEL_SPEC_NO_ID ? CHANNEL_FIRST : id);
+    spec->file = (*file ? file : NULL);
+    if (!*file)
+        g_free(file);
+    return TRUE;
 }
 
 /* A file as the file system knows it: its inode when it exists, else the
@@ -229,10 +253,6 @@ is_same_file(const gchar *a, const gchar *b)
     return same;
 }
 
-/* The reference file named by --reference (NULL when none, or INPUT). */
-static gchar*
-reference_file_name(void);
-
 /* An output may be none of the files read, nor the other output: each is
  * written by renaming a finished temporary over it, so an input would be
  * replaced (and the tool promises never to modify one). */
@@ -241,8 +261,7 @@ check_outputs_distinct(GError **error)
 {
     const gchar *outputs[2] = { options.output, options.write_drift };
     const gchar *output_options[2] = { "-o", "--write-drift" };
-    gchar *reference = reference_file_name();
-    const gchar *inputs[3] = { options.inputs[0], options.table_file, reference };
+    const gchar *inputs[3] = { options.inputs[0], options.table_file, reference_spec.file };
     /* Whole sentences, so that translations can order them. */
     const gchar *refusals[3] = {
         N_("refusing to overwrite the input file %s (named by %s)"),
@@ -266,7 +285,6 @@ check_outputs_distinct(GError **error)
                     _("-o and --write-drift name the same file %s"), options.write_drift);
         ok = FALSE;
     }
-    g_free(reference);
     return ok;
 }
 
@@ -305,6 +323,8 @@ check_command_line(GError **error)
                     options.stripes);
         return NULL;
     }
+    if (options.reference && !parse_reference(options.reference, &reference_spec, error))
+        return NULL;
     if (!check_outputs_distinct(error))
         return NULL;
     return find_mode(options.mode_name, error);
@@ -369,38 +389,6 @@ load_stored_table(GwyContainer *data, const gchar *filename, gint id,
         g_free(label);
     }
     return table;
-}
-
-/* FILE[:ID]: the ID is what follows the last colon when that is a number;
- * an empty FILE is the INPUT. */
-static void
-parse_reference(const gchar *arg, ReferenceSpec *spec)
-{
-    const gchar *colon = strrchr(arg, ':');
-    const gchar *p;
-
-    spec->channel = CHANNEL_FIRST;
-    if (colon && colon[1]) {
-        for (p = colon + 1; g_ascii_isdigit(*p); p++)
-            ;
-        if (!*p) {
-            spec->channel = atoi(colon + 1);
-            spec->file = (colon > arg ? g_strndup(arg, colon - arg) : NULL);
-            return;
-        }
-    }
-    spec->file = g_strdup(arg);
-}
-
-static gchar*
-reference_file_name(void)
-{
-    ReferenceSpec spec;
-
-    if (!options.reference)
-        return NULL;
-    parse_reference(options.reference, &spec);
-    return spec.file;
 }
 
 static gchar*
@@ -470,7 +458,7 @@ static DriftTable*
 measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
                         const CompensationMode *mode, GError **error)
 {
-    ReferenceSpec spec;
+    const ReferenceSpec spec = reference_spec;
     GwyContainer *refdata;
     GwyDataField *image, *reference;
     gchar *image_name, *reference_name = NULL;
@@ -479,7 +467,6 @@ measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
     gboolean same_file;
     gint refid;
 
-    parse_reference(options.reference, &spec);
     same_file = (!spec.file || is_same_file(spec.file, filename));
     reffile = spec.file ? spec.file : filename;
     refdata = (same_file ? g_object_ref(data)
@@ -510,7 +497,6 @@ end:
         g_object_unref(refdata);
     g_free(reference_name);
     g_free(image_name);
-    g_free(spec.file);
     return table;
 }
 
