@@ -102,6 +102,11 @@ headless_run_load(const gchar *filename, GError **error)
     GwyContainer *data;
     GError *err = NULL;
 
+    if (g_file_test(filename, G_FILE_TEST_IS_DIR)) {
+        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_LOAD,
+                    _("cannot read %s: it is a directory"), filename);
+        return NULL;
+    }
     if (!g_file_test(filename, G_FILE_TEST_IS_REGULAR)) {
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_LOAD,
                     _("cannot read %s: no such file"), filename);
