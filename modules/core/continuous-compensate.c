@@ -295,88 +295,101 @@ prefilter_row(const Prefilter *prefilter, gdouble *data)
 }
 
 #if defined(__GNUC__)
-/* Four doubles as one value.  The running values of the x prefilter's
- * recursions stay in (vector) registers this way; in an array GCC keeps
+/* Two doubles as one value, the SSE2 vector.  The running values of the x
+ * prefilter's recursions stay in registers this way; in an array GCC keeps
  * them in memory, and every step of the chain waits for a store to be
- * forwarded to the next load.  Aligned as a double: the buffers are. */
-typedef gdouble Quad __attribute__((vector_size(4*sizeof(gdouble)),
+ * forwarded to the next load (wider vectors are spilled the same way where
+ * AVX is missing).  Aligned as a double: the buffers are. */
+typedef gdouble Pair __attribute__((vector_size(2*sizeof(gdouble)),
                                     aligned(sizeof(gdouble))));
 
-/* Quads go through pointers: passed by value they would have a different
- * calling convention in the two compiled versions (GCC warns). */
-static inline void
-quad_gather(const gdouble *p, gsize stride, Quad *q)
+static inline Pair
+pair_gather(const gdouble *p, gsize stride)
 {
-    Quad v = { p[0], p[stride], p[2*stride], p[3*stride] };
+    Pair v = { p[0], p[stride] };
 
-    *q = v;
+    return v;
 }
 
 static inline void
-quad_scatter(gdouble *p, gsize stride, const Quad *q)
+pair_scatter(gdouble *p, gsize stride, Pair v)
 {
-    p[0] = (*q)[0];
-    p[stride] = (*q)[1];
-    p[2*stride] = (*q)[2];
-    p[3*stride] = (*q)[3];
+    p[0] = v[0];
+    p[stride] = v[1];
 }
 
 /* Data values of PREFILTER_BATCH rows of src (src_stride apart) to
  * coefficients in rows (stride apart).  Each row's recursion is a serial
- * chain; the eight rows' chains run side by side in two Quads, and lanes
- * keeps the forward pass (n groups of eight) for the backward one.  rows
- * should be padded (stride not a multiple of 4 KiB) so that writing them
- * across does not keep evicting the same cache set. */
+ * chain; the eight rows' chains run side by side in four Pairs, and lanes
+ * keeps the forward pass (n groups of four Pairs) for the backward one.
+ * rows should be padded (stride not a multiple of 4 KiB) so that writing
+ * them across does not keep evicting the same cache set. */
 static void VECTOR_CLONES
-prefilter_batch(const Prefilter *prefilter, Quad *restrict lanes,
+prefilter_batch(const Prefilter *prefilter, Pair *restrict lanes,
                 const gdouble *restrict src, gsize src_stride,
                 gdouble *restrict rows, gsize stride)
 {
     const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
     gdouble side = prefilter->side, f, inv;
+    gsize s = src_stride, t = stride;
     gint n = prefilter->n, i;
-    /* x set only to keep GCC 12 from a false may-be-uninitialised. */
-    Quad upper, lower, x = { 0.0, 0.0, 0.0, 0.0 };
+    Pair c0, c1, c2, c3, *lane;
 
     G_STATIC_ASSERT(PREFILTER_BATCH == 8);
-    quad_gather(src, src_stride, &upper);
-    quad_gather(src + 4*src_stride, src_stride, &lower);
-    lanes[0] = upper;
-    lanes[1] = lower;
+    c0 = pair_gather(src, s);
+    c1 = pair_gather(src + 2*s, s);
+    c2 = pair_gather(src + 4*s, s);
+    c3 = pair_gather(src + 6*s, s);
+    lanes[0] = c0;
+    lanes[1] = c1;
+    lanes[2] = c2;
+    lanes[3] = c3;
     for (i = 1; i < n; i++) {
         f = factor[i];
-        quad_gather(src + i, src_stride, &x);
-        upper = x - f*upper;
-        quad_gather(src + 4*src_stride + i, src_stride, &x);
-        lower = x - f*lower;
-        lanes[2*i] = upper;
-        lanes[2*i + 1] = lower;
+        c0 = pair_gather(src + i, s) - f*c0;
+        c1 = pair_gather(src + 2*s + i, s) - f*c1;
+        c2 = pair_gather(src + 4*s + i, s) - f*c2;
+        c3 = pair_gather(src + 6*s + i, s) - f*c3;
+        lane = lanes + 4*i;
+        lane[0] = c0;
+        lane[1] = c1;
+        lane[2] = c2;
+        lane[3] = c3;
     }
     inv = inv_diag[n-1];
-    upper *= inv;
-    lower *= inv;
-    quad_scatter(rows + n-1, stride, &upper);
-    quad_scatter(rows + 4*stride + n-1, stride, &lower);
+    c0 *= inv;
+    c1 *= inv;
+    c2 *= inv;
+    c3 *= inv;
+    pair_scatter(rows + n-1, t, c0);
+    pair_scatter(rows + 2*t + n-1, t, c1);
+    pair_scatter(rows + 4*t + n-1, t, c2);
+    pair_scatter(rows + 6*t + n-1, t, c3);
     /* (x - side c) inv as x inv - (side inv) c: the chain waits for one
      * multiply-add per step instead of two operations. */
     for (i = n-2; i >= 0; i--) {
         inv = inv_diag[i];
         f = side*inv;
-        upper = lanes[2*i]*inv - f*upper;
-        lower = lanes[2*i + 1]*inv - f*lower;
-        quad_scatter(rows + i, stride, &upper);
-        quad_scatter(rows + 4*stride + i, stride, &lower);
+        lane = lanes + 4*i;
+        c0 = lane[0]*inv - f*c0;
+        c1 = lane[1]*inv - f*c1;
+        c2 = lane[2]*inv - f*c2;
+        c3 = lane[3]*inv - f*c3;
+        pair_scatter(rows + i, t, c0);
+        pair_scatter(rows + 2*t + i, t, c1);
+        pair_scatter(rows + 4*t + i, t, c2);
+        pair_scatter(rows + 6*t + i, t, c3);
     }
 }
 #else
-typedef gdouble Quad;
+typedef gdouble Pair;
 
 /* Data values of PREFILTER_BATCH rows of src (src_stride apart) to
  * coefficients in rows (stride apart).  Each row's recursion is a serial
  * chain; in lanes (n groups of PREFILTER_BATCH) the rows' values at one
  * column lie side by side, so the chains run together. */
 static void
-prefilter_batch(const Prefilter *prefilter, Quad *restrict lanes,
+prefilter_batch(const Prefilter *prefilter, Pair *restrict lanes,
                 const gdouble *restrict src, gsize src_stride,
                 gdouble *restrict rows, gsize stride)
 {
@@ -777,7 +790,7 @@ typedef struct {
     GwyInterpolationType interpolation;
     gboolean prefilter_x;
     Prefilter x_prefilter;
-    Quad *lanes;           /* interleaved rows of prefilter_batch() */
+    Pair *lanes;           /* interleaved rows of prefilter_batch() */
     gdouble *coeffs;       /* x coefficients of rows batch_first .. */
     gsize coeff_stride;
     gint batch_first;
