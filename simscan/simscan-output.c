@@ -5,23 +5,15 @@
  */
 #include "config.h"
 #include <string.h>
-#include <errno.h>
 #include <math.h>
-#include <unistd.h>
-#include <sys/stat.h>
-#include <glib/gstdio.h>
 #include <json-glib/json-glib.h>
 #include <libgwyddion/gwyserializable.h>
 #include "localscan-channel.h"
+#include "output-files.h"
 #include "simscan-output.h"
 #include "simscan-i18n.h"
 
 #define GWY_MAGIC "GWYP"
-
-typedef struct {
-    const gchar *filename;
-    gchar *tmpname;
-} PendingFile;
 
 /* Numbers in metadata as the shortest text that reads back exactly. */
 static void
@@ -259,65 +251,11 @@ simscan_output_json(const SimscanScene *scene, const SimscanMeasurement *m)
     return text;
 }
 
-static gboolean
-write_temp(const gchar *filename, const guchar *data, gsize length,
-           gchar **tmpname, GError **error)
-{
-    gchar *dir = g_path_get_dirname(filename);
-    gchar *base = g_path_get_basename(filename);
-    gchar *tmpl = g_strdup_printf("%s%c.%s.XXXXXX", dir, G_DIR_SEPARATOR,
-                                  base);
-    gint fd = g_mkstemp(tmpl);
-    gboolean ok = (fd >= 0);
-    gsize done = 0;
-    mode_t mask = umask(0);
-
-    /* mkstemp makes the file private; outputs get the usual permissions. */
-    umask(mask);
-    if (ok)
-        ok = (fchmod(fd, 0666 & ~mask) == 0);
-
-    while (ok && done < length) {
-        gssize n = write(fd, data + done, length - done);
-
-        if (n < 0 && errno == EINTR)
-            continue;
-        ok = (n > 0);
-        done += ok ? (gsize)n : 0;
-    }
-    if (fd >= 0 && close(fd) != 0)
-        ok = FALSE;
-    if (!ok) {
-        g_set_error(error, G_FILE_ERROR, g_file_error_from_errno(errno),
-                    _("cannot write %s: %s"), filename, g_strerror(errno));
-        if (fd >= 0)
-            g_unlink(tmpl);
-        g_free(tmpl);
-        tmpl = NULL;
-    }
-    g_free(dir);
-    g_free(base);
-    *tmpname = tmpl;
-    return ok;
-}
-
 gboolean
 simscan_write_file(const gchar *filename, const guchar *data, gsize length,
                    GError **error)
 {
-    gchar *tmpname;
-
-    if (!write_temp(filename, data, length, &tmpname, error))
-        return FALSE;
-    if (g_rename(tmpname, filename) != 0) {
-        g_set_error(error, G_FILE_ERROR, g_file_error_from_errno(errno),
-                    _("cannot write %s: %s"), filename, g_strerror(errno));
-        g_unlink(tmpname);
-        g_free(tmpname);
-        return FALSE;
-    }
-    g_free(tmpname);
-    return TRUE;
+    return output_files_write_one(filename, data, length, error);
 }
 
 static GByteArray*
@@ -332,52 +270,39 @@ gwy_file_bytes(const SimscanScene *scene, const SimscanMeasurement *m)
     return bytes;
 }
 
+static gboolean
+add_text(OutputFiles *files, const gchar *filename, gchar *text,
+         GError **error)
+{
+    gboolean ok = output_files_add(files, filename, (const guchar*)text,
+                                   strlen(text), error);
+
+    g_free(text);
+    return ok;
+}
+
 gboolean
 simscan_output_write_all(const SimscanScene *scene,
                          const SimscanMeasurement *m, GError **error)
 {
     const SimscanConfig *config = scene->config;
-    PendingFile pending[3];
-    gint n = 0, i;
+    OutputFiles *files = output_files_new();
     gboolean ok = TRUE;
 
     if (config->output) {
         GByteArray *bytes = gwy_file_bytes(scene, m);
 
-        pending[n].filename = config->output;
-        ok = write_temp(config->output, bytes->data, bytes->len,
-                        &pending[n].tmpname, error);
-        n += ok;
+        ok = output_files_add(files, config->output, bytes->data, bytes->len,
+                              error);
         g_byte_array_free(bytes, TRUE);
     }
-    if (ok && config->table) {
-        gchar *text = drift_table_to_string(m->table);
-
-        pending[n].filename = config->table;
-        ok = write_temp(config->table, (const guchar*)text, strlen(text),
-                        &pending[n].tmpname, error);
-        n += ok;
-        g_free(text);
-    }
-    if (ok && config->json) {
-        gchar *text = simscan_output_json(scene, m);
-
-        pending[n].filename = config->json;
-        ok = write_temp(config->json, (const guchar*)text, strlen(text),
-                        &pending[n].tmpname, error);
-        n += ok;
-        g_free(text);
-    }
-    for (i = 0; i < n; i++) {
-        if (ok && g_rename(pending[i].tmpname, pending[i].filename) != 0) {
-            g_set_error(error, G_FILE_ERROR, g_file_error_from_errno(errno),
-                        _("cannot write %s: %s"), pending[i].filename,
-                        g_strerror(errno));
-            ok = FALSE;
-        }
-        if (!ok)
-            g_unlink(pending[i].tmpname);
-        g_free(pending[i].tmpname);
-    }
+    if (ok && config->table)
+        ok = add_text(files, config->table, drift_table_to_string(m->table),
+                      error);
+    if (ok && config->json)
+        ok = add_text(files, config->json, simscan_output_json(scene, m),
+                      error);
+    ok = ok && output_files_commit(files, error);
+    output_files_free(files);
     return ok;
 }

@@ -41,7 +41,7 @@ gboolean       simscan_output_write_all  (const SimscanScene *scene,
                                           const SimscanMeasurement *m,
                                           GError **error);
 
-/* Writes data atomically: temporary file in the same folder, then rename. */
+/* Writes data atomically (output_files_write_one). */
 gboolean       simscan_write_file        (const gchar *filename,
                                           const guchar *data,
                                           gsize length,

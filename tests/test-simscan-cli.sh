@@ -166,6 +166,20 @@ fit_bad_case "3 lines" --line-time 1 --frame-times 0,100 --blocks 1 \
 fit_bad_case "3 lines" --line-time 1 --frame-times 0,100 \
     "$tmp/tiny0.gwy" "$tmp/tiny-frame1.gwy"
 
+# An output that is a folder: refused before any output is renamed.
+rm -f "$tmp"/e.*
+mkdir "$tmp/e-folder"
+"$simscan" $small -q -o "$tmp/e.gwy" --table "$tmp/e.csv" --json "$tmp/e-folder" \
+    2>"$tmp/err"
+status=$?
+check
+[ $status -ne 0 ] || fail "a folder as --json exited 0"
+[ "$(wc -l <"$tmp/err")" -eq 1 ] || fail "a folder as --json: stderr is not one line: $(cat "$tmp/err")"
+if ls -A "$tmp" | grep -q '^\.\{0,1\}e\.'; then
+    fail "a folder as --json left output: $(ls -A "$tmp")"
+fi
+rmdir "$tmp/e-folder"
+
 # --help lists every option.
 "$simscan" --help >"$tmp/help" || fail "--help exited non-zero"
 for opt in preset sample radius radius-spread count density spacing \

@@ -1,0 +1,346 @@
+/*
+ *  simscan's output files, all or nothing.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <errno.h>
+#include <stdlib.h>
+#include <unistd.h>
+#include <sys/stat.h>
+#include <glib/gstdio.h>
+#include "output-files.h"
+#include "simscan-i18n.h"
+
+typedef struct {
+    gchar *filename;
+    gchar *tmpname;      /* the new contents until renamed */
+    gchar *backup;       /* the replaced file while committing, or NULL */
+    gboolean linked;     /* backup is a second link: the target stays */
+    gboolean renamed;
+} PendingOutput;
+
+struct _OutputFiles {
+    GArray *pending;     /* PendingOutput */
+    gboolean committed;
+};
+
+static void
+set_errno_error(GError **error, gint saved_errno, const gchar *filename)
+{
+    g_set_error(error, G_FILE_ERROR, g_file_error_from_errno(saved_errno),
+                _("cannot write %s: %s"), filename, g_strerror(saved_errno));
+}
+
+/* The folder resolved (symbolic links, .., .) and the name: a file that
+ * does not exist yet has no inode to compare. */
+static gchar*
+canonical_path(const gchar *filename)
+{
+    gchar *dir = g_path_get_dirname(filename);
+    gchar *base = g_path_get_basename(filename);
+    gchar *real = realpath(dir, NULL);
+    gchar *path;
+
+    if (real)
+        path = g_build_filename(real, base, NULL);
+    else
+        path = g_canonicalize_filename(filename, NULL);
+    free(real);
+    g_free(dir);
+    g_free(base);
+    return path;
+}
+
+gboolean
+output_files_same(const gchar *a, const gchar *b)
+{
+    GStatBuf sa, sb;
+    gboolean a_exists = (g_stat(a, &sa) == 0);
+    gboolean b_exists = (g_stat(b, &sb) == 0);
+    gchar *ca, *cb;
+    gboolean same;
+
+    if (a_exists && b_exists)
+        return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    if (a_exists != b_exists)
+        return FALSE;
+    ca = canonical_path(a);
+    cb = canonical_path(b);
+    same = g_str_equal(ca, cb);
+    g_free(ca);
+    g_free(cb);
+    return same;
+}
+
+static void
+refuse_same(const OutputFilesRole *output, const OutputFilesRole *other,
+            GError **error)
+{
+    if (other->is_input)
+        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_EXIST,
+                    _("%s %s would overwrite the %s %s"),
+                    output->role, output->filename,
+                    other->role, other->filename);
+    else
+        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_EXIST,
+                    _("%s %s and %s %s are the same file"),
+                    other->role, other->filename,
+                    output->role, output->filename);
+}
+
+gboolean
+output_files_check_roles(const OutputFilesRole *roles, guint n,
+                         GError **error)
+{
+    guint i, j;
+
+    for (i = 0; i < n; i++) {
+        if (roles[i].is_input || !roles[i].filename)
+            continue;
+        for (j = 0; j < n; j++) {
+            if (j == i || !roles[j].filename
+                || (!roles[j].is_input && j > i))
+                continue;
+            if (output_files_same(roles[i].filename, roles[j].filename)) {
+                refuse_same(roles + i, roles + j, error);
+                return FALSE;
+            }
+        }
+    }
+    return TRUE;
+}
+
+OutputFiles*
+output_files_new(void)
+{
+    OutputFiles *files = g_new0(OutputFiles, 1);
+
+    files->pending = g_array_new(FALSE, TRUE, sizeof(PendingOutput));
+    return files;
+}
+
+/* A new empty file with a unique name beside filename; NULL on failure
+ * (errno says why). */
+static gchar*
+make_temp_beside(const gchar *filename, const gchar *what, gint *fd)
+{
+    gchar *dir = g_path_get_dirname(filename);
+    gchar *base = g_path_get_basename(filename);
+    gchar *name = g_strdup_printf("%s%c.%s.%sXXXXXX", dir, G_DIR_SEPARATOR,
+                                  base, what);
+
+    g_free(dir);
+    g_free(base);
+    if ((*fd = g_mkstemp(name)) >= 0)
+        return name;
+    g_free(name);
+    return NULL;
+}
+
+static gboolean
+write_all(gint fd, const guchar *data, gsize length)
+{
+    gsize done = 0;
+    gssize n;
+    mode_t mask = umask(0);
+
+    /* mkstemp makes the file private; outputs get the usual permissions. */
+    umask(mask);
+    if (fchmod(fd, 0666 & ~mask) != 0)
+        return FALSE;
+    while (done < length) {
+        n = write(fd, data + done, length - done);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0)
+            return FALSE;
+        done += n;
+    }
+    return TRUE;
+}
+
+static gboolean
+check_target(OutputFiles *files, const gchar *filename, GError **error)
+{
+    GStatBuf st;
+    guint i;
+
+    if (g_stat(filename, &st) == 0 && !S_ISREG(st.st_mode)) {
+        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_ISDIR,
+                    S_ISDIR(st.st_mode)
+                    ? _("cannot write %s: it is a folder")
+                    : _("cannot write %s: it is not a regular file"),
+                    filename);
+        return FALSE;
+    }
+    for (i = 0; i < files->pending->len; i++) {
+        const gchar *other = g_array_index(files->pending, PendingOutput,
+                                           i).filename;
+
+        if (output_files_same(other, filename)) {
+            g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_EXIST,
+                        _("%s and %s are the same file"), other, filename);
+            return FALSE;
+        }
+    }
+    return TRUE;
+}
+
+gboolean
+output_files_add(OutputFiles *files, const gchar *filename,
+                 const guchar *data, gsize length, GError **error)
+{
+    PendingOutput p;
+    gint fd, saved_errno;
+    gboolean ok;
+
+    g_return_val_if_fail(!files->committed, FALSE);
+    if (!check_target(files, filename, error))
+        return FALSE;
+    memset(&p, 0, sizeof(p));
+    if (!(p.tmpname = make_temp_beside(filename, "", &fd))) {
+        set_errno_error(error, errno, filename);
+        return FALSE;
+    }
+    ok = write_all(fd, data, length);
+    saved_errno = errno;
+    if (close(fd) != 0 && ok) {
+        ok = FALSE;
+        saved_errno = errno;
+    }
+    if (!ok) {
+        set_errno_error(error, saved_errno, filename);
+        g_unlink(p.tmpname);
+        g_free(p.tmpname);
+        return FALSE;
+    }
+    p.filename = g_strdup(filename);
+    g_array_append_val(files->pending, p);
+    return TRUE;
+}
+
+/* Keeps the target's old contents under p->backup: a second link when the
+ * file system has them (the target never disappears), else the target
+ * moved aside.  A target that became something else than a regular file
+ * since it was checked is left alone: the commit fails. */
+static gboolean
+keep_old_contents(PendingOutput *p)
+{
+    GStatBuf st;
+    gint fd;
+
+    if (g_lstat(p->filename, &st) != 0)
+        return TRUE;
+    if (S_ISDIR(st.st_mode)) {
+        errno = EISDIR;
+        return FALSE;
+    }
+    if (!(p->backup = make_temp_beside(p->filename, "old.", &fd)))
+        return FALSE;
+    close(fd);
+    g_unlink(p->backup);
+    if (link(p->filename, p->backup) == 0) {
+        p->linked = TRUE;
+        return TRUE;
+    }
+    if (g_rename(p->filename, p->backup) == 0)
+        return TRUE;
+    g_free(p->backup);
+    p->backup = NULL;
+    return FALSE;
+}
+
+static gboolean
+replace_target(PendingOutput *p, GError **error)
+{
+    gint saved_errno;
+
+    if (!keep_old_contents(p)) {
+        set_errno_error(error, errno, p->filename);
+        return FALSE;
+    }
+    if (g_rename(p->tmpname, p->filename) == 0) {
+        p->renamed = TRUE;
+        return TRUE;
+    }
+    saved_errno = errno;
+    if (p->backup && !p->linked)
+        g_rename(p->backup, p->filename);
+    else if (p->backup)
+        g_unlink(p->backup);
+    g_free(p->backup);
+    p->backup = NULL;
+    set_errno_error(error, saved_errno, p->filename);
+    return FALSE;
+}
+
+static void
+undo_replace(PendingOutput *p)
+{
+    if (p->backup)
+        g_rename(p->backup, p->filename);
+    else
+        g_unlink(p->filename);
+    g_free(p->backup);
+    p->backup = NULL;
+}
+
+gboolean
+output_files_commit(OutputFiles *files, GError **error)
+{
+    GArray *pending = files->pending;
+    gboolean ok = TRUE;
+    guint i, n;
+
+    g_return_val_if_fail(!files->committed, FALSE);
+    files->committed = TRUE;
+    for (n = 0; ok && n < pending->len; n++)
+        ok = replace_target(&g_array_index(pending, PendingOutput, n), error);
+    for (i = 0; i < n; i++) {
+        PendingOutput *p = &g_array_index(pending, PendingOutput, i);
+
+        if (!ok && p->renamed)
+            undo_replace(p);
+        else if (p->backup) {
+            g_unlink(p->backup);
+            g_free(p->backup);
+            p->backup = NULL;
+        }
+    }
+    return ok;
+}
+
+void
+output_files_free(OutputFiles *files)
+{
+    guint i;
+
+    if (!files)
+        return;
+    for (i = 0; i < files->pending->len; i++) {
+        PendingOutput *p = &g_array_index(files->pending, PendingOutput, i);
+
+        if (!p->renamed)
+            g_unlink(p->tmpname);
+        g_free(p->tmpname);
+        g_free(p->filename);
+        g_free(p->backup);
+    }
+    g_array_free(files->pending, TRUE);
+    g_free(files);
+}
+
+gboolean
+output_files_write_one(const gchar *filename, const guchar *data,
+                       gsize length, GError **error)
+{
+    OutputFiles *files = output_files_new();
+    gboolean ok;
+
+    ok = (output_files_add(files, filename, data, length, error)
+          && output_files_commit(files, error));
+    output_files_free(files);
+    return ok;
+}

@@ -1,0 +1,66 @@
+/*
+ *  simscan's output files: written to temporary files beside their targets
+ *  and renamed only when all are written, all or nothing, and never over
+ *  an input or over each other.  The one file writer of simscan and its
+ *  subcommands.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef SIMSCAN_OUTPUT_FILES_H
+#define SIMSCAN_OUTPUT_FILES_H
+
+#include <glib.h>
+
+G_BEGIN_DECLS
+
+typedef struct _OutputFiles OutputFiles;
+
+/* A file a command reads or writes, for output_files_check_roles(). */
+typedef struct {
+    const gchar *role;       /* how messages name it: "--json", "frame" */
+    const gchar *filename;   /* NULL: not given */
+    gboolean is_input;
+} OutputFilesRole;
+
+/* Whether a and b are one file: the same device and inode when both
+ * exist, else the same canonical absolute path (symbolic links in the
+ * folder resolved). */
+gboolean      output_files_same         (const gchar *a,
+                                         const gchar *b);
+
+/* Refuses (one line naming both) an output that is the same file as an
+ * input or as another output.  Inputs may repeat. */
+gboolean      output_files_check_roles  (const OutputFilesRole *roles,
+                                         guint n,
+                                         GError **error);
+
+OutputFiles*  output_files_new          (void);
+
+/* Checks the target (absent or a regular file, not a target of the set
+ * already) and writes data to a temporary file beside it; the target is
+ * not touched until output_files_commit(). */
+gboolean      output_files_add          (OutputFiles *files,
+                                         const gchar *filename,
+                                         const guchar *data,
+                                         gsize length,
+                                         GError **error);
+
+/* Renames every temporary file over its target.  When one rename fails,
+ * those done are undone (replaced files get their old contents back, new
+ * ones are removed), so either every target is written or none changed.
+ * Call once. */
+gboolean      output_files_commit       (OutputFiles *files,
+                                         GError **error);
+
+/* Removes the temporary files of a set not committed. */
+void          output_files_free         (OutputFiles *files);
+
+/* One file, atomically: a set of one. */
+gboolean      output_files_write_one    (const gchar *filename,
+                                         const guchar *data,
+                                         gsize length,
+                                         GError **error);
+
+G_END_DECLS
+
+#endif

@@ -1,0 +1,295 @@
+/*
+ *  Tests of simscan's output files: all written or none changed, never one
+ *  over an input or over another output.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <check.h>
+#include <glib.h>
+#include <glib/gstdio.h>
+#include "output-files.h"
+
+static gchar *dir;
+
+static void
+make_dir(void)
+{
+    dir = g_dir_make_tmp("test-output-files-XXXXXX", NULL);
+    ck_assert_ptr_nonnull(dir);
+}
+
+static void
+remove_dir(void)
+{
+    gchar *cmd = g_strdup_printf("rm -rf '%s'", dir);
+
+    ck_assert_int_eq(system(cmd), 0);
+    g_free(cmd);
+    g_free(dir);
+}
+
+static gchar*
+path(const gchar *name)
+{
+    return g_build_filename(dir, name, NULL);
+}
+
+static void
+put(const gchar *name, const gchar *text)
+{
+    gchar *p = path(name);
+
+    ck_assert(g_file_set_contents(p, text, -1, NULL));
+    g_free(p);
+}
+
+static void
+assert_contents(const gchar *name, const gchar *expected)
+{
+    gchar *p = path(name), *text = NULL;
+
+    ck_assert_msg(g_file_get_contents(p, &text, NULL, NULL),
+                  "%s is missing", name);
+    ck_assert_str_eq(text, expected);
+    g_free(text);
+    g_free(p);
+}
+
+static gint
+compare_names(gconstpointer a, gconstpointer b)
+{
+    return strcmp(*(const gchar *const*)a, *(const gchar *const*)b);
+}
+
+/* The folder's names, sorted, separated by spaces. */
+static gchar*
+listing(void)
+{
+    GDir *d = g_dir_open(dir, 0, NULL);
+    GPtrArray *names = g_ptr_array_new_with_free_func(g_free);
+    const gchar *name;
+    gchar *text;
+
+    while ((name = g_dir_read_name(d)))
+        g_ptr_array_add(names, g_strdup(name));
+    g_dir_close(d);
+    g_ptr_array_sort(names, compare_names);
+    g_ptr_array_add(names, NULL);
+    text = g_strjoinv(" ", (gchar**)names->pdata);
+    g_ptr_array_free(names, TRUE);
+    return text;
+}
+
+static void
+assert_listing(const gchar *expected)
+{
+    gchar *text = listing();
+
+    ck_assert_str_eq(text, expected);
+    g_free(text);
+}
+
+static gboolean
+add(OutputFiles *files, const gchar *name, const gchar *text, GError **error)
+{
+    gchar *p = path(name);
+    gboolean ok = output_files_add(files, p, (const guchar*)text,
+                                   strlen(text), error);
+
+    g_free(p);
+    return ok;
+}
+
+START_TEST(test_commit_writes_all)
+{
+    OutputFiles *files = output_files_new();
+
+    make_dir();
+    put("old.csv", "old\n");
+    ck_assert(add(files, "new.gwy", "gwy", NULL));
+    ck_assert(add(files, "old.csv", "csv", NULL));
+    /* Nothing changes before the commit. */
+    assert_contents("old.csv", "old\n");
+    ck_assert(output_files_commit(files, NULL));
+    output_files_free(files);
+    assert_contents("new.gwy", "gwy");
+    assert_contents("old.csv", "csv");
+    assert_listing("new.gwy old.csv");
+    remove_dir();
+}
+END_TEST
+
+/* The last target becomes a folder after it was checked: its rename fails
+ * and the targets renamed before it get their old state back. */
+START_TEST(test_failed_rename_rolls_back)
+{
+    OutputFiles *files = output_files_new();
+    GError *error = NULL;
+    gchar *late;
+
+    make_dir();
+    put("kept.csv", "old contents\n");
+    ck_assert(add(files, "kept.csv", "new table", NULL));
+    ck_assert(add(files, "fresh.gwy", "new gwy", NULL));
+    ck_assert(add(files, "late.json", "{}", NULL));
+    late = path("late.json");
+    ck_assert_int_eq(g_mkdir(late, 0755), 0);
+    put("late.json/inside", "x");
+    ck_assert(!output_files_commit(files, &error));
+    ck_assert_ptr_nonnull(error);
+    ck_assert(g_str_has_prefix(error->message, "cannot write "));
+    ck_assert(strstr(error->message, "late.json"));
+    g_clear_error(&error);
+    output_files_free(files);
+    assert_contents("kept.csv", "old contents\n");
+    assert_listing("kept.csv late.json");
+    g_free(late);
+    remove_dir();
+}
+END_TEST
+
+START_TEST(test_free_without_commit)
+{
+    OutputFiles *files = output_files_new();
+
+    make_dir();
+    put("a.csv", "a");
+    ck_assert(add(files, "a.csv", "b", NULL));
+    ck_assert(add(files, "b.csv", "b", NULL));
+    output_files_free(files);
+    assert_contents("a.csv", "a");
+    assert_listing("a.csv");
+    remove_dir();
+}
+END_TEST
+
+START_TEST(test_add_refuses_folder_and_repeats)
+{
+    OutputFiles *files = output_files_new();
+    GError *error = NULL;
+    gchar *sub, *msg;
+
+    make_dir();
+    sub = path("sub");
+    ck_assert_int_eq(g_mkdir(sub, 0755), 0);
+    ck_assert(!add(files, "sub", "x", &error));
+    msg = g_strdup_printf("cannot write %s: it is a folder", sub);
+    ck_assert_str_eq(error->message, msg);
+    g_free(msg);
+    g_clear_error(&error);
+
+    ck_assert(add(files, "x.gwy", "x", NULL));
+    /* The same file, spelled otherwise, before it exists. */
+    ck_assert(!add(files, "sub/../x.gwy", "y", &error));
+    ck_assert(strstr(error->message, "are the same file"));
+    g_clear_error(&error);
+    output_files_free(files);
+    assert_listing("sub");
+    g_free(sub);
+    remove_dir();
+}
+END_TEST
+
+START_TEST(test_same_file)
+{
+    gchar *a, *b, *c, *link_a, *dot_a, *missing, *missing2, *base;
+
+    make_dir();
+    put("a", "a");
+    put("c", "a");
+    a = path("a");
+    b = path("b");
+    c = path("c");
+    link_a = path("link-a");
+    dot_a = g_build_filename(dir, ".", "a", NULL);
+    missing = path("missing");
+    base = g_path_get_basename(dir);
+    missing2 = g_build_filename(dir, "..", base, "missing", NULL);
+    ck_assert_int_eq(link(a, link_a), 0);
+    ck_assert(output_files_same(a, a));
+    ck_assert(output_files_same(a, link_a));
+    ck_assert(output_files_same(a, dot_a));
+    ck_assert(!output_files_same(a, c));
+    ck_assert(!output_files_same(a, b));
+    ck_assert(output_files_same(missing, missing2));
+    ck_assert(!output_files_same(missing, b));
+    g_free(a);
+    g_free(b);
+    g_free(c);
+    g_free(link_a);
+    g_free(dot_a);
+    g_free(missing);
+    g_free(missing2);
+    g_free(base);
+    remove_dir();
+}
+END_TEST
+
+START_TEST(test_check_roles)
+{
+    GError *error = NULL;
+    gchar *frame_a, *frame_b, *out, *msg;
+    OutputFilesRole roles[4];
+
+    make_dir();
+    put("A.gwy", "a");
+    put("B.gwy", "b");
+    frame_a = path("A.gwy");
+    frame_b = path("B.gwy");
+    out = path("out.json");
+    roles[0] = (OutputFilesRole){ "frame", frame_a, TRUE };
+    roles[1] = (OutputFilesRole){ "frame", frame_b, TRUE };
+    roles[2] = (OutputFilesRole){ "frame", frame_a, TRUE };
+    roles[3] = (OutputFilesRole){ "--json", out, FALSE };
+    /* Inputs may repeat; a new output is fine. */
+    ck_assert(output_files_check_roles(roles, 4, NULL));
+
+    roles[3].filename = frame_a;
+    ck_assert(!output_files_check_roles(roles, 4, &error));
+    msg = g_strdup_printf("--json %s would overwrite the frame %s",
+                          frame_a, frame_a);
+    ck_assert_str_eq(error->message, msg);
+    g_free(msg);
+    g_clear_error(&error);
+
+    roles[0] = (OutputFilesRole){ "--output", "X", FALSE };
+    roles[1] = (OutputFilesRole){ "--table", "./X", FALSE };
+    ck_assert(!output_files_check_roles(roles, 2, &error));
+    ck_assert_str_eq(error->message, "--output X and --table ./X are the "
+                     "same file");
+    g_clear_error(&error);
+
+    roles[1].filename = NULL;
+    ck_assert(output_files_check_roles(roles, 2, NULL));
+    g_free(frame_a);
+    g_free(frame_b);
+    g_free(out);
+    remove_dir();
+}
+END_TEST
+
+int
+main(void)
+{
+    Suite *suite = suite_create("output-files");
+    TCase *tc = tcase_create("core");
+    SRunner *sr;
+    gint failed;
+
+    tcase_add_test(tc, test_commit_writes_all);
+    tcase_add_test(tc, test_failed_rename_rolls_back);
+    tcase_add_test(tc, test_free_without_commit);
+    tcase_add_test(tc, test_add_refuses_folder_and_repeats);
+    tcase_add_test(tc, test_same_file);
+    tcase_add_test(tc, test_check_roles);
+    suite_add_tcase(suite, tc);
+    sr = srunner_create(suite);
+    srunner_run_all(sr, CK_NORMAL);
+    failed = srunner_ntests_failed(sr);
+    srunner_free(sr);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
