@@ -16,6 +16,7 @@
 #include <app/gwyapp.h>
 #include <app/gwymoduleutils.h>
 #include "localscan-channel.h"
+#include "localscan-params.h"
 #include "stripe-registration.h"
 #include "stripe-geometry.h"
 
@@ -23,7 +24,6 @@
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
 
-#define FUNC_NAME "localscan_drift"
 #define RUN_MODES (GWY_RUN_INTERACTIVE | GWY_RUN_IMMEDIATE)
 #define PREVIEW_SIZE 480
 #define DRIFT_GRAPH_HEIGHT 170
@@ -129,7 +129,7 @@ module_register(void)
 {
     bindtextdomain(GETTEXT_PACKAGE, LOCALEDIR);
     bind_textdomain_codeset(GETTEXT_PACKAGE, "UTF-8");
-    gwy_process_func_register(FUNC_NAME,
+    gwy_process_func_register(LOCALSCAN_FUNCTION_NAME,
                               &localscan_drift,
                               N_("/_Distortion/_Local Scan Drift..."),
                               NULL,
@@ -182,32 +182,36 @@ define_module_params(void)
         return paramdef;
 
     paramdef = gwy_param_def_new();
-    gwy_param_def_set_function_name(paramdef, FUNC_NAME);
-    gwy_param_def_add_gwyenum(paramdef, PARAM_SOURCE, "source", _("Drift source"),
+    gwy_param_def_set_function_name(paramdef, LOCALSCAN_FUNCTION_NAME);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_SOURCE, LOCALSCAN_KEY_SOURCE, _("Drift source"),
                               translate_enum(sources, G_N_ELEMENTS(sources)), G_N_ELEMENTS(sources),
-                              LOCALSCAN_SOURCE_STORED);
-    gwy_param_def_add_string(paramdef, PARAM_TABLE_FILE, "table-file", _("Table _file"),
+                              LOCALSCAN_DEFAULT_SOURCE);
+    gwy_param_def_add_string(paramdef, PARAM_TABLE_FILE, LOCALSCAN_KEY_TABLE_FILE, _("Table _file"),
                              GWY_PARAM_STRING_NULL_IS_EMPTY, NULL, "");
-    gwy_param_def_add_image_id(paramdef, PARAM_REFERENCE, "reference", _("_Reference image"));
-    gwy_param_def_add_int(paramdef, PARAM_STRIPES, "stripes", _("_Stripes"), 1, 4096, 16);
-    gwy_param_def_add_gwyenum(paramdef, PARAM_MODE, "mode", _("Mode"),
+    gwy_param_def_add_image_id(paramdef, PARAM_REFERENCE, LOCALSCAN_KEY_REFERENCE, _("_Reference image"));
+    gwy_param_def_add_int(paramdef, PARAM_STRIPES, LOCALSCAN_KEY_STRIPES, _("_Stripes"),
+                          LOCALSCAN_STRIPES_MIN, LOCALSCAN_STRIPES_MAX, LOCALSCAN_STRIPES_DEFAULT);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_MODE, LOCALSCAN_KEY_MODE, _("Mode"),
                               translate_enum(modes, G_N_ELEMENTS(modes)), G_N_ELEMENTS(modes),
-                              LOCALSCAN_MODE_PAPER);
-    gwy_param_def_add_enum(paramdef, PARAM_INTERPOLATION, "interpolation", NULL, GWY_TYPE_INTERPOLATION_TYPE,
-                           GWY_INTERPOLATION_BSPLINE);
-    gwy_param_def_add_gwyenum(paramdef, PARAM_DIRECTION, "direction", _("Slow scan _direction"),
+                              LOCALSCAN_DEFAULT_MODE);
+    gwy_param_def_add_enum(paramdef, PARAM_INTERPOLATION, LOCALSCAN_KEY_INTERPOLATION, NULL, GWY_TYPE_INTERPOLATION_TYPE,
+                           LOCALSCAN_DEFAULT_INTERPOLATION);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_DIRECTION, LOCALSCAN_KEY_DIRECTION, _("Slow scan _direction"),
                               translate_enum(directions, G_N_ELEMENTS(directions)), G_N_ELEMENTS(directions),
-                              SCAN_DIRECTION_DOWN);
-    gwy_param_def_add_gwyenum(paramdef, PARAM_FILL, "fill", _("_Fill value"),
+                              LOCALSCAN_DEFAULT_DIRECTION);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_FILL, LOCALSCAN_KEY_FILL, _("_Fill value"),
                               translate_enum(fills, G_N_ELEMENTS(fills)), G_N_ELEMENTS(fills),
-                              LOCALSCAN_FILL_MEAN);
-    gwy_param_def_add_boolean(paramdef, PARAM_ADD_MASK, "add-mask", _("_Mask filled pixels"), TRUE);
-    gwy_param_def_add_boolean(paramdef, PARAM_PLOT_DRIFT, "plot-drift", _("_Plot drift graph"), FALSE);
+                              LOCALSCAN_DEFAULT_FILL);
+    gwy_param_def_add_boolean(paramdef, PARAM_ADD_MASK, LOCALSCAN_KEY_ADD_MASK, _("_Mask filled pixels"),
+                              LOCALSCAN_DEFAULT_ADD_MASK);
+    gwy_param_def_add_boolean(paramdef, PARAM_PLOT_DRIFT, LOCALSCAN_KEY_PLOT_DRIFT, _("_Plot drift graph"),
+                              LOCALSCAN_DEFAULT_PLOT_DRIFT);
     gwy_param_def_add_mask_color(paramdef, PARAM_MASK_COLOR, NULL, NULL);
     /* The reference by its channel id in the image's own file, for batch
      * callers: an image id parameter is remembered only in the running
      * session's memory, never in the settings. */
-    gwy_param_def_add_int(paramdef, PARAM_REFERENCE_CHANNEL, "reference-channel", NULL, -1, G_MAXINT32, -1);
+    gwy_param_def_add_int(paramdef, PARAM_REFERENCE_CHANNEL, LOCALSCAN_KEY_REFERENCE_CHANNEL, NULL,
+                          LOCALSCAN_REFERENCE_CHANNEL_NONE, G_MAXINT32, LOCALSCAN_REFERENCE_CHANNEL_NONE);
     return paramdef;
 }
 
@@ -382,7 +386,7 @@ measure_reference_drift(ModuleArgs *args, GError **error)
     if (!measured->valid || measured->stripes != n
         || measured->reference.datano != refid.datano || measured->reference.id != refid.id) {
         measured_drift_clear(measured);
-        g_debug("%s: registering %d stripes against channel %d", FUNC_NAME, n, refid.id);
+        g_debug("%s: registering %d stripes against channel %d", LOCALSCAN_FUNCTION_NAME, n, refid.id);
         measured->table = stripe_registration_table_for_fields(args->field, reference, n, 0.0, FALSE,
                                                                &measured->error);
         measured->valid = TRUE;
@@ -539,7 +543,7 @@ report_error(ModuleArgs *args, const GError *error)
     GtkWindow *parent;
 
     if (!main_window) {
-        g_printerr("%s: %s\n", FUNC_NAME, error->message);
+        g_printerr("%s: %s\n", LOCALSCAN_FUNCTION_NAME, error->message);
         return;
     }
     parent = gwy_app_find_window_for_channel(args->data, args->id);
@@ -598,7 +602,7 @@ run_gui(ModuleArgs *args)
     gwy_param_table_append_image_id(table, PARAM_REFERENCE);
     gwy_param_table_data_id_set_filter(table, PARAM_REFERENCE, reference_filter, args, NULL);
     gwy_param_table_append_slider(table, PARAM_STRIPES);
-    gwy_param_table_slider_restrict_range(table, PARAM_STRIPES, 1, MIN(4096, gwy_data_field_get_yres(args->field)));
+    gwy_param_table_slider_restrict_range(table, PARAM_STRIPES, 1, MIN(LOCALSCAN_STRIPES_MAX, gwy_data_field_get_yres(args->field)));
     gwy_param_table_append_header(table, -1, _("Compensation"));
     gwy_param_table_append_radio(table, PARAM_MODE);
     gwy_param_table_append_combo(table, PARAM_INTERPOLATION);

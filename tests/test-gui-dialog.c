@@ -20,10 +20,9 @@
 #include <app/gwyapp.h>
 #include "drift-table.h"
 #include "localscan-channel.h"
+#include "localscan-params.h"
 #include "paper-compensate.h"
 
-#define FUNC_NAME "localscan_drift"
-#define SETTINGS_PREFIX "/module/" FUNC_NAME "/"
 #define SCREENSHOT TEST_BUILDDIR "/tests/gui-dialog.png"
 #define SCREENSHOT_DE TEST_BUILDDIR "/tests/gui-dialog-de.png"
 #define TEST_LOCALEDIR TEST_BUILDDIR "/tests/locale"
@@ -69,7 +68,7 @@ init_application(void)
     g_clear_error(&error);
     ck_assert_msg(gwy_module_register_module(module, &error),
                   "cannot register %s: %s", module, error ? error->message : "?");
-    ck_assert(gwy_process_func_exists(FUNC_NAME));
+    ck_assert(gwy_process_func_exists(LOCALSCAN_FUNCTION_NAME));
 }
 
 static void
@@ -77,11 +76,11 @@ set_batch_like_settings(void)
 {
     GwyContainer *settings = gwy_app_settings_get();
 
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "source", 0);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "mode", 0);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "fill", 0);
-    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "add-mask", TRUE);
-    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "plot-drift", FALSE);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(SOURCE), LOCALSCAN_SOURCE_STORED);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(MODE), LOCALSCAN_MODE_PAPER);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(FILL), LOCALSCAN_FILL_MEAN);
+    gwy_container_set_boolean_by_name(settings, LOCALSCAN_SETTINGS_KEY(ADD_MASK), TRUE);
+    gwy_container_set_boolean_by_name(settings, LOCALSCAN_SETTINGS_KEY(PLOT_DRIFT), FALSE);
 }
 
 /* A smooth random surface (so the preview shows something recognisable)
@@ -227,7 +226,7 @@ run_dialog(GwyContainer *data, DialogProbe *probe)
     gwy_app_data_browser_select_data_field(data, 0);
     probe->texts = g_string_new(NULL);
     timeout = g_timeout_add(TICK_MS, probe_dialog, probe);
-    gwy_process_func_run(FUNC_NAME, data, GWY_RUN_INTERACTIVE);
+    gwy_process_func_run(LOCALSCAN_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
     /* The timeout is gone once it answered; a dialog that never came or
      * never got ready leaves it behind. */
     if (!probe->dialog)

@@ -924,6 +924,8 @@ START_TEST(test_help_lists_options)
     ck_assert_int_eq(run.status, 0);
     for (i = 0; i < G_N_ELEMENTS(options); i++)
         ck_assert_msg(strstr(run.out, options[i]), "--help does not list %s:\n%s", options[i], run.out);
+    ck_assert_msg(strstr(run.out, "(default 16; at most 4096 and the image's rows)"),
+                  "--help does not state the module's stripe default and limit:\n%s", run.out);
     ck_assert_msg(strstr(run.out, "timed by the file's metadata"), "--help does not say where continuous mode's "
                   "timing comes from:\n%s", run.out);
     tool_run_clear(&run);
@@ -1658,7 +1660,9 @@ static const ReferenceErrorCase reference_error_cases[] = {
     { "stripes alone", { "--stripes", "4", "-o", "@OUT", "@IN", }, 2,
       "gwy-localscan: --stripes needs --reference" },
     { "no stripes", { "--stripes", "0", "--reference", ":1", "-o", "@OUT", "@IN", }, 2,
-      "gwy-localscan: --stripes must be at least 1, not 0" },
+      "gwy-localscan: --stripes must be from 1 to 4096, not 0" },
+    { "more stripes than the module allows", { "--stripes", "4097", "--reference", ":1", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --stripes must be from 1 to 4096, not 4097" },
     { "unreadable reference", { "--reference", "@IN.missing", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: cannot read @IN.missing: no such file" },
     { "reference not SPM data", { "--reference", "@CSV:0", "-o", "@OUT", "@IN", }, 1,

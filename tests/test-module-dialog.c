@@ -18,10 +18,9 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "localscan-channel.h"
+#include "localscan-params.h"
 #include "registration-frames.h"
 
-#define FUNC_NAME "localscan_drift"
-#define SETTINGS_PREFIX "/module/localscan_drift/"
 #define RERUN_GUARD "LOCALSCAN_TEST_UNDER_XVFB"
 #define MAX_TICKS 100
 
@@ -75,11 +74,11 @@ set_stored_table_settings(void)
 {
     GwyContainer *settings = gwy_app_settings_get();
 
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "source", 0);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "mode", 0);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "fill", 0);
-    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "add-mask", TRUE);
-    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "plot-drift", FALSE);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(SOURCE), 0);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(MODE), 0);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(FILL), 0);
+    gwy_container_set_boolean_by_name(settings, LOCALSCAN_SETTINGS_KEY(ADD_MASK), TRUE);
+    gwy_container_set_boolean_by_name(settings, LOCALSCAN_SETTINGS_KEY(PLOT_DRIFT), FALSE);
 }
 
 static GtkWidget*
@@ -153,7 +152,7 @@ run_dialog(GwyContainer *data, DialogProbe *probe)
 {
     guint timeout = g_timeout_add(50, probe_dialog, probe);
 
-    gwy_process_func_run(FUNC_NAME, data, GWY_RUN_INTERACTIVE);
+    gwy_process_func_run(LOCALSCAN_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
     if (!probe->answered)
         g_source_remove(timeout);
 }
@@ -211,8 +210,8 @@ START_TEST(test_status_names_timing_source)
     GwyContainer *settings = gwy_app_settings_get(), *data, *meta;
 
     set_stored_table_settings();
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "mode", 1);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "direction", 0);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(MODE), 1);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(DIRECTION), 0);
     data = make_container(gentle_table);
     run_dialog(data, &without);
     ck_assert_msg(without.found_text && without.found_also, "no timing source shown without metadata");
@@ -465,13 +464,13 @@ START_TEST(test_reference_chooser_and_cache)
     gwy_clear(&probe, 1);
     probe.data = make_reference_container();
     set_stored_table_settings();
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "source", 2);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "stripes", 16);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "reference-channel", -1);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(SOURCE), 2);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(STRIPES), 16);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(REFERENCE_CHANNEL), -1);
     registrations = 0;
     handler = g_log_set_handler(NULL, G_LOG_LEVEL_DEBUG, count_registrations, NULL);
     timeout = g_timeout_add(50, probe_reference_dialog, &probe);
-    gwy_process_func_run(FUNC_NAME, probe.data, GWY_RUN_INTERACTIVE);
+    gwy_process_func_run(LOCALSCAN_FUNCTION_NAME, probe.data, GWY_RUN_INTERACTIVE);
     if (!probe.answered)
         g_source_remove(timeout);
     g_log_remove_handler(NULL, handler);
@@ -501,7 +500,7 @@ START_TEST(test_reference_chooser_and_cache)
     ck_assert(table);
     ck_assert_int_eq(table->n_stripes, 8);
     drift_table_free(table);
-    ck_assert(gwy_container_gis_int32_by_name(settings, SETTINGS_PREFIX "reference-channel", &channel));
+    ck_assert(gwy_container_gis_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(REFERENCE_CHANNEL), &channel));
     ck_assert_int_eq(channel, 0);
 
     gwy_app_data_browser_remove(probe.data);

@@ -22,11 +22,10 @@
 #include "paper-compensate.h"
 #include "continuous-compensate.h"
 #include "localscan-channel.h"
+#include "localscan-params.h"
 #include "registration-frames.h"
 #include "simscan-file-case.h"
 
-#define FUNC_NAME "localscan_drift"
-#define SETTINGS_PREFIX "/module/localscan_drift/"
 #define TITLE "Height"
 #define RESULT_TITLE "Height (local-scan compensated)"
 
@@ -69,8 +68,9 @@ typedef struct {
 } ModuleSettings;
 
 static const ModuleSettings default_settings = {
-    LOCALSCAN_SOURCE_STORED, "", LOCALSCAN_MODE_PAPER, LOCALSCAN_FILL_MEAN, TRUE, FALSE,
-    GWY_INTERPOLATION_BSPLINE, SCAN_DIRECTION_DOWN, -1, 16,
+    LOCALSCAN_DEFAULT_SOURCE, "", LOCALSCAN_DEFAULT_MODE, LOCALSCAN_DEFAULT_FILL,
+    LOCALSCAN_DEFAULT_ADD_MASK, LOCALSCAN_DEFAULT_PLOT_DRIFT, LOCALSCAN_DEFAULT_INTERPOLATION,
+    LOCALSCAN_DEFAULT_DIRECTION, LOCALSCAN_REFERENCE_CHANNEL_NONE, LOCALSCAN_STRIPES_DEFAULT,
 };
 
 static void
@@ -85,16 +85,16 @@ set_module_settings(const ModuleSettings *ms)
 {
     GwyContainer *settings = gwy_app_settings_get();
 
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "source", ms->source);
-    set_string(settings, SETTINGS_PREFIX "table-file", ms->table_file);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "mode", ms->mode);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "fill", ms->fill);
-    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "add-mask", ms->add_mask);
-    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "plot-drift", ms->plot_drift);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "interpolation", ms->interpolation);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "direction", ms->direction);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "reference-channel", ms->reference_channel);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "stripes", ms->stripes);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(SOURCE), ms->source);
+    set_string(settings, LOCALSCAN_SETTINGS_KEY(TABLE_FILE), ms->table_file);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(MODE), ms->mode);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(FILL), ms->fill);
+    gwy_container_set_boolean_by_name(settings, LOCALSCAN_SETTINGS_KEY(ADD_MASK), ms->add_mask);
+    gwy_container_set_boolean_by_name(settings, LOCALSCAN_SETTINGS_KEY(PLOT_DRIFT), ms->plot_drift);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(INTERPOLATION), ms->interpolation);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(DIRECTION), ms->direction);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(REFERENCE_CHANNEL), ms->reference_channel);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(STRIPES), ms->stripes);
 }
 
 /* Pixel k*k blocks: image (xres*k) x (yres*k). */
@@ -172,7 +172,7 @@ run_module(GwyContainer *data, gchar **message)
     ck_assert_int_ge(fd, 0);
     saved_fd = dup(STDERR_FILENO);
     dup2(fd, STDERR_FILENO);
-    gwy_process_func_run(FUNC_NAME, data, GWY_RUN_IMMEDIATE);
+    gwy_process_func_run(LOCALSCAN_FUNCTION_NAME, data, GWY_RUN_IMMEDIATE);
     fflush(stderr);
     dup2(saved_fd, STDERR_FILENO);
     close(saved_fd);
@@ -441,7 +441,7 @@ START_TEST(test_result_channel_items)
     ck_assert(gwy_container_gis_object_by_name(data, "/1/data/log", &log));
     ck_assert_int_ge(gwy_string_list_get_length(log), 1);
     last = gwy_string_list_get(log, gwy_string_list_get_length(log) - 1);
-    ck_assert_msg(strstr(last, FUNC_NAME) != NULL, "log entry '%s'", last);
+    ck_assert_msg(strstr(last, LOCALSCAN_FUNCTION_NAME) != NULL, "log entry '%s'", last);
     /* Nothing was added to the source channel. */
     ck_assert(!gwy_container_contains(data, gwy_app_get_mask_key_for_id(0)));
     ck_assert(!gwy_container_contains_by_name(data, "/0/data/log"));
@@ -644,7 +644,7 @@ check_refused(GwyDataField *field, const gchar *stored_table, const ModuleSettin
 
     set_module_settings(ms);
     ck_assert_int_eq(run_module(data, &message), -1);
-    ck_assert_msg(g_str_has_prefix(message, FUNC_NAME ": "), "message '%s'", message);
+    ck_assert_msg(g_str_has_prefix(message, LOCALSCAN_FUNCTION_NAME ": "), "message '%s'", message);
     ck_assert_msg(strstr(message, expected_part) != NULL, "message '%s' lacks '%s'", message, expected_part);
     newline = strchr(message, '\n');
     ck_assert_msg(newline && newline[1] == '\0', "message '%s' is not one line", message);
@@ -1021,7 +1021,7 @@ START_TEST(test_reference_graph_and_log)
     ck_assert_int_ge(gwy_string_list_get_length(log), 1);
     entry = gwy_string_list_get(log, gwy_string_list_get_length(log) - 1);
     printf("test-module-immediate: log entry: %s\n", entry);
-    ck_assert_msg(g_str_has_prefix(entry, "proc::" FUNC_NAME "("), "log entry %s", entry);
+    ck_assert_msg(g_str_has_prefix(entry, "proc::" LOCALSCAN_FUNCTION_NAME "("), "log entry %s", entry);
     ck_assert_msg(strstr(entry, "source=2"), "log entry %s", entry);
     ck_assert_msg(strstr(entry, "reference-channel=0"), "log entry %s", entry);
 
@@ -1043,7 +1043,7 @@ check_reference_refused(GwyContainer *data, gint reference_channel, gint stripes
     ms.stripes = stripes;
     set_module_settings(&ms);
     ck_assert_int_eq(run_module(data, &message), -1);
-    ck_assert_msg(g_str_has_prefix(message, FUNC_NAME ": ") && strstr(message, expected_part),
+    ck_assert_msg(g_str_has_prefix(message, LOCALSCAN_FUNCTION_NAME ": ") && strstr(message, expected_part),
                   "message '%s' lacks '%s'", message, expected_part);
     ck_assert_msg(strchr(message, '\n') == message + strlen(message) - 1, "message '%s' is not one line", message);
     g_free(message);
@@ -1347,7 +1347,7 @@ load_module(void)
         g_clear_error(&error);
         return FALSE;
     }
-    return gwy_process_func_exists(FUNC_NAME);
+    return gwy_process_func_exists(LOCALSCAN_FUNCTION_NAME);
 }
 
 int

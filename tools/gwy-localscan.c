@@ -27,9 +27,6 @@
 /* No -c given: the channel with the lowest id. */
 #define CHANNEL_FIRST G_MININT
 
-/* Stripes registered against a reference unless --stripes says otherwise
- * (the module's default). */
-#define DEFAULT_STRIPES 16
 #define STRIPES_UNSET G_MININT
 
 enum {
@@ -66,7 +63,7 @@ static ReferenceSpec reference_spec = { NULL, CHANNEL_FIRST };
 /* Every option gwy-localscan knows; --help is generated from this table.
  * A new option is one entry here plus its handling in run_batch() (drift
  * sources: obtain_drift_table()). */
-static const GOptionEntry option_table[] = {
+static GOptionEntry option_table[] = {
     { "output", 'o', 0, G_OPTION_ARG_FILENAME, &options.output,
       N_("Write the result to OUT.gwy (required)"), N_("OUT.gwy") },
     { "drift", 'd', 0, G_OPTION_ARG_FILENAME, &options.table_file,
@@ -85,8 +82,7 @@ static const GOptionEntry option_table[] = {
          "its first channel); FILE may be INPUT itself, and :ID alone means "
          "channel ID of INPUT.  Not with -d"), N_("FILE[:ID]") },
     { "stripes", 0, 0, G_OPTION_ARG_INT, &options.stripes,
-      N_("Register N stripes with --reference (default 16; at most the "
-         "image's rows)"), N_("N") },
+      NULL, N_("N") },   /* stripes_help() */
     { "write-drift", 0, 0, G_OPTION_ARG_FILENAME, &options.write_drift,
       N_("Also write the drift table used to TABLE.csv"), N_("TABLE.csv") },
     { "version", 0, 0, G_OPTION_ARG_NONE, &options.show_version,
@@ -136,11 +132,37 @@ free_options(void)
     g_strfreev(options.inputs);
 }
 
+/* The module's default and limit, as they are. */
+static gchar*
+stripes_help(void)
+{
+    return g_strdup_printf(_("Register N stripes with --reference (default %d; at most %d and the "
+                             "image's rows)"),
+                           LOCALSCAN_STRIPES_DEFAULT, LOCALSCAN_STRIPES_MAX);
+}
+
+static GOptionEntry*
+find_option(const gchar *long_name)
+{
+    GOptionEntry *entry;
+
+    for (entry = option_table; entry->long_name; entry++) {
+        if (gwy_strequal(entry->long_name, long_name))
+            return entry;
+    }
+    g_return_val_if_reached(NULL);
+}
+
 static gboolean
 parse_options(gint *argc, gchar ***argv, GError **error)
 {
     GOptionContext *context;
+    gchar *help = stripes_help();
     gboolean ok;
+
+    /* Entries with a description are translated by the context; this one
+     * already is. */
+    find_option("stripes")->description = help;
 
     context = g_option_context_new(NULL);
     g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
@@ -154,6 +176,7 @@ parse_options(gint *argc, gchar ***argv, GError **error)
     g_option_context_add_main_entries(context, option_table, GETTEXT_PACKAGE);
     ok = g_option_context_parse(context, argc, argv, error);
     g_option_context_free(context);
+    g_free(help);
     return ok;
 }
 
@@ -316,11 +339,11 @@ check_command_line(GError **error)
                     _("--stripes needs --reference"));
         return NULL;
     }
-    if (options.reference && options.stripes != STRIPES_UNSET
-        && options.stripes < 1) {
+    if (options.stripes != STRIPES_UNSET
+        && (options.stripes < LOCALSCAN_STRIPES_MIN || options.stripes > LOCALSCAN_STRIPES_MAX)) {
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
-                    _("--stripes must be at least 1, not %d"),
-                    options.stripes);
+                    _("--stripes must be from %d to %d, not %d"),
+                    LOCALSCAN_STRIPES_MIN, LOCALSCAN_STRIPES_MAX, options.stripes);
         return NULL;
     }
     if (options.reference && !parse_reference(options.reference, &reference_spec, error))
@@ -676,7 +699,7 @@ main(int argc, char *argv[])
         goto end;
     }
     if (options.stripes == STRIPES_UNSET)
-        options.stripes = DEFAULT_STRIPES;
+        options.stripes = LOCALSCAN_STRIPES_DEFAULT;
     if (!load_module(&error) || !run_batch(mode, &error))
         status = EXIT_ERROR;
     gwy_app_settings_free();

@@ -8,7 +8,7 @@
 #include <app/gwyapp.h>
 #include "localscan-settings.h"
 
-#define SETTINGS_PREFIX "/module/" LOCALSCAN_FUNCTION_NAME "/"
+#define KEY LOCALSCAN_SETTINGS_KEY
 
 /* GwyParams keeps enums and ints as int32, booleans as booleans. */
 void
@@ -17,15 +17,15 @@ localscan_settings_apply(const LocalscanBatchParams *params)
     GwyContainer *settings = gwy_app_settings_get();
     gchar *table_file;
 
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "source", params->source);
+    gwy_container_set_int32_by_name(settings, KEY(SOURCE), params->source);
     if (params->source == LOCALSCAN_SOURCE_FILE) {
         /* Absolute, so it means the same file whatever the module's cwd. */
         table_file = g_canonicalize_filename(params->table_file, NULL);
-        gwy_container_set_string_by_name(settings, SETTINGS_PREFIX "table-file",
+        gwy_container_set_string_by_name(settings, KEY(TABLE_FILE),
                                          (const guchar*)table_file);
     }
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "mode", params->mode);
-    gwy_container_set_int32_by_name(settings, SETTINGS_PREFIX "fill", LOCALSCAN_FILL_MEAN);
-    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "add-mask", TRUE);
-    gwy_container_set_boolean_by_name(settings, SETTINGS_PREFIX "plot-drift", FALSE);
+    gwy_container_set_int32_by_name(settings, KEY(MODE), params->mode);
+    gwy_container_set_int32_by_name(settings, KEY(FILL), LOCALSCAN_FILL_MEAN);
+    gwy_container_set_boolean_by_name(settings, KEY(ADD_MASK), TRUE);
+    gwy_container_set_boolean_by_name(settings, KEY(PLOT_DRIFT), FALSE);
 }

@@ -9,11 +9,9 @@
 #define LOCALSCAN_SETTINGS_H
 
 #include <glib.h>
-#include "localscan-channel.h"
+#include "localscan-params.h"
 
 G_BEGIN_DECLS
-
-#define LOCALSCAN_FUNCTION_NAME "localscan_drift"
 
 /* What a batch run decides; everything else the module reads (interpolation
  * and scan direction of continuous mode) stays as the user's settings have

@@ -1,0 +1,52 @@
+/*
+ *  The localscan_drift process function's parameters as stored in
+ *  Gwyddion's settings (/module/localscan_drift/<key>): function name, keys,
+ *  defaults and limits, for the module's GwyParamDef, the batch tools and
+ *  the tests alike.  GTK-free.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef LOCALSCAN_PARAMS_H
+#define LOCALSCAN_PARAMS_H
+
+#include <libprocess/gwyprocessenums.h>
+#include "localscan-channel.h"
+
+/* Process function names are global in Gwyddion; "drift" is Gwyddion's own. */
+#define LOCALSCAN_FUNCTION_NAME "localscan_drift"
+#define LOCALSCAN_SETTINGS_PREFIX "/module/" LOCALSCAN_FUNCTION_NAME "/"
+/* The settings key of a parameter: LOCALSCAN_SETTINGS_KEY(MODE). */
+#define LOCALSCAN_SETTINGS_KEY(name) (LOCALSCAN_SETTINGS_PREFIX LOCALSCAN_KEY_##name)
+
+/* Keys under LOCALSCAN_SETTINGS_PREFIX.  Users' settings files hold them:
+ * never rename one.  GwyParams stores enums and ints as int32, booleans as
+ * booleans, doubles as doubles. */
+#define LOCALSCAN_KEY_SOURCE            "source"
+#define LOCALSCAN_KEY_TABLE_FILE        "table-file"
+#define LOCALSCAN_KEY_REFERENCE         "reference"
+#define LOCALSCAN_KEY_STRIPES           "stripes"
+#define LOCALSCAN_KEY_MODE              "mode"
+#define LOCALSCAN_KEY_INTERPOLATION     "interpolation"
+#define LOCALSCAN_KEY_DIRECTION         "direction"
+#define LOCALSCAN_KEY_FILL              "fill"
+#define LOCALSCAN_KEY_ADD_MASK          "add-mask"
+#define LOCALSCAN_KEY_PLOT_DRIFT        "plot-drift"
+#define LOCALSCAN_KEY_REFERENCE_CHANNEL "reference-channel"
+
+#define LOCALSCAN_DEFAULT_SOURCE        LOCALSCAN_SOURCE_STORED
+#define LOCALSCAN_DEFAULT_MODE          LOCALSCAN_MODE_PAPER
+#define LOCALSCAN_DEFAULT_INTERPOLATION GWY_INTERPOLATION_BSPLINE
+#define LOCALSCAN_DEFAULT_DIRECTION     SCAN_DIRECTION_DOWN
+#define LOCALSCAN_DEFAULT_FILL          LOCALSCAN_FILL_MEAN
+#define LOCALSCAN_DEFAULT_ADD_MASK      TRUE
+#define LOCALSCAN_DEFAULT_PLOT_DRIFT    FALSE
+
+/* Stripes registered against a reference image. */
+#define LOCALSCAN_STRIPES_MIN           1
+#define LOCALSCAN_STRIPES_MAX           4096
+#define LOCALSCAN_STRIPES_DEFAULT       16
+
+/* A channel id of the image's own file, for batch callers; -1: none. */
+#define LOCALSCAN_REFERENCE_CHANNEL_NONE -1
+
+#endif
