@@ -12,6 +12,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "option-values.h"
+#include "output-files.h"
 #include "fit-command.h"
 
 #undef _
@@ -440,6 +441,27 @@ end:
     return ok;
 }
 
+/* The JSON may not replace a frame. */
+static gboolean
+check_files(const gchar *json, gchar **files, GError **error)
+{
+    guint n = g_strv_length(files), i;
+    OutputFilesRole *roles = g_new(OutputFilesRole, n + 1);
+    gboolean ok;
+
+    for (i = 0; i < n; i++) {
+        roles[i].role = _("frame");
+        roles[i].filename = files[i];
+        roles[i].is_input = TRUE;
+    }
+    roles[n].role = "--json";
+    roles[n].filename = (json && strcmp(json, "-") != 0) ? json : NULL;
+    roles[n].is_input = FALSE;
+    ok = output_files_check_roles(roles, n + 1, error);
+    g_free(roles);
+    return ok;
+}
+
 static void
 ensure_gwyddion(void)
 {
@@ -498,6 +520,8 @@ simscan_fit_main(int argc, char **argv)
                       "channel per frame)"));
         goto end;
     }
+    if (!check_files(args.json, files, &error))
+        goto end;
     ensure_gwyddion();
     if (run_fit(&args, files, g_strv_length(files), &error))
         status = 0;

@@ -13,6 +13,7 @@
 #include "particle-detect.h"
 #include "centre-error.h"
 #include "simscan-output.h"
+#include "output-files.h"
 #include "simscan-report.h"
 #include "channel-png.h"
 #include "simscan-compare.h"
@@ -240,6 +241,20 @@ compare_file(const gchar *filename, const CompareOptions *options,
     return ok;
 }
 
+/* No picture may replace the input or another picture. */
+static gboolean
+check_files(const CompareOptions *options, GError **error)
+{
+    OutputFilesRole roles[] = {
+        { _("input"), options->inputs[0], TRUE },
+        { "--before-png", options->before_png, FALSE },
+        { "--after-png", options->after_png, FALSE },
+        { "--truth-png", options->truth_png, FALSE },
+    };
+
+    return output_files_check_roles(roles, G_N_ELEMENTS(roles), error);
+}
+
 int
 simscan_compare_main(int argc, char **argv)
 {
@@ -269,6 +284,7 @@ simscan_compare_main(int argc, char **argv)
                     _("expected one input file"));
         ok = FALSE;
     }
+    ok = ok && check_files(&options, &error);
     ok = ok && compare_file(options.inputs[0], &options, &error);
     if (!ok) {
         fprintf(stderr, "simscan compare: %s\n", error->message);

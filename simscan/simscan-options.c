@@ -10,6 +10,7 @@
 #include "simscan-presets.h"
 #include "simscan-sample-file.h"
 #include "option-values.h"
+#include "output-files.h"
 #include "simscan-options.h"
 #include "simscan-i18n.h"
 
@@ -483,6 +484,20 @@ check_scene_limits(const SimscanConfig *config, GError **error)
     return TRUE;
 }
 
+/* No output may replace the sample or another output. */
+static gboolean
+check_files(const SimscanConfig *config, GError **error)
+{
+    OutputFilesRole roles[] = {
+        { "--sample", config->sample_file, TRUE },
+        { "--output", config->output, FALSE },
+        { "--table", config->table, FALSE },
+        { "--json", config->json, FALSE },
+    };
+
+    return output_files_check_roles(roles, G_N_ELEMENTS(roles), error);
+}
+
 /* A measured sample sets the defaults of what the user did not give. */
 static gboolean
 adopt_sample(SimscanConfig *config, const RawOptions *raw, guint given,
@@ -561,6 +576,7 @@ simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
     }
     ok = ok && parse_given(&raw, &given, error);
     ok = ok && raw_to_config(&raw, config, error);
+    ok = ok && check_files(config, error);
     ok = ok && (!config->sample_file || adopt_sample(config, &raw, given, error));
     ok = ok && check_scene_limits(config, error);
     g_strfreev(args);

@@ -6,6 +6,10 @@
 # SPDX-License-Identifier: GPL-2.0-or-later
 set -u
 simscan=${SIMSCAN:-./simscan/simscan}
+case $simscan in
+    /*) ;;
+    *) simscan=$(pwd)/$simscan ;;
+esac
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 failures=0
@@ -179,6 +183,45 @@ if ls -A "$tmp" | grep -q '^\.\{0,1\}e\.'; then
     fail "a folder as --json left output: $(ls -A "$tmp")"
 fi
 rmdir "$tmp/e-folder"
+
+# No output may be an input or another output: refused with one line, the
+# input unchanged, nothing written.
+same_file_case() {
+    keep=$1
+    shift
+    cp "$keep" "$tmp/keep.copy"
+    "$simscan" "$@" >"$tmp/out" 2>"$tmp/err"
+    status=$?
+    check
+    [ $status -ne 0 ] || fail "$* exited 0"
+    [ "$(wc -l <"$tmp/err")" -eq 1 ] || fail "$*: stderr is not one line: $(cat "$tmp/err")"
+    grep -q "same file\|would overwrite" "$tmp/err" \
+        || fail "$*: message does not name the clash: $(cat "$tmp/err")"
+    cmp -s "$keep" "$tmp/keep.copy" || fail "$* changed $keep"
+}
+same_file_case "$tmp/f0.gwy" fit --line-time 1 --frame-times 0,100,200 \
+    $fit_frames --json "$tmp/f0.gwy"
+same_file_case "$tmp/f1.gwy" fit --line-time 1 --frame-times 0,100,200 \
+    $fit_frames --json "$tmp/../$(basename "$tmp")/f1.gwy"
+same_file_case "$tmp/a.gwy" --sample "$tmp/a.gwy" -q -o "$tmp/a.gwy"
+same_file_case "$tmp/a.gwy" --sample "$tmp/a.gwy:0" -q --json "$tmp/./a.gwy"
+ln "$tmp/a.gwy" "$tmp/a-link.gwy"
+same_file_case "$tmp/a.gwy" --sample "$tmp/a.gwy" -q --table "$tmp/a-link.gwy"
+rm -f "$tmp/a-link.gwy"
+same_file_case "$tmp/a.gwy" compare "$tmp/a.gwy" --after-png "$tmp/a.gwy"
+for pair in "-o X --table X" "-o X --json ./X" "--table X --json X"; do
+    rm -f "$tmp/X"
+    (cd "$tmp" && "$simscan" $small -q $pair) 2>"$tmp/err"
+    status=$?
+    check
+    [ $status -ne 0 ] || fail "$pair exited 0"
+    [ ! -e "$tmp/X" ] || fail "$pair wrote X"
+    grep -q "are the same file" "$tmp/err" || fail "$pair: $(cat "$tmp/err")"
+done
+(cd "$tmp" && "$simscan" compare a.gwy --before-png P.png --truth-png ./P.png) \
+    2>"$tmp/err"
+check
+grep -q "are the same file" "$tmp/err" || fail "compare, one picture twice: $(cat "$tmp/err")"
 
 # --help lists every option.
 "$simscan" --help >"$tmp/help" || fail "--help exited non-zero"
