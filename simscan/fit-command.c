@@ -55,12 +55,22 @@ fit_report_clear(FitReport *report)
     report->n_meas = 0;
 }
 
+/* JSON has no NaN or infinity: a number not known is null. */
+static void
+add_number_value(JsonBuilder *b, gdouble v)
+{
+    if (isfinite(v))
+        json_builder_add_double_value(b, v);
+    else
+        json_builder_add_null_value(b);
+}
+
 static void
 add_pair_value(JsonBuilder *b, const gdouble *v)
 {
     json_builder_begin_array(b);
-    json_builder_add_double_value(b, v[0]);
-    json_builder_add_double_value(b, v[1]);
+    add_number_value(b, v[0]);
+    add_number_value(b, v[1]);
     json_builder_end_array(b);
 }
 
@@ -75,10 +85,7 @@ static void
 add_double(JsonBuilder *b, const gchar *name, gdouble v)
 {
     json_builder_set_member_name(b, name);
-    if (isfinite(v))
-        json_builder_add_double_value(b, v);
-    else
-        json_builder_add_null_value(b);
+    add_number_value(b, v);
 }
 
 static void

@@ -124,6 +124,16 @@ simscan_output_particles(GwyContainer *data)
     return (const gchar*)text;
 }
 
+/* JSON has no NaN or infinity: a number not known is null. */
+static void
+add_number(JsonBuilder *b, gdouble value)
+{
+    if (isfinite(value))
+        json_builder_add_double_value(b, value);
+    else
+        json_builder_add_null_value(b);
+}
+
 static void
 add_error(JsonBuilder *b, const gchar *name, const CentreError *e)
 {
@@ -134,13 +144,13 @@ add_error(JsonBuilder *b, const gchar *name, const CentreError *e)
     json_builder_set_member_name(b, "matched");
     json_builder_add_int_value(b, e->n_matched);
     json_builder_set_member_name(b, "rms_px");
-    json_builder_add_double_value(b, e->rms_px);
+    add_number(b, e->rms_px);
     json_builder_set_member_name(b, "max_px");
-    json_builder_add_double_value(b, e->max_px);
+    add_number(b, e->max_px);
     json_builder_set_member_name(b, "rms_nm");
-    json_builder_add_double_value(b, e->rms_nm);
+    add_number(b, e->rms_nm);
     json_builder_set_member_name(b, "max_nm");
-    json_builder_add_double_value(b, e->max_nm);
+    add_number(b, e->max_nm);
     json_builder_end_object(b);
 }
 
@@ -150,7 +160,7 @@ add_number_or_null(JsonBuilder *b, const gchar *name, gboolean known,
 {
     json_builder_set_member_name(b, name);
     if (known)
-        json_builder_add_double_value(b, value);
+        add_number(b, value);
     else
         json_builder_add_null_value(b);
 }
@@ -171,8 +181,8 @@ add_stripes(JsonBuilder *b, const SimscanMeasurement *m)
         json_builder_add_int_value(b, s);
         json_builder_set_member_name(b, "true_px");
         json_builder_begin_array(b);
-        json_builder_add_double_value(b, m->true_dx[s]);
-        json_builder_add_double_value(b, m->true_dy[s]);
+        add_number(b, m->true_dx[s]);
+        add_number(b, m->true_dy[s]);
         json_builder_end_array(b);
         add_number_or_null(b, "dx", row->has_drift, row->dx);
         add_number_or_null(b, "dy", row->has_drift, row->dy);
@@ -211,24 +221,24 @@ simscan_output_json(const SimscanScene *scene, const SimscanMeasurement *m)
     json_builder_add_int_value(b, scene->scan.yres);
     json_builder_set_member_name(b, "pixel_nm");
     json_builder_begin_array(b);
-    json_builder_add_double_value(b, 1e9*scene->scan.xreal/scene->scan.xres);
-    json_builder_add_double_value(b, 1e9*scene->scan.yreal/scene->scan.yres);
+    add_number(b, 1e9*scene->scan.xreal/scene->scan.xres);
+    add_number(b, 1e9*scene->scan.yreal/scene->scan.yres);
     json_builder_end_array(b);
     json_builder_set_member_name(b, "frame_time_s");
-    json_builder_add_double_value(b, scan_timing_frame_end(&scene->timing));
+    add_number(b, scan_timing_frame_end(&scene->timing));
     json_builder_set_member_name(b, "local_scans");
     json_builder_begin_object(b);
     json_builder_set_member_name(b, "start_s");
-    json_builder_add_double_value(b, m->t_start);
+    add_number(b, m->t_start);
     json_builder_set_member_name(b, "end_s");
-    json_builder_add_double_value(b, m->t_end);
+    add_number(b, m->t_end);
     json_builder_set_member_name(b, "lines");
     json_builder_add_int_value(b, m->lines);
     json_builder_end_object(b);
     json_builder_set_member_name(b, "reference_drift_nm");
     json_builder_begin_array(b);
-    json_builder_add_double_value(b, 1e9*m->ref_drift[0]);
-    json_builder_add_double_value(b, 1e9*m->ref_drift[1]);
+    add_number(b, 1e9*m->ref_drift[0]);
+    add_number(b, 1e9*m->ref_drift[1]);
     json_builder_end_array(b);
     add_stripes(b, m);
     if (m->have_errors) {

@@ -142,6 +142,22 @@ PY
 write_tiny_gwy "$tmp/tiny0.gwy"
 write_tiny_gwy "$tmp/tiny-frame1.gwy"
 
+# Every JSON simscan writes parses as strict JSON (no NaN or Infinity).
+strict_json() {
+    python3 -c 'import json, sys
+def refuse(name):
+    raise ValueError("not JSON: " + name)
+json.load(open(sys.argv[1]), parse_constant=refuse)' "$1"
+}
+"$simscan" fit --line-time 1 --frame-times 0,100,200 $fit_frames \
+    --json "$tmp/fit.json" || fail "fit of three frames exited non-zero"
+check
+strict_json "$tmp/fit.json" || fail "fit JSON does not parse: $(cat "$tmp/fit.json")"
+check
+grep -q '"effect"' "$tmp/fit.json" || fail "fit JSON has no effect"
+check
+strict_json "$tmp/a.json" || fail "simscan's JSON does not parse"
+
 # A bad fit option: non-zero, one line naming what is wrong, no JSON.
 fit_bad_case() {
     expect=$1
