@@ -10,6 +10,7 @@
 #include <math.h>
 #include <libgwymodule/gwymodule-file.h>
 #include <app/gwyapp.h>
+#include "localscan-channel.h"
 #include "particle-detect.h"
 #include "centre-error.h"
 #include "simscan-output.h"
@@ -19,8 +20,6 @@
 #include "simscan-compare.h"
 #include "simscan-i18n.h"
 
-/* The compensated channel's title ends so (interfaces.md section 2). */
-#define COMPENSATED_SUFFIX " (local-scan compensated)"
 #define MAX_CHANNEL_ID 4096
 /* Particles this close to the border are left out, px. */
 #define BORDER_MARGIN 4.0
@@ -54,7 +53,7 @@ find_compensated(GwyContainer *data)
         g_snprintf(key, sizeof(key), "/%d/data/title", id);
         if (channel(data, id)
             && gwy_container_gis_string_by_name(data, key, &title)
-            && g_str_has_suffix((const gchar*)title, COMPENSATED_SUFFIX))
+            && g_str_has_suffix((const gchar*)title, LOCALSCAN_TITLE_SUFFIX))
             return id;
     }
     return -1;
@@ -219,7 +218,7 @@ compare_file(const gchar *filename, const CompareOptions *options,
     if (comp_id < 0 || !channel(data, 0))
         g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL,
                     _("%s has no channel titled ...%s"), filename,
-                    COMPENSATED_SUFFIX);
+                    LOCALSCAN_TITLE_SUFFIX);
     else if (!n)
         g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL,
                     _("%s holds no simulated particle list (%s)"), filename,
