@@ -14,13 +14,13 @@
 #include "particle-detect.h"
 #include "centre-error.h"
 #include "simscan-output.h"
+#include "simscan-sample-file.h"
 #include "output-files.h"
 #include "simscan-report.h"
 #include "channel-png.h"
 #include "simscan-compare.h"
 #include "simscan-i18n.h"
 
-#define MAX_CHANNEL_ID 4096
 /* Particles this close to the border are left out, px. */
 #define BORDER_MARGIN 4.0
 /* Pictures are enlarged by whole pixels to at least this size. */
@@ -42,21 +42,23 @@ channel(GwyContainer *data, gint id)
     return field;
 }
 
+/* The lowest id whose title says it is compensated, or -1. */
 static gint
 find_compensated(GwyContainer *data)
 {
+    gint *ids = simscan_channel_ids(data);
     const guchar *title;
-    gchar key[40];
-    gint id;
+    gint i, found = -1;
 
-    for (id = 0; id <= MAX_CHANNEL_ID; id++) {
-        g_snprintf(key, sizeof(key), "/%d/data/title", id);
-        if (channel(data, id)
-            && gwy_container_gis_string_by_name(data, key, &title)
+    for (i = 0; ids[i] >= 0 && found < 0; i++) {
+        if (gwy_container_gis_string(data,
+                                     gwy_app_get_data_title_key_for_id(ids[i]),
+                                     &title)
             && g_str_has_suffix((const gchar*)title, LOCALSCAN_TITLE_SUFFIX))
-            return id;
+            found = ids[i];
     }
-    return -1;
+    g_free(ids);
+    return found;
 }
 
 /* The simulator's particle list: true and shown positions, px. */

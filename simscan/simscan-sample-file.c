@@ -4,18 +4,48 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include <stdlib.h>
 #include <libgwymodule/gwymodule-file.h>
 #include <app/gwyapp.h>
 #include "simscan-sample-file.h"
 #include "simscan-i18n.h"
 
-/* Gwyddion keeps channel ids small; a generous bound for the search. */
-#define MAX_CHANNEL_ID 4096
-
 static GQuark
 simscan_sample_error_quark(void)
 {
     return g_quark_from_static_string("simscan-sample-error-quark");
+}
+
+static gint
+compare_ids(gconstpointer a, gconstpointer b)
+{
+    gint ia = *(const gint*)a, ib = *(const gint*)b;
+
+    return (ia > ib) - (ia < ib);
+}
+
+gint*
+simscan_channel_ids(GwyContainer *data)
+{
+    gint *ids = gwy_app_data_browser_get_data_ids(data);
+    guint n = 0;
+
+    while (ids[n] != -1)
+        n++;
+    qsort(ids, n, sizeof(gint), compare_ids);
+    return ids;
+}
+
+static GwyDataField*
+channel_field(GwyContainer *data, gint id)
+{
+    GObject *object = NULL;
+
+    if (gwy_container_gis_object(data, gwy_app_get_data_key_for_id(id),
+                                 &object)
+        && GWY_IS_DATA_FIELD(object))
+        return GWY_DATA_FIELD(object);
+    return NULL;
 }
 
 GwyDataField*
@@ -25,8 +55,7 @@ simscan_load_channel(const gchar *filename, gint id, GError **error)
     GwyContainer *data;
     GwyDataField *field = NULL;
     GError *err = NULL;
-    gchar key[32];
-    gint i;
+    gint *ids;
 
     if (!initialised) {
         gwy_app_init_nongui("enable-threads", FALSE, NULL);
@@ -39,11 +68,14 @@ simscan_load_channel(const gchar *filename, gint id, GError **error)
         g_clear_error(&err);
         return NULL;
     }
-    for (i = (id >= 0 ? id : 0); i <= (id >= 0 ? id : MAX_CHANNEL_ID); i++) {
-        g_snprintf(key, sizeof(key), "/%d/data", i);
-        if (gwy_container_gis_object_by_name(data, key, &field))
-            break;
+    if (id < 0) {
+        ids = simscan_channel_ids(data);
+        if (ids[0] >= 0)
+            field = channel_field(data, ids[0]);
+        g_free(ids);
     }
+    else
+        field = channel_field(data, id);
     if (field)
         g_object_ref(field);
     else if (id >= 0)

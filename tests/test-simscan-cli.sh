@@ -111,36 +111,48 @@ fi
 
 # simscan fit: three frames of one sample drifting at (1, 0.5) nm/s, 100 s
 # apart, and a pair of frames of 3 lines (too short to register), written
-# as Gwyddion's serialised GwyContainer.
+# as Gwyddion's serialised GwyContainer (the format simscan writes).
 fit_frames="$tmp/f0.gwy $tmp/f1.gwy $tmp/f2.gwy"
 for k in 0 1 2; do
     "$simscan" -q --xres 64 --yres 64 --size 1.25 --stripes 4 --seed $seed \
         --velocity 1,0.5 --offset $((100 * k)),$((50 * k)) -o "$tmp/f$k.gwy" \
         || fail "frame $k exited non-zero"
 done
-write_tiny_gwy() {
-    python3 - "$1" <<'PY'
-import struct, sys
+# write_gwy FILE ID XRES YRES noise|particles: one channel, id ID, of
+# hemispheres 3 px in radius on a flat ground, or of small noise.
+write_gwy() {
+    python3 - "$@" <<'PY'
+import math, struct, sys
 def obj(name, comps):
     body = b''.join(comps)
     return name.encode() + b'\0' + struct.pack('<I', len(body)) + body
 def comp(name, kind, payload):
     return name.encode() + b'\0' + kind.encode() + payload
-xres, yres = 16, 3
-data = [((i * 7919 + len(sys.argv[1])) % 13) * 1e-10 for i in range(xres * yres)]
+path, cid, xres, yres, kind = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
+dx = 1e-6 / 32
+data = [((i * 7919 + len(path)) % 13) * 1e-10 for i in range(xres * yres)]
+if kind == 'particles':
+    data = [0.0] * (xres * yres)
+    for cy in range(8, yres - 4, 12):
+        for cx in range(8 + (cy // 12) % 2 * 6, xres - 4, 12):
+            for i in range(cy - 3, cy + 4):
+                for j in range(cx - 3, cx + 4):
+                    d2 = (i - cy) ** 2 + (j - cx) ** 2
+                    if d2 < 9:
+                        data[i * xres + j] = math.sqrt(9 - d2) * dx
 field = obj('GwyDataField', [
     comp('xres', 'i', struct.pack('<i', xres)),
     comp('yres', 'i', struct.pack('<i', yres)),
-    comp('xreal', 'd', struct.pack('<d', 1e-6)),
-    comp('yreal', 'd', struct.pack('<d', 1e-6 * yres / xres)),
+    comp('xreal', 'd', struct.pack('<d', xres * dx)),
+    comp('yreal', 'd', struct.pack('<d', yres * dx)),
     comp('data', 'D', struct.pack('<I', len(data))
          + struct.pack('<%dd' % len(data), *data))])
-with open(sys.argv[1], 'wb') as fh:
-    fh.write(b'GWYP' + obj('GwyContainer', [comp('/0/data', 'o', field)]))
+with open(path, 'wb') as fh:
+    fh.write(b'GWYP' + obj('GwyContainer', [comp('/%d/data' % cid, 'o', field)]))
 PY
 }
-write_tiny_gwy "$tmp/tiny0.gwy"
-write_tiny_gwy "$tmp/tiny-frame1.gwy"
+write_gwy "$tmp/tiny0.gwy" 0 16 3 noise
+write_gwy "$tmp/tiny-frame1.gwy" 0 16 3 noise
 
 # Every JSON simscan writes parses as strict JSON (no NaN or Infinity).
 strict_json() {
@@ -297,6 +309,14 @@ if [ -n "${LOCALSCAN_MEASURED_DIR:-}" ] && [ -r "$measured" ]; then
 else
     echo "test-simscan-cli: SKIPPED the --sample checks: measured data absent ($measured)"
 fi
+
+# A sample whose only channel has a high id (not the first 4097) is found.
+write_gwy "$tmp/high-id.gwy" 5000 64 64 particles
+"$simscan" --sample "$tmp/high-id.gwy" -q --table "$tmp/high-id.csv" 2>"$tmp/err" \
+    || fail "--sample with channel id 5000: $(cat "$tmp/err")"
+check
+[ "$(grep -c '^[0-9]*,-\{0,1\}[0-9]' "$tmp/high-id.csv")" -ge 4 ] \
+    || fail "--sample with channel id 5000: too few stripes measured"
 
 # The sweep runs and plots.
 "$simscan" sweep $small --n-list 1,4 --plot "$tmp/s.png" >"$tmp/sweep" \
