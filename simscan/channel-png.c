@@ -141,15 +141,6 @@ channel_png_write_styled(GwyDataField *field, const ChannelPngStyle *style,
     return ok;
 }
 
-gboolean
-channel_png_write(GwyDataField *field, const gchar *filename, GError **error)
-{
-    ChannelPngStyle style;
-
-    channel_png_style_init(&style, field);
-    return channel_png_write_styled(field, &style, filename, error);
-}
-
 void
 channel_png_release_fonts(void)
 {

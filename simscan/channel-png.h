@@ -29,9 +29,6 @@ void      channel_png_style_init  (ChannelPngStyle *style,
                                    GwyDataField *field);
 
 /* Written atomically (temporary file, rename). */
-gboolean  channel_png_write       (GwyDataField *field,
-                                   const gchar *filename,
-                                   GError **error);
 gboolean  channel_png_write_styled(GwyDataField *field,
                                    const ChannelPngStyle *style,
                                    const gchar *filename,
