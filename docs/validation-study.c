@@ -16,10 +16,12 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "fit-command.h"
+#include "sample.h"
+#include "scanner.h"
 
 #define N_BLOCKS 16
 #define PLOT_W 1000
-#define PLOT_H 680
+#define PLOT_H 700
 
 typedef struct {
     const gchar *name;
@@ -34,32 +36,49 @@ static const SeriesSpec specs[] = {
       { "fastscan-series/09261606.001", "fastscan-series/09261609.001",
         "fastscan-series/09261616.001", NULL },
       "Phase", -1, -1,
-      "Bruker FastScan, 3 frames 768 x 486 (0.130 x 0.206 nm pixels), "
-      "209 s each, channel Phase" },
+      "Bruker Dimension FastScan" },
     { "hsafm-sample0",
       { "hsafm-minicircles/hsafm_sample0_frames50-140.gwy", NULL },
       NULL, -1, -1,
-      "HS-AFM, 7 frames 256 x 256 of 200 nm, 0.41 s each, 6.2 s apart" },
+      "High-speed AFM (Ando), sample_0" },
     { "hsafm-extra",
       { "hsafm-minicircles/hsafm_extra_frames14-62.gwy", NULL },
       NULL, -1, -1,
-      "HS-AFM, 7 frames 256 x 256 of 500 nm, 1.01 s each, 8.1 s apart" },
+      "High-speed AFM (Ando), extra_sample" },
     { "afmir-film",
       { "afmir-film/PEA_BDA_film.axz", NULL },
       "Height", 9, 17,
-      "Anasys nanoIR, channels Height 9..17 (128 x 128, 2 um), duplicates "
-      "dropped" },
+      "Anasys nanoIR2, channels Height 9..17" },
 };
 
 /* What the study found for one series. */
 typedef struct {
+    const gchar *name;
     FrameSeries *series;
     FitReport report;
-    gint extended;            /* index of the best effect model by CV */
+    gint extended;            /* index of the extension model (settling) */
     gdouble cv_paper, cv_none, cv_ext;
     gdouble ncc_raw, ncc_paper, ncc_ext;
+    gdouble ncc1[3];          /* the same for frames 0 and 1 alone */
+    DriftFit creep[2];        /* constant acceleration, logarithmic creep */
+    gdouble cv_settling;      /* drift_fit_cross_validate of settling */
     gchar *plot, *images;
 } SeriesResult;
+
+/* The registration and fit settings of the study, shared by every series
+ * and printed in the document's header. */
+static void
+study_options(const SeriesFrame *f0, DisplacementOptions *dopt,
+              DriftFitOptions *fopt)
+{
+    displacement_options_init(dopt);
+    dopt->n_blocks = N_BLOCKS;
+    drift_fit_options_init(fopt);
+    if (f0)
+        fopt->min_period = drift_fit_min_period(f0->timing.line_time,
+                                                f0->timing.yres,
+                                                dopt->n_blocks);
+}
 
 /* The paper's model: constant velocity, one drift per stripe, whole
  * pixels.  Its prediction of a measurement. */
@@ -72,26 +91,34 @@ paper_predict(const DriftFit *none, const DriftMeasurement *m,
     *dy = ystep*floor(*dy/ystep + 0.5);
 }
 
-/* Cross-validated RMS (nm) of the paper model: v from the other folds. */
+static gint
+fold_of(const DriftMeasurement *m, gint folds)
+{
+    return (m->group % folds + folds) % folds;
+}
+
+/* Cross-validated RMS (nm) of the paper model: v from the other folds, the
+ * folds of drift_fit_cross_validate. */
 static gdouble
-paper_cross_validate(const DriftMeasurement *meas, gint n, gdouble xstep,
+paper_cross_validate(const DriftMeasurement *meas, gint n,
+                     const DriftFitOptions *options, gdouble xstep,
                      gdouble ystep)
 {
     DriftMeasurement *train = g_new(DriftMeasurement, n);
     gdouble sum = 0.0, wsum = 0.0, dx, dy;
-    gint f, i, folds = 5;
+    gint f, i, folds = MAX(options->n_folds, 2);
     DriftFit fit;
 
     for (f = 0; f < folds; f++) {
         memcpy(train, meas, n*sizeof(DriftMeasurement));
         for (i = 0; i < n; i++) {
-            if (meas[i].group % folds == f)
+            if (fold_of(meas + i, folds) == f)
                 train[i].weight = 0.0;
         }
-        if (!drift_fit_model(train, n, DRIFT_MODEL_NONE, NULL, &fit))
+        if (!drift_fit_model(train, n, DRIFT_MODEL_NONE, options, &fit))
             continue;
         for (i = 0; i < n; i++) {
-            if (meas[i].group % folds != f || !(meas[i].weight > 0.0))
+            if (fold_of(meas + i, folds) != f || !(meas[i].weight > 0.0))
                 continue;
             paper_predict(&fit, meas + i, xstep, ystep, &dx, &dy);
             sum += meas[i].weight*1e18*((meas[i].dx - dx)*(meas[i].dx - dx)
@@ -197,10 +224,11 @@ overlap_ncc(const gdouble *a, const gdouble *b, gint n)
     return sab/sqrt(saa*sbb);
 }
 
-/* Mean alignment (NCC) of consecutive frames after compensation. */
+/* Mean alignment (NCC) of consecutive frames after compensation; the
+ * difference image of frames 1 and 0 and their NCC. */
 static gdouble
 alignment(const FrameSeries *series, const DriftFit *fit, gint stripes,
-          gdouble **diff_image)
+          gdouble **diff_image, gdouble *first_ncc)
 {
     gint k, n = series->frames[0].timing.xres*series->frames[0].timing.yres;
     gdouble sum = 0.0;
@@ -218,6 +246,8 @@ alignment(const FrameSeries *series, const DriftFit *fit, gint stripes,
             sum += v;
             count++;
         }
+        if (k == 1)
+            *first_ncc = v;
         if (k == 1 && diff_image) {
             *diff_image = g_new(gdouble, n);
             for (i = 0; i < n; i++)
@@ -413,7 +443,7 @@ plot_displacements(const SeriesResult *res, const gchar *path,
     for (k = 0; k < 4; k++) {
         p[k].cr = cr;
         p[k].x0 = 80 + (k % 2)*480;
-        p[k].y0 = 70 + (k/2)*290;
+        p[k].y0 = 88 + (k/2)*290;
         p[k].w = 400;
         p[k].h = 215;
         p[k].tmin = G_MAXDOUBLE;
@@ -477,6 +507,15 @@ plot_displacements(const SeriesResult *res, const gchar *path,
     cairo_set_font_size(cr, 16);
     cairo_set_source_rgb(cr, 0, 0, 0);
     show_text_at(cr, title, 80, 28, 0.0);
+    cairo_set_font_size(cr, 12);
+    cairo_set_source_rgb(cr, 0.3, 0.3, 0.3);
+    show_text_at(cr, "Each point: one block of a later frame registered "
+                 "against one earlier frame, drawn at the later block's scan "
+                 "time; points stacked at one time are", 80, 46, 0.0);
+    show_text_at(cr, "that block against different earlier frames.  "
+                 "Residuals of a good model scatter about 0 with no trend "
+                 "in time.", 80, 61, 0.0);
+    cairo_set_source_rgb(cr, 0, 0, 0);
     cairo_set_font_size(cr, 13);
     model = g_strdup_printf("%s model (continuous, fitted)",
                             drift_model_type_name(ext->type));
@@ -490,56 +529,101 @@ plot_displacements(const SeriesResult *res, const gchar *path,
     cairo_surface_destroy(sf);
 }
 
-/* Greyscale tiles side by side (NaN black), one common scale. */
+/* Grey value of v on a scale of +-2.5 rms (mid grey 0); NaN dark red. */
+static guint32
+grey_pixel(gdouble v, gdouble rms)
+{
+    gint g;
+
+    if (isnan(v))
+        return 0x400000;
+    g = CLAMP((gint)(128 + 51*v/rms), 0, 255);
+    return (guint32)g*0x010101;
+}
+
+static gdouble
+tile_rms(const gdouble *tile, gint n)
+{
+    gdouble s2 = 0.0;
+    gint i, m = 0;
+
+    for (i = 0; i < n; i++) {
+        if (!isnan(tile[i])) {
+            s2 += tile[i]*tile[i];
+            m++;
+        }
+    }
+    return (m && s2 > 0.0) ? sqrt(s2/m) : 1.0;
+}
+
+static void
+paint_tile(cairo_t *cr, const gdouble *tile, gint xres, gint yres,
+           gdouble rms, gdouble x, gdouble y, gdouble w, gdouble h)
+{
+    cairo_surface_t *img = cairo_image_surface_create(CAIRO_FORMAT_RGB24,
+                                                      xres, yres);
+    guint32 *px = (guint32*)cairo_image_surface_get_data(img);
+    gint stride = cairo_image_surface_get_stride(img)/4, r, c;
+
+    cairo_surface_flush(img);
+    for (r = 0; r < yres; r++) {
+        for (c = 0; c < xres; c++)
+            px[r*stride + c] = grey_pixel(tile[r*xres + c], rms);
+    }
+    cairo_surface_mark_dirty(img);
+    cairo_save(cr);
+    cairo_translate(cr, x, y);
+    cairo_scale(cr, w/xres, h/yres);
+    cairo_set_source_surface(cr, img, 0, 0);
+    cairo_paint(cr);
+    cairo_restore(cr);
+    cairo_surface_destroy(img);
+}
+
+/* The later frame, then difference images side by side, each drawn with
+ * its physical aspect; the differences share one grey scale (the raw
+ * difference's), so that a better compensation looks flatter. */
 static void
 image_strip(gdouble **tiles, gint n, gint xres, gint yres, gdouble aspect,
-            const gchar *const *labels, const gchar *path)
+            const gchar *title, gchar **labels, const gchar *path)
 {
-    gint scale_h = MAX(200, MIN(320, yres)), tile_w = (gint)(scale_h/aspect*xres/yres);
-    gint w = n*(tile_w + 10) + 10, h = scale_h + 40, k, r, c;
-    cairo_surface_t *sf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
-    cairo_t *cr = cairo_create(sf);
-    gdouble s2 = 0.0;
-    gint m = 0;
+    gint tile_h = 240, tile_w = (gint)(tile_h*aspect*xres/yres + 0.5);
+    gint gap = 16, w, h = tile_h + 110, k;
+    cairo_surface_t *sf;
+    cairo_t *cr;
+    gdouble diff_rms = tile_rms(tiles[1], xres*yres);
 
-    for (k = 0; k < n; k++) {
-        for (r = 0; r < xres*yres; r++) {
-            if (!isnan(tiles[k][r])) {
-                s2 += tiles[k][r]*tiles[k][r];
-                m++;
-            }
-        }
-    }
-    s2 = m ? sqrt(s2/m) : 1.0;
+    tile_w = MAX(tile_w, 180);
+    w = n*(tile_w + gap) + gap;
+    sf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
+    cr = cairo_create(sf);
     cairo_set_source_rgb(cr, 1, 1, 1);
     cairo_paint(cr);
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL,
+                           CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_font_size(cr, 14);
+    show_text_at(cr, title, gap, 22, 0.0);
     for (k = 0; k < n; k++) {
-        cairo_surface_t *img = cairo_image_surface_create(CAIRO_FORMAT_RGB24,
-                                                          xres, yres);
-        guint32 *px = (guint32*)cairo_image_surface_get_data(img);
-        gint stride = cairo_image_surface_get_stride(img)/4;
+        gdouble x = gap + k*(tile_w + gap);
+        gchar **lines = g_strsplit(labels[k], "\n", -1);
+        gint l;
 
-        cairo_surface_flush(img);
-        for (r = 0; r < yres; r++) {
-            for (c = 0; c < xres; c++) {
-                gdouble v = tiles[k][r*xres + c];
-                gint g = isnan(v) ? 0 : CLAMP((gint)(128 + 40*v/s2), 0, 255);
-                px[r*stride + c] = isnan(v) ? 0x400000 : (guint32)g*0x010101;
-            }
-        }
-        cairo_surface_mark_dirty(img);
-        cairo_save(cr);
-        cairo_translate(cr, 10 + k*(tile_w + 10), 10);
-        cairo_scale(cr, (gdouble)tile_w/xres, (gdouble)scale_h/yres);
-        cairo_set_source_surface(cr, img, 0, 0);
-        cairo_paint(cr);
-        cairo_restore(cr);
-        cairo_surface_destroy(img);
+        paint_tile(cr, tiles[k], xres, yres,
+                   k ? diff_rms : tile_rms(tiles[k], xres*yres),
+                   x, 36, tile_w, tile_h);
         cairo_set_source_rgb(cr, 0, 0, 0);
         cairo_set_font_size(cr, 12);
-        cairo_move_to(cr, 10 + k*(tile_w + 10), scale_h + 28);
-        cairo_show_text(cr, labels[k]);
+        for (l = 0; lines[l]; l++)
+            show_text_at(cr, lines[l], x, 36 + tile_h + 18 + 15*l, 0.0);
+        g_strfreev(lines);
     }
+    cairo_set_font_size(cr, 11);
+    cairo_set_source_rgb(cr, 0.3, 0.3, 0.3);
+    show_text_at(cr, "Differences: mid grey = the frames agree; black/white "
+                 "edges = content misaligned; dark red = outside the "
+                 "overlap.  One grey scale for all differences.", gap,
+                 h - 10, 0.0);
     cairo_surface_write_to_png(sf, path);
     cairo_destroy(cr);
     cairo_surface_destroy(sf);
@@ -561,70 +645,332 @@ extension_model(const FitReport *rep)
     return 0;
 }
 
-static gboolean
-study_series(const SeriesSpec *spec, const gchar *measured,
-             const gchar *figdir, SeriesResult *res, GError **error)
+static FrameSeries*
+load_measured_series(const SeriesSpec *spec, const gchar *measured,
+                     const gchar *channel, GError **error)
 {
     FrameSeriesOptions so;
-    DisplacementOptions dopt;
-    DriftFitOptions fopt;
+    FrameSeries *series;
     gchar *files[4];
-    gint n = 0, k;
-    gdouble *diff[3] = { NULL, NULL, NULL };
-    const gchar *labels[3] = {
-        "frame 1 - frame 0, raw", "after paper-model compensation",
-        "after settling-model compensation",
-    };
-    const SeriesFrame *f0;
-    gchar *path, *title;
+    gint n, k;
 
-    memset(res, 0, sizeof(SeriesResult));
     frame_series_options_init(&so);
-    so.channel = spec->channel;
+    so.channel = channel ? channel : spec->channel;
     so.first_id = spec->first_id;
     so.last_id = spec->last_id;
     for (n = 0; spec->files[n]; n++)
         files[n] = g_build_filename(measured, spec->files[n], NULL);
-    res->series = frame_series_load(files, n, &so, error);
+    series = frame_series_load(files, n, &so, error);
     for (k = 0; k < n; k++)
         g_free(files[k]);
-    if (!res->series)
-        return FALSE;
-    f0 = res->series->frames;
-    displacement_options_init(&dopt);
-    dopt.n_blocks = N_BLOCKS;
-    drift_fit_options_init(&fopt);
-    fopt.min_period = drift_fit_min_period(f0->timing.line_time,
-                                           f0->timing.yres, N_BLOCKS);
+    return series;
+}
+
+/* The creep forms tried beside settling, on the measurements simscan fit
+ * kept, held out the same way. */
+static void
+try_creep_forms(SeriesResult *res)
+{
+    const FitReport *rep = &res->report;
+
+    drift_fit_creep(rep->meas, rep->n_meas, DRIFT_FIT_CREEP_ACCELERATION,
+                    &rep->fit_options, res->creep);
+    drift_fit_creep(rep->meas, rep->n_meas, DRIFT_FIT_CREEP_LOGARITHMIC,
+                    &rep->fit_options, res->creep + 1);
+    res->cv_settling = drift_fit_cross_validate(rep->meas, rep->n_meas,
+                                                DRIFT_MODEL_SETTLING,
+                                                &rep->fit_options);
+}
+
+static void
+write_alignment_figure(SeriesResult *res, const gchar *docdir,
+                       gdouble **diff)
+{
+    const SeriesFrame *f1 = res->series->frames + 1;
+    const gchar *ext = drift_model_type_name(res->report.fits[res->extended].type);
+    gdouble *tiles[4];
+    gchar *labels[4], *title, *path;
+    gint k;
+
+    tiles[0] = leveled_copy(f1->field);
+    for (k = 0; k < 3; k++)
+        tiles[k+1] = diff[k];
+    labels[0] = g_strdup("frame 1 as measured\n(each line levelled)");
+    labels[1] = g_strdup_printf("frame 1 - frame 0, no compensation\n"
+                                "correlation %.3f", res->ncc1[0]);
+    labels[2] = g_strdup_printf("both compensated, paper model\n"
+                                "correlation %.3f", res->ncc1[1]);
+    labels[3] = g_strdup_printf("both compensated, %s model\n"
+                                "correlation %.3f", ext, res->ncc1[2]);
+    title = g_strdup_printf("%s: frame 1 minus frame 0, before and after "
+                            "drift compensation", res->name);
+    path = g_build_filename(docdir, res->images, NULL);
+    image_strip(tiles, 4, f1->timing.xres, f1->timing.yres,
+                frame_series_dx(res->series)/frame_series_dy(res->series),
+                title, labels, path);
+    g_free(tiles[0]);
+    for (k = 0; k < 4; k++)
+        g_free(labels[k]);
+    g_free(title);
+    g_free(path);
+}
+
+/* Measures, fits and draws one series (res->series already loaded). */
+static void
+analyse_series(SeriesResult *res, const gchar *docdir)
+{
+    DisplacementOptions dopt;
+    DriftFitOptions fopt;
+    gdouble *diff[3] = { NULL, NULL, NULL };
+    gchar *path, *title;
+    gint k;
+
+    study_options(res->series->frames, &dopt, &fopt);
     fit_report_compute(res->series, &dopt, &fopt, &res->report);
     res->extended = extension_model(&res->report);
     res->cv_none = res->report.fits[0].cv_rms_nm;
     res->cv_ext = res->report.fits[res->extended].cv_rms_nm;
     res->cv_paper = paper_cross_validate(res->report.meas, res->report.n_meas,
+                                         &res->report.fit_options,
                                          frame_series_dx(res->series),
                                          frame_series_dy(res->series));
-    res->ncc_raw = alignment(res->series, NULL, 0, diff);
-    res->ncc_paper = alignment(res->series, res->report.fits, N_BLOCKS,
-                               diff + 1);
+    try_creep_forms(res);
+    res->ncc_raw = alignment(res->series, NULL, 0, diff, res->ncc1);
+    res->ncc_paper = alignment(res->series, res->report.fits, dopt.n_blocks,
+                               diff + 1, res->ncc1 + 1);
     res->ncc_ext = alignment(res->series, res->report.fits + res->extended, 0,
-                             diff + 2);
+                             diff + 2, res->ncc1 + 2);
 
-    res->plot = g_strdup_printf("figures/%s-displacement.png", spec->name);
-    path = g_build_filename(figdir, "..", res->plot, NULL);
-    title = g_strdup_printf("%s: displacement of each block against an earlier "
-                            "frame", spec->name);
+    res->plot = g_strdup_printf("figures/%s-displacement.png", res->name);
+    path = g_build_filename(docdir, res->plot, NULL);
+    title = g_strdup_printf("%s: displacement of each block against an "
+                            "earlier frame, measured and predicted", res->name);
     plot_displacements(res, path, title);
     g_free(title);
     g_free(path);
-    res->images = g_strdup_printf("figures/%s-alignment.png", spec->name);
-    path = g_build_filename(figdir, "..", res->images, NULL);
-    image_strip(diff, 3, f0->timing.xres, f0->timing.yres,
-                frame_series_dx(res->series)/frame_series_dy(res->series),
-                labels, path);
-    g_free(path);
+    res->images = g_strdup_printf("figures/%s-alignment.png", res->name);
+    write_alignment_figure(res, docdir, diff);
     for (k = 0; k < 3; k++)
         g_free(diff[k]);
+}
+
+static gboolean
+study_series(const SeriesSpec *spec, const gchar *measured,
+             const gchar *docdir, SeriesResult *res, GError **error)
+{
+    memset(res, 0, sizeof(SeriesResult));
+    res->name = spec->name;
+    if (!(res->series = load_measured_series(spec, measured, NULL, error)))
+        return FALSE;
+    analyse_series(res, docdir);
     return TRUE;
+}
+
+/* ---- Why the FastScan series is registered on Phase ---- */
+
+/* How well the registrations of three frames close: (2 vs 0) should equal
+ * (2 vs 1) + (1 vs 0).  Registered as displacement-measure.c does:
+ * consecutive pairs blind, 2 vs 0 around the sum of their whole-frame
+ * shifts (a blind search would not reach that far). */
+typedef struct {
+    const gchar *channel;
+    gint n_blocks;            /* blocks accepted in all three pairs */
+    gdouble median[2];        /* median |misclosure| over them, px */
+    gdouble whole[2];         /* misclosure of the whole-frame shifts, px */
+} RegistrationTriangle;
+
+static gdouble
+median_of(gdouble *v, gint n)
+{
+    return n ? gwy_math_median(n, v) : NAN;
+}
+
+static gboolean
+registration_triangle(const SeriesSpec *spec, const gchar *measured,
+                      const gchar *channel, RegistrationTriangle *tri,
+                      GError **error)
+{
+    static const gint pairs[3][2] = { { 1, 0 }, { 2, 1 }, { 2, 0 } };
+    FrameSeries *series;
+    DisplacementOptions dopt;
+    DriftFitOptions fopt;
+    gdouble dx[3][N_BLOCKS], dy[3][N_BLOCKS], score[3][N_BLOCKS],
+            whole[3][3], mis[2][N_BLOCKS];
+    gint p, b, xres, yres;
+
+    memset(tri, 0, sizeof(RegistrationTriangle));
+    tri->channel = channel;
+    if (!(series = load_measured_series(spec, measured, channel, error)))
+        return FALSE;
+    if (series->n_frames < 3) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    "%s: fewer than three frames", channel);
+        frame_series_free(series);
+        return FALSE;
+    }
+    study_options(series->frames, &dopt, &fopt);
+    xres = series->frames[0].timing.xres;
+    yres = series->frames[0].timing.yres;
+    for (p = 0; p < 3; p++) {
+        const SeriesFrame *fa = series->frames + pairs[p][0];
+        const SeriesFrame *fb = series->frames + pairs[p][1];
+        gdouble guess[2] = { whole[0][0] + whole[1][0],
+                             whole[0][1] + whole[1][1] };
+
+        displacement_register_blocks(gwy_data_field_get_data_const(fa->field),
+                                     gwy_data_field_get_data_const(fb->field),
+                                     xres, yres, N_BLOCKS, &dopt,
+                                     frame_series_dy(series)
+                                     /frame_series_dx(series),
+                                     p == 2 ? guess : NULL,
+                                     dx[p], dy[p], score[p], whole[p]);
+    }
+    for (b = 0; b < N_BLOCKS; b++) {
+        if (score[0][b] < dopt.min_score || score[1][b] < dopt.min_score
+            || score[2][b] < dopt.min_score)
+            continue;
+        mis[0][tri->n_blocks] = fabs(dx[2][b] - dx[1][b] - dx[0][b]);
+        mis[1][tri->n_blocks] = fabs(dy[2][b] - dy[1][b] - dy[0][b]);
+        tri->n_blocks++;
+    }
+    tri->median[0] = median_of(mis[0], tri->n_blocks);
+    tri->median[1] = median_of(mis[1], tri->n_blocks);
+    tri->whole[0] = whole[2][0] - whole[1][0] - whole[0][0];
+    tri->whole[1] = whole[2][1] - whole[1][1] - whole[0][1];
+    frame_series_free(series);
+    return TRUE;
+}
+
+/* ---- A simulated series on the measured particle film ---- */
+
+#define SIM_FILE "particles-film/PTO_110_Virgin0001.gwy"
+#define SIM_FRAMES 4
+#define SIM_RES 128
+#define SIM_LINE_TIME 1.0
+#define SIM_FRAME_INTERVAL 160.0
+#define SIM_NOISE 0.5e-9
+/* The part of the sample scanned, leaving room for the drift. */
+#define SIM_FIELD_FRACTION 0.6
+
+/* The hidden effect: settling of the size hsafm-extra shows, relative to
+ * the frame time. */
+static void
+sim_truth(DriftModel *truth)
+{
+    drift_model_init(truth, DRIFT_MODEL_SETTLING);
+    truth->v[0] = 0.15e-9;
+    truth->v[1] = -0.10e-9;
+    truth->u[0] = 1.5e-9;
+    truth->u[1] = 1.0e-9;
+    truth->tau = 150.0;
+}
+
+static GwyDataField*
+load_first_channel(const gchar *filename, gchar **title, GError **error)
+{
+    GwyContainer *data;
+    GwyDataField *field = NULL;
+    const guchar *s;
+
+    if (!(data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, error)))
+        return NULL;
+    if (gwy_container_gis_object_by_name(data, "/0/data", &field))
+        g_object_ref(field);
+    else
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    "%s: no channel 0", filename);
+    *title = g_strdup(gwy_container_gis_string_by_name(data, "/0/data/title",
+                                                       &s)
+                      ? (const gchar*)s : "channel 0");
+    g_object_unref(data);
+    return field;
+}
+
+/* SIM_FRAMES frames of the measured film under the truth's drift, scanned
+ * down, back to back every SIM_FRAME_INTERVAL s. */
+static FrameSeries*
+simulate_particles_series(const gchar *measured, const DriftModel *truth,
+                          gchar **what, GError **error)
+{
+    gchar *path = g_build_filename(measured, SIM_FILE, NULL), *title = NULL;
+    GwyDataField *field = load_first_channel(path, &title, error);
+    FrameSeries *series;
+    SimSample *sample;
+    SimScanParams sp;
+    ScanTiming timing;
+    gdouble xreal, yreal;
+    gint k;
+
+    g_free(path);
+    if (!field) {
+        g_free(title);
+        return NULL;
+    }
+    sample = sim_sample_new_from_field(field);
+    sim_sample_get_extent(sample, &xreal, &yreal);
+    series = frame_series_new();
+    for (k = 0; k < SIM_FRAMES; k++) {
+        GwyDataField *frame;
+        gchar *label = g_strdup_printf("simulated frame %d", k);
+
+        sim_scan_params_init(&sp, sample, SIM_RES, SIM_RES);
+        sp.xreal = SIM_FIELD_FRACTION*xreal;
+        sp.yreal = SIM_FIELD_FRACTION*yreal;
+        sp.xoff = 0.5*(1.0 - SIM_FIELD_FRACTION)*xreal;
+        sp.yoff = 0.5*(1.0 - SIM_FIELD_FRACTION)*yreal;
+        sp.line_time = SIM_LINE_TIME;
+        sp.frame_start = k*SIM_FRAME_INTERVAL;
+        sp.noise_rms = SIM_NOISE;
+        sp.noise_seed = k + 1;
+        frame = sim_scan_frame(sample, truth, &sp);
+        sim_scan_params_timing(&sp, &timing);
+        frame_series_append(series, frame, label, &timing);
+        g_object_unref(frame);
+        g_free(label);
+    }
+    *what = g_strdup_printf("%s, channel %s (%d x %d px, %.3g x %.3g um) "
+                            "as simscan's sample; %d frames of %d x %d px "
+                            "over its central %.3g x %.3g um, %.3g s per line, "
+                            "one every %.0f s, noise %.2g nm",
+                            SIM_FILE, title,
+                            gwy_data_field_get_xres(field),
+                            gwy_data_field_get_yres(field),
+                            1e6*xreal, 1e6*yreal, SIM_FRAMES, SIM_RES,
+                            SIM_RES, 1e6*sp.xreal, 1e6*sp.yreal,
+                            SIM_LINE_TIME, SIM_FRAME_INTERVAL, 1e9*SIM_NOISE);
+    sim_sample_free(sample);
+    g_object_unref(field);
+    g_free(title);
+    return series;
+}
+
+/* RMS (nm, both axes) of a fit's trajectory against the truth's over the
+ * scanned lines of the series; rounded: whole pixels (the paper model). */
+static gdouble
+trajectory_error(const FrameSeries *series, const DriftFit *fit,
+                 const DriftModel *truth, gboolean rounded)
+{
+    gdouble xstep = frame_series_dx(series), ystep = frame_series_dy(series);
+    gdouble sum = 0.0, px, py, tx, ty;
+    gint k, r, m = 0;
+
+    for (k = 0; k < series->n_frames; k++) {
+        const ScanTiming *tm = &series->frames[k].timing;
+
+        for (r = 0; r < tm->yres; r++) {
+            gdouble t = scan_timing_pixel_time(tm, r, 0.5*tm->xres);
+
+            drift_fit_eval(fit, t, &px, &py);
+            if (rounded) {
+                px = xstep*floor(px/xstep + 0.5);
+                py = ystep*floor(py/ystep + 0.5);
+            }
+            drift_model_eval(truth, t, &tx, &ty);
+            sum += 1e18*((px - tx)*(px - tx) + (py - ty)*(py - ty));
+            m += 2;
+        }
+    }
+    return m ? sqrt(sum/m) : NAN;
 }
 
 /* ---- The document ---- */
@@ -659,6 +1005,88 @@ write_pair_velocities(GString *md, const SeriesResult *res)
     }
 }
 
+/* Where the paper model departs from the measurement: its residuals (and
+ * the extension's) over the blocks of each later frame.  In-sample: the
+ * held-out errors are in the text above the table. */
+static void
+write_departures(GString *md, const SeriesResult *res)
+{
+    const FitReport *rep = &res->report;
+    const DriftFit *none = rep->fits, *ext = rep->fits + res->extended;
+    gdouble xstep = frame_series_dx(res->series);
+    gdouble ystep = frame_series_dy(res->series);
+    gint k, i;
+
+    g_string_append_printf(md, "\nWhere the paper model departs: residual "
+                           "(measured - predicted) of the blocks of each "
+                           "later frame, mean and RMS, nm (fitted to all "
+                           "blocks):\n\n| later frame | scan time (s) | "
+                           "blocks | paper mean (x, y) | paper RMS | "
+                           "%s mean (x, y) | %s RMS |\n"
+                           "|---|---|---|---|---|---|---|\n",
+                           drift_model_type_name(ext->type),
+                           drift_model_type_name(ext->type));
+    for (k = 1; k < res->series->n_frames; k++) {
+        gdouble sum[2][3], d[2], md_[2];
+        const ScanTiming *tm = &res->series->frames[k].timing;
+        gint used = 0, ax, mdl;
+
+        memset(sum, 0, sizeof(sum));
+        for (i = 0; i < rep->n_meas; i++) {
+            const DriftMeasurement *m = rep->meas + i;
+
+            if (m->frame_a != k || !(m->weight > 0.0))
+                continue;
+            md_[0] = 1e9*m->dx;
+            md_[1] = 1e9*m->dy;
+            for (mdl = 0; mdl < 2; mdl++) {
+                if (mdl)
+                    drift_fit_predict(ext, m, d, d + 1);
+                else
+                    paper_predict(none, m, xstep, ystep, d, d + 1);
+                for (ax = 0; ax < 2; ax++) {
+                    gdouble r = md_[ax] - 1e9*d[ax];
+
+                    sum[mdl][ax] += r;
+                    sum[mdl][2] += r*r;
+                }
+            }
+            used++;
+        }
+        if (!used)
+            continue;
+        g_string_append_printf(md, "| %d | %.4g-%.4g | %d | (%.2f, %.2f) | "
+                               "%.3f | (%.2f, %.2f) | %.3f |\n", k,
+                               tm->frame_start, scan_timing_frame_end(tm),
+                               used, sum[0][0]/used, sum[0][1]/used,
+                               sqrt(sum[0][2]/(2*used)), sum[1][0]/used,
+                               sum[1][1]/used, sqrt(sum[1][2]/(2*used)));
+    }
+}
+
+/* What was loaded, from the frames themselves. */
+static void
+write_series_facts(GString *md, const SeriesSpec *spec,
+                   const SeriesResult *res)
+{
+    const FrameSeries *series = res->series;
+    const SeriesFrame *f0 = series->frames;
+    const SeriesFrame *last = series->frames + series->n_frames - 1;
+    gdouble dx = frame_series_dx(series), dy = frame_series_dy(series);
+    gdouble scan = scan_timing_frame_end(&f0->timing) - f0->timing.frame_start;
+
+    g_string_append_printf(md, "%s, %s%s%s; frames of %d x %d px, %.4g x %.4g nm "
+                           "(pixels %.3g x %.3g nm), %.3g s of scanning each, "
+                           "started over %.4g s.",
+                           spec->what, f0->label,
+                           spec->channel ? ", channel " : "",
+                           spec->channel ? spec->channel : "",
+                           f0->timing.xres,
+                           f0->timing.yres, 1e9*dx*f0->timing.xres,
+                           1e9*dy*f0->timing.yres, 1e9*dx, 1e9*dy, scan,
+                           last->timing.frame_start);
+}
+
 static void
 write_series(GString *md, const SeriesSpec *spec, const SeriesResult *res)
 {
@@ -670,8 +1098,9 @@ write_series(GString *md, const SeriesSpec *spec, const SeriesResult *res)
     for (i = 0; i < rep->n_meas; i++)
         used += (rep->meas[i].weight > 0.0);
     drift_fit_parameters(chosen, &p);
-    g_string_append_printf(md, "\n## %s\n\n%s.  %d frames kept",
-                           spec->name, spec->what, res->series->n_frames);
+    g_string_append_printf(md, "\n## %s\n\n", spec->name);
+    write_series_facts(md, spec, res);
+    g_string_append_printf(md, "  %d frames kept", res->series->n_frames);
     for (i = 0; i < (gint)res->series->notes->len; i++)
         g_string_append_printf(md, "; %s",
                                (gchar*)g_ptr_array_index(res->series->notes, i));
@@ -679,8 +1108,15 @@ write_series(GString *md, const SeriesSpec *spec, const SeriesResult *res)
     for (i = 0; i < res->series->n_frames; i++)
         g_string_append_printf(md, " %.2f", res->series->frames[i].timing.frame_start);
     g_string_append_printf(md, "; line time %.4g s.  %d block measurements, "
-                           "%d used.\n\n", res->series->frames[0].timing.line_time,
-                           rep->n_meas, used);
+                           "%d used.  Shortest period or time constant "
+                           "searched: %.3g s (%.3g blocks' scan time, "
+                           "drift_fit_min_period).\n\n",
+                           res->series->frames[0].timing.line_time,
+                           rep->n_meas, used, rep->fit_options.min_period,
+                           rep->fit_options.min_period
+                           /(res->series->frames[0].timing.line_time
+                             *res->series->frames[0].timing.yres
+                             /N_BLOCKS));
     g_string_append_printf(md, "`simscan fit` chooses **%s** (its "
                            "velocity (%.4f, %.4f) nm/s).\n\n",
                            drift_model_type_name(chosen->type),
@@ -723,10 +1159,10 @@ write_series(GString *md, const SeriesSpec *spec, const SeriesResult *res)
         g_free(par);
     }
     g_string_append_printf(md, "\nPrediction error of the measured displacements "
-                           "(5-fold over blocks, never on the data fitted): paper "
+                           "(%d-fold over blocks, never on the data fitted): paper "
                            "model **%.3f nm**, constant velocity without "
                            "rounding %.3f nm, %s model **%.3f nm**.\n",
-                           res->cv_paper, res->cv_none,
+                           rep->fit_options.n_folds, res->cv_paper, res->cv_none,
                            drift_model_type_name(rep->fits[res->extended].type),
                            res->cv_ext);
     g_string_append_printf(md, "Alignment of consecutive frames (normalised "
@@ -735,9 +1171,11 @@ write_series(GString *md, const SeriesSpec *spec, const SeriesResult *res)
                            "%.4f.\n", res->ncc_raw, res->ncc_paper,
                            drift_model_type_name(rep->fits[res->extended].type),
                            res->ncc_ext);
-    g_string_append(md, "\nApparent velocity of each consecutive pair (mean of "
-                    "its blocks' displacement over their time difference):\n");
+    g_string_append(md, "\nThe drift as the data show it: apparent velocity "
+                    "of each consecutive pair (mean of its blocks' "
+                    "displacement over their time difference):\n");
     write_pair_velocities(md, res);
+    write_departures(md, res);
     g_string_append_printf(md, "\n![displacements](%s)\n\n![alignment](%s)\n",
                            res->plot, res->images);
 }
@@ -847,9 +1285,10 @@ write_finding(GString *md, const SeriesSpec *spec, const SeriesResult *res)
         g_string_append_printf(md, "  Observable oscillation periods: %.3g to "
                                "%.3g s.", lo, hi);
     else
-        g_string_append(md, "  No oscillation period is observable: 1.5 "
-                        "cycles over the series would be shorter than twice "
-                        "its longest gap between measured times.");
+        g_string_append_printf(md, "  No oscillation period is observable: "
+                               "%g cycles over the series would be shorter "
+                               "than twice its longest gap between measured "
+                               "times.", rep->fit_options.min_cycles);
     g_string_append(md, "\n");
 }
 
@@ -884,6 +1323,35 @@ pair_velocity_trend(const SeriesResult *res, gdouble *first, gdouble *last)
         last[1] = sy/sw;
     }
     return found >= 2;
+}
+
+/* What the paper model's whole pixels cost in held-out error, against the
+ * same constant velocity unrounded, at most over the series. */
+static void
+write_rounding_cost(GString *md, const SeriesResult *results, gint n)
+{
+    gdouble worst = -G_MAXDOUBLE, gap = 0.0;
+    const gchar *where = NULL;
+    gint i;
+
+    for (i = 0; i < n; i++) {
+        gdouble cost;
+
+        if (!results[i].series)
+            continue;
+        cost = results[i].cv_paper/results[i].cv_none - 1.0;
+        if (cost > worst) {
+            worst = cost;
+            where = results[i].name;
+            gap = results[i].cv_none/results[i].cv_ext - 1.0;
+        }
+    }
+    if (where)
+        g_string_append_printf(md, "The whole-pixel rounding of the paper "
+                               "model costs at most %.1f %% of held-out "
+                               "error (%s), where constant velocity itself "
+                               "is %.0f %% worse than settling.", 100.0*worst,
+                               where, 100.0*gap);
 }
 
 /* The cause, from the numbers of the series whose named effect is not
@@ -951,13 +1419,217 @@ write_cause(GString *md, const SeriesSpec *specs, const SeriesResult *results,
                         "series (settling: thermal or piezo creep after the "
                         "scan or stage was set up) is what the paper model "
                         "(one constant velocity) misses there.  ");
-    g_string_append_printf(md, "%s the periods it can observe.  "
-                    "The whole-pixel rounding of the paper model costs "
-                    "little by comparison (paper model against unrounded "
-                    "constant velocity in each table).\n",
+    g_string_append_printf(md, "%s the periods it can observe.  ",
                     oscillations ? "An oscillation is named in some series within"
                     : "No series shows an oscillation that `simscan fit` "
                       "accepts within");
+    write_rounding_cost(md, results, n);
+    g_string_append(md, "\n");
+}
+
+/* The settings of the run, as the registration and the fit use them. */
+static void
+write_header(GString *md)
+{
+    DisplacementOptions dopt;
+    DriftFitOptions fopt;
+
+    study_options(NULL, &dopt, &fopt);
+    g_string_append_printf(md, "# Validation of the drift model on measured "
+        "AFM data\n\n"
+        "Generated by `make validation` (docs/validation-study.c); do not "
+        "edit: every number below comes from that run.\n"
+        "Each series is cut into %d blocks of lines per frame; every block of "
+        "every frame is registered against every earlier frame with the "
+        "project's stripe registration (modules/core/stripe-registration.c: "
+        "zero-mean normalised cross-correlation over the overlap, searched "
+        "around the frame's overall shift, chained across frames; frames "
+        "line-levelled and blurred by %.3g %% of the frame first; a block "
+        "counts only when its peak stands clear of rival peaks and "
+        "correlates at least %.2g), which measures p(t_a) - p(t_b) at the "
+        "two scan times of its content (interfaces.md section 4).  All "
+        "models are fitted to all measurements of a series at once, after "
+        "gross outliers (beyond %g robust sigmas) are dropped; held-out "
+        "errors are %d-fold cross-validated over the blocks.  `simscan fit` "
+        "names an effect only when it beats constant velocity by %g in BIC, "
+        "predicts held-out blocks %.0f %% better and explains %g times its "
+        "own residual, and an oscillation only with a period it can "
+        "observe: at least %g cycles over the measured time span, no shorter "
+        "than twice the longest gap between measured times, not cancelling "
+        "between frames, and not the longest such period.\n\n"
+        "The paper model is constant velocity fitted to the same "
+        "measurements, applied as one whole-pixel drift per block of lines; "
+        "the extended model is simscan's settling drift "
+        "p' = v + u exp(-t/tau), continuous and sub-pixel.\n",
+        dopt.n_blocks, 100.0*dopt.smooth, dopt.min_score,
+        fopt.outlier_sigmas, fopt.n_folds, fopt.bic_margin,
+        100.0*fopt.cv_gain, fopt.min_explained, fopt.min_cycles);
+}
+
+static void
+write_simulation(GString *md, const SeriesResult *res, const gchar *what,
+                 const DriftModel *truth)
+{
+    const FitReport *rep = &res->report;
+    const DriftFit *chosen = rep->fits + MAX(rep->chosen, 0);
+    const DriftFit *none = fit_of_type(rep, DRIFT_MODEL_NONE);
+    const DriftFit *ext = rep->fits + res->extended;
+    DriftFitParameters p;
+    gint i, used = 0;
+
+    for (i = 0; i < rep->n_meas; i++)
+        used += (rep->meas[i].weight > 0.0);
+    drift_fit_parameters(ext, &p);
+    g_string_append_printf(md, "\n## particles-film: a simulated series on "
+        "the measured sample\n\nThe measured particle film serves as the "
+        "sample of simscan: %s.  The drift hidden in the frames is "
+        "simscan's settling model with v (%.3g, %.3g) nm/s, u (%.3g, %.3g) "
+        "nm/s, tau %.4g s.  The frames go through the same pipeline as the "
+        "measured series, blind (the fit knows only the frames and their "
+        "timing).  %d block measurements, %d used.\n\n",
+        what, 1e9*truth->v[0], 1e9*truth->v[1], 1e9*truth->u[0],
+        1e9*truth->u[1], truth->tau, rep->n_meas, used);
+    g_string_append_printf(md, "`simscan fit` names **%s**.  Its settling "
+        "fit: tau %.4g s (hidden %.4g s), u (%.3g, %.3g) nm/s (hidden "
+        "(%.3g, %.3g)), v (%.3g, %.3g) nm/s (hidden (%.3g, %.3g)).\n\n",
+        drift_model_type_name(chosen->type), p.tau_s, truth->tau,
+        p.u_nm_per_s[0], p.u_nm_per_s[1], 1e9*truth->u[0], 1e9*truth->u[1],
+        p.velocity_nm_per_s[0], p.velocity_nm_per_s[1], 1e9*truth->v[0],
+        1e9*truth->v[1]);
+    g_string_append_printf(md, "| model | held-out RMS of the displacements "
+        "(nm) | RMS of the trajectory against the hidden one (nm) | "
+        "alignment of consecutive frames |\n|---|---|---|---|\n"
+        "| none (raw frames) | - | - | %.4f |\n"
+        "| paper model | %.3f | %.3f | %.4f |\n"
+        "| constant velocity, unrounded | %.3f | %.3f | - |\n"
+        "| %s | %.3f | %.3f | %.4f |\n",
+        res->ncc_raw, res->cv_paper,
+        trajectory_error(res->series, none, truth, TRUE), res->ncc_paper,
+        res->cv_none, trajectory_error(res->series, none, truth, FALSE),
+        drift_model_type_name(ext->type), res->cv_ext,
+        trajectory_error(res->series, ext, truth, FALSE), res->ncc_ext);
+    g_string_append_printf(md, "\n![displacements](%s)\n\n![alignment](%s)\n",
+                           res->plot, res->images);
+}
+
+/* The creep forms against settling: their held-out errors, and whether
+ * any gains enough over settling to be worth a model of its own. */
+static void
+write_creep_forms(GString *md, const SeriesResult *results, gint n)
+{
+    gdouble best_gain = -G_MAXDOUBLE, worst_gain = G_MAXDOUBLE, cv_gain = 0.1;
+    const gchar *best_name = NULL, *worst_name = NULL;
+    gint i, j;
+
+    g_string_append(md, "\nSlow creep was tried as a further candidate, "
+        "fitted and held out exactly like the models above "
+        "(drift_fit_creep, drift_fit_cross_validate): constant acceleration "
+        "(p = v t + b t^2, one parameter less than settling per axis) and "
+        "logarithmic creep (p = v t + c t0 log(1 + t/t0)).  Held-out RMS "
+        "(nm):\n\n| series | constant velocity | settling | constant "
+        "acceleration | logarithmic creep |\n|---|---|---|---|---|\n");
+    for (i = 0; i < n; i++) {
+        const SeriesResult *res = results + i;
+
+        if (!res->series)
+            continue;
+        cv_gain = res->report.fit_options.cv_gain;
+        g_string_append_printf(md, "| %s | %.3f | %.3f | %.3f | %.3f |\n",
+                               res->name, res->cv_none, res->cv_settling,
+                               res->creep[0].cv_rms_nm,
+                               res->creep[1].cv_rms_nm);
+        for (j = 0; j < 2; j++) {
+            gdouble gain = 1.0 - res->creep[j].cv_rms_nm/res->cv_settling;
+
+            if (!isfinite(gain))
+                continue;
+            if (gain > best_gain) {
+                best_gain = gain;
+                best_name = res->name;
+            }
+            if (gain < worst_gain) {
+                worst_gain = gain;
+                worst_name = res->name;
+            }
+        }
+    }
+    if (!best_name)
+        return;
+    g_string_append_printf(md, "\nAgainst settling, the better creep form "
+        "gains at most %.1f %% of held-out error (%s) and loses up to "
+        "%.1f %% (%s).  ", 100.0*best_gain, best_name, -100.0*worst_gain,
+        worst_name);
+    if (best_gain < cv_gain)
+        g_string_append_printf(md, "That is less than the %.0f %% an effect "
+            "must gain over constant velocity to be named, so neither form "
+            "is among `simscan fit`'s models.", 100.0*cv_gain);
+    else
+        g_string_append_printf(md, "That exceeds the %.0f %% an effect must "
+            "gain over constant velocity to be named: the creep form "
+            "deserves a model of its own in simscan.", 100.0*cv_gain);
+    for (i = 0; i < n; i++) {
+        const DriftFit *settle;
+
+        if (!results[i].series)
+            continue;
+        settle = fit_of_type(&results[i].report, DRIFT_MODEL_SETTLING);
+        if (settle->ok && settle->at_limit > 0)
+            g_string_append_printf(md, "  In %s settling's tau (%.3g s) is "
+                "the longest searched, %.1f times the series' duration: there it "
+                "acts as constant acceleration (held-out %.3f against "
+                "%.3f nm).", results[i].name, settle->nonlinear,
+                settle->nonlinear/scan_timing_frame_end(
+                    &results[i].series->frames[results[i].series->n_frames
+                                               - 1].timing),
+                results[i].creep[0].cv_rms_nm, results[i].cv_settling);
+    }
+    g_string_append(md, "\n");
+}
+
+static void
+write_triangles(GString *md, const RegistrationTriangle *tri, gint n)
+{
+    gint i, zsensor = -1, phase = -1;
+
+    g_string_append(md, "  Registration of the FastScan series uses the "
+        "Phase channel.  Three frames must close: frame 2 against 0 equals "
+        "(2 against 1) + (1 against 0).  Registered as the study does "
+        "(consecutive pairs searched blind, 2 against 0 around the sum of "
+        "their whole-frame shifts), the misclosure in px (median of |2-0 "
+        "minus (2-1 + 1-0)| over the blocks accepted in all three pairs; "
+        "the whole-frame shifts' misclosure in brackets) is:");
+    for (i = 0; i < n; i++) {
+        if (!tri[i].channel)
+            continue;
+        g_string_append_printf(md, " %s %.2f in x, %.2f in y over %d "
+                               "of %d blocks (%.2f, %.2f);",
+                               tri[i].channel, tri[i].median[0],
+                               tri[i].median[1], tri[i].n_blocks, N_BLOCKS,
+                               tri[i].whole[0], tri[i].whole[1]);
+        if (g_str_equal(tri[i].channel, "ZSensor"))
+            zsensor = i;
+        if (g_str_equal(tri[i].channel, "Phase"))
+            phase = i;
+    }
+    g_string_truncate(md, md->len - 1);
+    g_string_append(md, ".");
+    if (zsensor >= 0 && phase >= 0) {
+        gdouble mz = MAX(tri[zsensor].median[0], tri[zsensor].median[1]);
+        gdouble mp = MAX(tri[phase].median[0], tri[phase].median[1]);
+        gdouble wz = MAX(fabs(tri[zsensor].whole[0]),
+                         fabs(tri[zsensor].whole[1]));
+        gdouble wp = MAX(fabs(tri[phase].whole[0]),
+                         fabs(tri[phase].whole[1]));
+
+        if (tri[zsensor].n_blocks < tri[phase].n_blocks || mz > mp
+            || wz > wp)
+            g_string_append(md, "  ZSensor closes worse or keeps fewer "
+                            "blocks than Phase: hence Phase.");
+        else
+            g_string_append(md, "  ZSensor closes as well as Phase here; "
+                            "Phase is kept for its sharper blobs.");
+    }
+    g_string_append(md, "\n");
 }
 
 static gchar*
@@ -970,17 +1642,32 @@ read_text(const gchar *path)
     return g_strdup("(not generated: run `make validation`)\n");
 }
 
+static void
+series_result_free(SeriesResult *res)
+{
+    if (!res->series)
+        return;
+    fit_report_clear(&res->report);
+    frame_series_free(res->series);
+    g_free(res->plot);
+    g_free(res->images);
+}
+
 int
 main(int argc, char **argv)
 {
+    static const gchar *triangle_channels[] = { "ZSensor", "Phase" };
     const gchar *measured = argc > 1 ? argv[1] : "../shared/data/measured";
     const gchar *docdir = argc > 2 ? argv[2] : "docs";
     gchar *figdir = g_build_filename(docdir, "figures", NULL);
     gchar *out = g_build_filename(docdir, "validation.md", NULL);
     gchar *confusion = read_text(argc > 3 ? argv[3] : NULL);
-    SeriesResult results[G_N_ELEMENTS(specs)];
+    SeriesResult results[G_N_ELEMENTS(specs)], sim;
+    RegistrationTriangle tri[G_N_ELEMENTS(triangle_channels)];
+    DriftModel truth;
     GString *md = g_string_new(NULL);
     GError *error = NULL;
+    gchar *sim_what = NULL;
     guint i;
 
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
@@ -989,25 +1676,9 @@ main(int argc, char **argv)
         g_printerr("validation-study: %s: no measured data there\n", measured);
         return 1;
     }
-    g_string_append(md, "# Validation of the drift model on measured AFM data\n\n"
-        "Generated by `make validation` (docs/validation-study.c); do not edit.\n"
-        "Each series is cut into 16 blocks of lines per frame; every block of "
-        "every frame is registered against every earlier frame with the "
-        "project's stripe registration (modules/core/stripe-registration.c: "
-        "zero-mean normalised cross-correlation over the overlap, searched "
-        "around the frame's overall shift, chained across frames; frames "
-        "line-levelled and blurred by 1 % of the frame first; a block counts "
-        "only when its peak stands clear of rival peaks), which measures "
-        "p(t_a) - p(t_b) at the two scan times of its content (interfaces.md "
-        "section 4).  All models are fitted to all measurements of a series "
-        "at once; `simscan fit` names an effect only when it beats constant "
-        "velocity by 20 in BIC, predicts held-out blocks 10 % better and "
-        "explains 1.5 times its own residual, and an oscillation only with a "
-        "period it can observe: at least 1.5 cycles over the measured time "
-        "span, no shorter than twice the longest gap between measured times, "
-        "not cancelling between frames, and not the longest such period.\n");
+    write_header(md);
     for (i = 0; i < G_N_ELEMENTS(specs); i++) {
-        if (!study_series(specs + i, measured, figdir, results + i, &error)) {
+        if (!study_series(specs + i, measured, docdir, results + i, &error)) {
             g_printerr("validation-study: %s: %s\n", specs[i].name,
                        error->message);
             g_clear_error(&error);
@@ -1016,6 +1687,19 @@ main(int argc, char **argv)
         }
         write_series(md, specs + i, results + i);
         fprintf(stderr, "%s done\n", specs[i].name);
+    }
+    memset(&sim, 0, sizeof(sim));
+    sim.name = "particles-film-simulated";
+    sim_truth(&truth);
+    if ((sim.series = simulate_particles_series(measured, &truth, &sim_what,
+                                                &error))) {
+        analyse_series(&sim, docdir);
+        write_simulation(md, &sim, sim_what, &truth);
+        fprintf(stderr, "%s done\n", sim.name);
+    }
+    else {
+        g_printerr("validation-study: particles-film: %s\n", error->message);
+        g_clear_error(&error);
     }
     g_string_append(md, "\n## Findings\n\n");
     for (i = 0; i < G_N_ELEMENTS(specs); i++) {
@@ -1029,17 +1713,14 @@ main(int argc, char **argv)
         "model type was needed; what the paper mode lacks is using it.  The "
         "gain is in the tables: held-out prediction error and the alignment "
         "of compensated consecutive frames, paper model against the settling "
-        "model (continuous, sub-pixel, per line).  Slow creep was tried as "
-        "a further candidate while this study was written: constant "
-        "acceleration (p = v t + b t^2, one parameter less than settling per "
-        "axis) and logarithmic creep (p = v t + c t0 log(1 + t/t0)).  Neither "
-        "is among `simscan fit`'s models, because neither wins on held-out "
-        "error: against settling, constant acceleration was 0.2 % better on "
-        "afmir-film (22.22 against 22.27 nm, where settling's tau already sits "
-        "at the top of its range and acts as constant acceleration), 4 % "
-        "worse on hsafm-extra; logarithmic creep was within 0.8 % of settling "
-        "on every series (the numbers are in the commit message that added "
-        "this paragraph).\n\n"
+        "model (continuous, sub-pixel, per line)");
+    if (sim.series)
+        g_string_append(md, "; the simulated particles-film series shows "
+                        "that the pipeline finds a known settling back on a "
+                        "real surface");
+    g_string_append(md, ".\n");
+    write_creep_forms(md, results, G_N_ELEMENTS(specs));
+    g_string_append(md, "\n"
         "**Limits.**  A drift component with a whole number of cycles per "
         "frame interval repeats identically in every frame and cancels in "
         "every frame-to-frame measurement: no frame series can see it "
@@ -1047,10 +1728,17 @@ main(int argc, char **argv)
         "tests do not draw them).  For the "
         "HS-AFM series the slow-scan direction is not in the metadata and is "
         "taken as down; for the Anasys series the time stamp is taken as the "
-        "end of each frame.  Registration of the FastScan series uses the "
-        "Phase channel: in ZSensor the periodic background and line streaks "
-        "pin blocks to wrong peaks (its frame-to-frame shifts do not add up: "
-        "frame 2 vs 0 differs from (2 vs 1) + (1 vs 0) by tens of pixels in x).\n");
+        "end of each frame.");
+    for (i = 0; i < G_N_ELEMENTS(triangle_channels); i++) {
+        if (!registration_triangle(specs + 0, measured, triangle_channels[i],
+                                   tri + i, &error)) {
+            g_printerr("validation-study: %s: %s\n", triangle_channels[i],
+                       error->message);
+            g_clear_error(&error);
+            tri[i].channel = NULL;
+        }
+    }
+    write_triangles(md, tri, G_N_ELEMENTS(triangle_channels));
     g_string_append(md, "\n## Effects hidden in simulated series "
                     "(bench/bench-effect-confusion)\n\n");
     g_string_append(md, confusion);
@@ -1058,15 +1746,11 @@ main(int argc, char **argv)
         g_printerr("validation-study: %s\n", error->message);
         return 1;
     }
-    for (i = 0; i < G_N_ELEMENTS(specs); i++) {
-        if (results[i].series) {
-            fit_report_clear(&results[i].report);
-            frame_series_free(results[i].series);
-            g_free(results[i].plot);
-            g_free(results[i].images);
-        }
-    }
+    for (i = 0; i < G_N_ELEMENTS(specs); i++)
+        series_result_free(results + i);
+    series_result_free(&sim);
     g_string_free(md, TRUE);
+    g_free(sim_what);
     g_free(confusion);
     g_free(figdir);
     g_free(out);
