@@ -13,6 +13,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "frame-series.h"
+#include "scan-timing-meta.h"
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -102,111 +103,22 @@ frame_series_dy(const FrameSeries *series)
     return gwy_data_field_get_dy(series->frames[0].field);
 }
 
-static const gchar*
-meta_string(GwyContainer *meta, const gchar *key)
-{
-    const guchar *s = NULL;
-
-    if (meta && gwy_container_gis_string_by_name(meta, key, &s))
-        return (const gchar*)s;
-    return NULL;
-}
-
-/* A number at the start of a metadata value ("2.32515", "0.25 Hz"). */
-static gboolean
-meta_number(GwyContainer *meta, const gchar *key, gdouble *value)
-{
-    const gchar *s = meta_string(meta, key);
-    gchar *end;
-    gdouble v;
-
-    if (!s)
-        return FALSE;
-    v = g_ascii_strtod(s, &end);
-    if (end == s || !isfinite(v))
-        return FALSE;
-    *value = v;
-    return TRUE;
-}
-
-/* Nanoscope "Date": "04:06:25 PM Thu Sep 26 2019", seconds of the day plus
- * days; only differences matter. */
-static gboolean
-parse_nanoscope_date(const gchar *s, gdouble *t)
-{
-    static const gchar months[] = "JanFebMarAprMayJunJulAugSepOctNovDec";
-    gint h, m, sec, day, year;
-    gchar ampm[4], wday[4], mon[4];
-    const gchar *p;
-    GDateTime *dt;
-
-    if (sscanf(s, "%d:%d:%d %2s %3s %3s %d %d",
-               &h, &m, &sec, ampm, wday, mon, &day, &year) != 8)
-        return FALSE;
-    if (!(p = strstr(months, mon)))
-        return FALSE;
-    h %= 12;
-    if (g_ascii_toupper(ampm[0]) == 'P')
-        h += 12;
-    dt = g_date_time_new_utc(year, (p - months)/3 + 1, day, h, m, sec);
-    if (!dt)
-        return FALSE;
-    *t = (gdouble)g_date_time_to_unix(dt);
-    g_date_time_unref(dt);
-    return TRUE;
-}
-
-static gboolean
-parse_iso_time(const gchar *s, gdouble *t)
-{
-    GDateTime *dt = g_date_time_new_from_iso8601(s, NULL);
-
-    if (!dt)
-        return FALSE;
-    *t = g_date_time_to_unix(dt) + 1e-6*g_date_time_get_microsecond(dt);
-    g_date_time_unref(dt);
-    return TRUE;
-}
-
+/* The core's reader (scan-timing-meta.h) knows every format's keys,
+ * simscan's own among them. */
 static void
 read_meta_timing(GwyContainer *meta, gint yres, MetaTiming *mt)
 {
-    const gchar *s;
-    gdouble v;
+    ScanMetaTiming timing;
+    ScanMetaFound found;
 
-    mt->line_time = mt->start = NAN;
-    mt->direction = -1;
-    mt->start_is_end = FALSE;
-    if (!meta)
-        return;
-
-    /* Bruker Nanoscope. */
-    if (meta_number(meta, "Scan Rate", &v) && v > 0.0)
-        mt->line_time = 1.0/v;
-    if ((s = meta_string(meta, "Frame direction"))) {
-        if (g_ascii_strncasecmp(s, "Down", 4) == 0)
-            mt->direction = SCAN_DIRECTION_DOWN;
-        else if (g_ascii_strncasecmp(s, "Up", 2) == 0)
-            mt->direction = SCAN_DIRECTION_UP;
-    }
-    if (!meta_number(meta, "Relative frame time", &mt->start)
-        && (s = meta_string(meta, "Date")))
-        parse_nanoscope_date(s, &mt->start);
-
-    /* HS-AFM movies converted to .gwy. */
-    if (meta_number(meta, "Frame time (s)", &v) && v > 0.0)
-        mt->line_time = v/yres;
-    if (meta_number(meta, "Time since first kept frame (s)", &v))
-        mt->start = v;
-
-    /* Anasys nanoIR: the stamp is taken when the image is stored, that is
-     * when its last line has been scanned. */
-    if (meta_number(meta, "ScanRate", &v) && v > 0.0)
-        mt->line_time = 1.0/v;
-    if ((s = meta_string(meta, "TimeStamp")) && parse_iso_time(s, &v)) {
-        mt->start = v;
-        mt->start_is_end = TRUE;
-    }
+    timing.line_time = timing.frame_start = NAN;
+    timing.direction = SCAN_DIRECTION_DOWN;
+    timing.start_is_end = FALSE;
+    found = scan_timing_meta_read(meta, yres, &timing);
+    mt->line_time = (found & SCAN_META_LINE_TIME) ? timing.line_time : NAN;
+    mt->start = (found & SCAN_META_FRAME_START) ? timing.frame_start : NAN;
+    mt->direction = (found & SCAN_META_DIRECTION) ? (gint)timing.direction : -1;
+    mt->start_is_end = (found & SCAN_META_FRAME_START) && timing.start_is_end;
 }
 
 static gboolean

@@ -70,9 +70,8 @@ void          frame_series_options_init (FrameSeriesOptions *options);
  * to it or to it followed by " <number>") within the id range, else every
  * channel with the same size, pixel size and value unit as the first.  Frames
  * with bit-identical data are dropped (a note says which).  Timing comes from
- * the metadata Gwyddion exposes (Nanoscope "Scan Rate", "Frame direction",
- * "Relative frame time"/"Date"; HS-AFM "Frame time (s)" and "Time since first
- * kept frame (s)"; Anasys "ScanRate" and "TimeStamp") unless options give it.
+ * the metadata as scan_timing_meta_read() reads it (simscan's own keys,
+ * Nanoscope, HS-AFM, Anasys, Asylum) unless options give it.
  * Refuses series of fewer than two frames, frames of different size and
  * series whose timing stays unknown. */
 FrameSeries*  frame_series_load         (gchar **filenames,

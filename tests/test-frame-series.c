@@ -9,6 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <math.h>
+#include <stdio.h>
+#include <glib/gstdio.h>
 #include <check.h>
 #include <libgwyddion/gwyddion.h>
 #include <libgwymodule/gwymodule.h>
@@ -148,11 +150,126 @@ START_TEST(test_options_override_and_refusals)
 }
 END_TEST
 
+/************************************************************************
+ * simscan's own files: timing from simscan's metadata keys
+ ************************************************************************/
+
+#define SIMSCAN_PATH TEST_BUILDDIR "/simscan/simscan"
+#define SIMSCAN_FRAMES 3
+#define SIMSCAN_CROP 100
+#define SIMSCAN_FRAME_PERIOD 200.0
+/* Registration of whole-pixel shifts: within a few percent of the
+ * velocity (one frame's shift is 1-3 px, 39 nm each). */
+#define SIMSCAN_VELOCITY_TOLERANCE 0.05
+
+static guint32
+test_seed(void)
+{
+    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
+
+    return env && *env ? (guint32)g_ascii_strtoull(env, NULL, 10) : g_random_int();
+}
+
+static gboolean
+spawn(const gchar *const *argv, gchar **out, gchar **err)
+{
+    gint status = -1;
+
+    ck_assert(g_spawn_sync(NULL, (gchar**)argv, NULL, G_SPAWN_DEFAULT, NULL, NULL, out, err, &status, NULL));
+    return g_spawn_check_exit_status(status, NULL);
+}
+
+/* Frames k = 0, 1, ... of simscan's image, each cropped k*shift px further
+ * on and started k*SIMSCAN_FRAME_PERIOD s later, with simscan's metadata
+ * (line time, slow scan, frame start) and nothing else timing them. */
+static void
+write_simscan_frames(const gchar *dir, const gchar *simulated, const gint *shift, gchar **files)
+{
+    GwyContainer *data = gwy_file_load(simulated, GWY_RUN_NONINTERACTIVE, NULL), *frame, *meta;
+    GwyDataField *field, *crop;
+    gchar start[G_ASCII_DTOSTR_BUF_SIZE];
+    gint k;
+
+    ck_assert(data);
+    field = gwy_container_get_object_by_name(data, "/0/data");
+    for (k = 0; k < SIMSCAN_FRAMES; k++) {
+        crop = gwy_data_field_area_extract(field, k*shift[0] + 8, k*shift[1] + 8, SIMSCAN_CROP, SIMSCAN_CROP);
+        meta = gwy_container_duplicate(gwy_container_get_object_by_name(data, "/0/meta"));
+        g_ascii_dtostr(start, sizeof(start), k*SIMSCAN_FRAME_PERIOD);
+        gwy_container_set_const_string_by_name(meta, "Frame start (s)", (const guchar*)start);
+        frame = gwy_container_new();
+        gwy_container_set_object_by_name(frame, "/0/data", crop);
+        gwy_container_set_object_by_name(frame, "/0/meta", meta);
+        files[k] = g_strdup_printf("%s/frame%d.gwy", dir, k);
+        ck_assert(gwy_file_save(frame, files[k], GWY_RUN_NONINTERACTIVE, NULL));
+        g_object_unref(frame);
+        g_object_unref(meta);
+        g_object_unref(crop);
+    }
+    files[k] = NULL;
+    g_object_unref(data);
+}
+
+/* simscan fit on frames simscan wrote needs no timing option: the velocity
+ * it finds is the frames' hidden shift over their metadata frame starts. */
+START_TEST(test_simscan_fit_reads_simscan_timing)
+{
+    guint32 seed = test_seed();
+    GRand *rng = g_rand_new_with_seed(seed);
+    gchar *dir = g_dir_make_tmp("test-frame-series-XXXXXX", NULL);
+    gchar *simulated = g_build_filename(dir, "simulated.gwy", NULL), *seedarg = g_strdup_printf("%u", seed);
+    gchar *files[SIMSCAN_FRAMES + 1], *out = NULL, *err = NULL, *v;
+    const gchar *make[] = { SIMSCAN_PATH, "-q", "--xres", "128", "--yres", "128", "--seed", seedarg,
+                            "-o", simulated, NULL };
+    const gchar *fit[SIMSCAN_FRAMES + 3] = { SIMSCAN_PATH, "fit", };
+    gint shift[2], k;
+    gdouble vx, vy, want[2], dx;
+
+    /* Crops start 8 px in and move right and down (up to 16 px). */
+    shift[0] = g_rand_int_range(rng, 1, 4);
+    shift[1] = g_rand_int_range(rng, 0, 3);
+    printf("test-frame-series: simscan seed %u (LOCALSCAN_TEST_SEED), frames %d, %d px apart\n",
+           seed, shift[0], shift[1]);
+    ck_assert(dir);
+    ck_assert_msg(spawn(make, &out, &err), "simscan failed: %s", err);
+    g_free(out);
+    g_free(err);
+    write_simscan_frames(dir, simulated, shift, files);
+    for (k = 0; k < SIMSCAN_FRAMES; k++)
+        fit[k+2] = files[k];
+    ck_assert_msg(spawn(fit, &out, &err), "simscan fit without timing options failed: %s", err);
+    ck_assert_msg((v = strstr(out, "\"velocity_nm_per_s\"")), "no velocity in %s", out);
+    ck_assert(sscanf(strchr(v, '[') + 1, "%lf , %lf", &vx, &vy) == 2);
+
+    /* A feature at X shows at X - k*shift in crop k: drift -shift per frame. */
+    dx = 5000.0/128;
+    want[0] = -shift[0]*dx/SIMSCAN_FRAME_PERIOD;
+    want[1] = -shift[1]*dx/SIMSCAN_FRAME_PERIOD;
+    printf("test-frame-series: velocity %g, %g nm/s, hidden %g, %g nm/s\n", vx, vy, want[0], want[1]);
+    ck_assert(fabs(vx - want[0]) <= SIMSCAN_VELOCITY_TOLERANCE*fabs(want[0]) + 0.005);
+    ck_assert(fabs(vy - want[1]) <= SIMSCAN_VELOCITY_TOLERANCE*fabs(want[0]) + 0.005);
+
+    for (k = 0; k < SIMSCAN_FRAMES; k++) {
+        g_unlink(files[k]);
+        g_free(files[k]);
+    }
+    g_unlink(simulated);
+    g_rmdir(dir);
+    g_free(out);
+    g_free(err);
+    g_free(seedarg);
+    g_free(simulated);
+    g_free(dir);
+    g_rand_free(rng);
+}
+END_TEST
+
 int
 main(void)
 {
     Suite *s = suite_create("frame-series");
-    TCase *tc = tcase_create("measured");
+    TCase *tc = tcase_create("measured"), *tc_simscan = tcase_create("simscan");
+    gboolean have_measured;
     gchar *probe;
     SRunner *sr;
     gint failed;
@@ -161,18 +278,21 @@ main(void)
     if (!measured)
         measured = TEST_SRCDIR "/../shared/data/measured";
     probe = g_build_filename(measured, "fastscan-series", "09261606.001", NULL);
-    if (!g_file_test(probe, G_FILE_TEST_EXISTS)) {
-        printf("SKIPPED: measured data absent (%s)\n", measured);
-        g_free(probe);
-        return 77;
-    }
+    have_measured = g_file_test(probe, G_FILE_TEST_EXISTS);
     g_free(probe);
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
-    tcase_add_test(tc, test_nanoscope_timing);
-    tcase_add_test(tc, test_hsafm_channels_as_frames);
-    tcase_add_test(tc, test_anasys_duplicates_dropped);
-    tcase_add_test(tc, test_options_override_and_refusals);
-    suite_add_tcase(s, tc);
+    tcase_set_timeout(tc_simscan, 120);
+    tcase_add_test(tc_simscan, test_simscan_fit_reads_simscan_timing);
+    suite_add_tcase(s, tc_simscan);
+    if (have_measured) {
+        tcase_add_test(tc, test_nanoscope_timing);
+        tcase_add_test(tc, test_hsafm_channels_as_frames);
+        tcase_add_test(tc, test_anasys_duplicates_dropped);
+        tcase_add_test(tc, test_options_override_and_refusals);
+        suite_add_tcase(s, tc);
+    }
+    else
+        printf("SKIPPED: the measured-file tests, measured data absent (%s)\n", measured);
     sr = srunner_create(s);
     srunner_run_all(sr, CK_NORMAL);
     failed = srunner_ntests_failed(sr);

@@ -23,6 +23,7 @@
 #include "continuous-compensate.h"
 #include "localscan-channel.h"
 #include "localscan-params.h"
+#include "scan-timing-meta.h"
 #include "registration-frames.h"
 #include "simscan-file-case.h"
 
@@ -723,6 +724,11 @@ START_TEST(test_scan_timing_from_metadata)
                                               "Capture direction", "Up", NULL };
     static const gchar *const nanoscope_up[] = { "Scan Rate", "2.32515", "Frame direction", "Up", NULL };
     static const gchar *const anasys[] = { "ScanRate", "0.5 Hz", "ScanAngle", "-90 deg", NULL };
+    static const gchar *const nanoscope_relative[] = { "Scan Rate", "2.32515", "Relative frame time", "209.88",
+                                                       NULL };
+    static const gchar *const nanoscope_date[] = { "Scan Rate", "2.32515", "Date", "04:06:25 PM Thu Sep 26 2019",
+                                                   NULL };
+    static const gchar *const anasys_stamp[] = { "ScanRate", "0.5 Hz", "TimeStamp", "2021-03-04T10:20:30Z", NULL };
     static const gchar *const asylum[] = { "ScanRate", "1.0016", "FastMapScanRate", "0.23461", NULL };
     static const gchar *const hsafm[] = { "Frame time (s)", "0.413", "Time since first kept frame (s)", "6.189",
                                           NULL };
@@ -759,6 +765,14 @@ START_TEST(test_scan_timing_from_metadata)
     ck_assert_double_eq_tol(t.line_time, 0.413/6, 1e-15);
     ck_assert_double_eq_tol(t.frame_start, 6.189, 1e-15);
 
+    ck_assert_int_eq(timing_with_meta(nanoscope_relative, SCAN_DIRECTION_DOWN, &t),
+                     LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_FRAME_START);
+    ck_assert(t.frame_start == 209.88);
+    ck_assert_int_eq(timing_with_meta(nanoscope_date, SCAN_DIRECTION_DOWN, &t), LOCALSCAN_TIMING_LINE_TIME);
+    ck_assert(t.frame_start == 0.0);
+    ck_assert_int_eq(timing_with_meta(anasys_stamp, SCAN_DIRECTION_DOWN, &t), LOCALSCAN_TIMING_LINE_TIME);
+    ck_assert(t.frame_start == 0.0);
+
     timing_with_meta(units, SCAN_DIRECTION_DOWN, &t);
     ck_assert_double_eq_tol(t.line_time, 0.5, 1e-15);
     timing_with_meta(rate_units, SCAN_DIRECTION_DOWN, &t);
@@ -766,6 +780,30 @@ START_TEST(test_scan_timing_from_metadata)
     ck_assert_int_eq(timing_with_meta(bad, SCAN_DIRECTION_DOWN, &t), 0);
     ck_assert(t.line_time == LOCALSCAN_DEFAULT_LINE_TIME && t.direction == SCAN_DIRECTION_DOWN);
     ck_assert(t.frame_start == 0.0);
+}
+END_TEST
+
+/* The core reader gives the dates themselves, for simscan fit's series:
+ * Nanoscope's as a start, Anasys's as the end of the frame. */
+START_TEST(test_scan_timing_meta_dates)
+{
+    GwyContainer *meta = gwy_container_new();
+    ScanMetaTiming mt;
+
+    set_string(meta, "Date", "04:06:25 PM Thu Sep 26 2019");
+    gwy_clear(&mt, 1);
+    ck_assert_int_eq(scan_timing_meta_read(meta, 6, &mt), SCAN_META_FRAME_START);
+    ck_assert(mt.frame_start == 1569513985.0 && mt.wall_clock && !mt.start_is_end);
+    set_string(meta, "TimeStamp", "2021-03-04T10:20:30.25Z");
+    ck_assert_int_eq(scan_timing_meta_read(meta, 6, &mt), SCAN_META_FRAME_START);
+    ck_assert(mt.frame_start == 1614853230.25 && mt.wall_clock && mt.start_is_end);
+    set_string(meta, "Date", "04:06:25 PM Thu Sxp 26 2019");
+    set_string(meta, "TimeStamp", "yesterday");
+    ck_assert_int_eq(scan_timing_meta_read(meta, 6, &mt), 0);
+    set_string(meta, "Frame time (s)", "0.6");
+    ck_assert_int_eq(scan_timing_meta_read(meta, 6, &mt), SCAN_META_LINE_TIME);
+    ck_assert_double_eq_tol(mt.line_time, 0.1, 1e-15);
+    g_object_unref(meta);
 }
 END_TEST
 
@@ -1098,7 +1136,9 @@ END_TEST
 
 /* What the importers of the measured files put into metadata gives their
  * timing (shared/data/measured/MANIFEST.md: FastScan 2.325 Hz scanning
- * down, HS-AFM 0.413 s frames 6.189 s apart, nanoIR 0.25-1 Hz, Asylum). */
+ * down, its "Relative frame time" the frame start, HS-AFM 0.413 s frames
+ * 6.189 s apart, nanoIR 0.25-1 Hz, its TimeStamp a date and so not used,
+ * Asylum). */
 typedef struct {
     const gchar *file;
     gint id;
@@ -1109,8 +1149,9 @@ typedef struct {
 } MeasuredTiming;
 
 static const MeasuredTiming measured_timings[] = {
-    { "fastscan-series/09261606.001", 0, LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_DIRECTION,
-      1.0/2.32515, SCAN_DIRECTION_DOWN, 0.0 },
+    { "fastscan-series/09261606.001", 0,
+      LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_DIRECTION | LOCALSCAN_TIMING_FRAME_START,
+      1.0/2.32515, SCAN_DIRECTION_DOWN, 7279.93 },
     { "hsafm-minicircles/hsafm_sample0_frames50-140.gwy", 1, LOCALSCAN_TIMING_LINE_TIME | LOCALSCAN_TIMING_FRAME_START,
       0.41263/256, SCAN_DIRECTION_UP, 6.189 },
     { "afmir-film/PEA_BDA_film.axz", 10, LOCALSCAN_TIMING_LINE_TIME, 4.0, SCAN_DIRECTION_UP, 0.0 },
@@ -1375,6 +1416,7 @@ main(void)
     tcase_add_test(tc, test_continuous_mode_passes_timing);
     tcase_add_test(tc, test_bad_sources_refused);
     tcase_add_test(tc, test_scan_timing_from_metadata);
+    tcase_add_test(tc, test_scan_timing_meta_dates);
     tcase_add_loop_test(tc, test_measured_files_timing, 0, G_N_ELEMENTS(measured_timings));
     tcase_add_test(tc, test_simscan_default_timing);
     tcase_add_test(tc, test_simscan_up_timing);

@@ -13,6 +13,7 @@
 #include "paper-compensate.h"
 #include "continuous-compensate.h"
 #include "stripe-geometry.h"
+#include "scan-timing-meta.h"
 
 GQuark
 localscan_channel_error_quark(void)
@@ -95,133 +96,15 @@ localscan_channel_store_table(GwyContainer *data, gint id, const DriftTable *tab
                                      (const guchar*)drift_table_to_string(table));
 }
 
-/* A metadata value such as "2.325 Hz", "0.5 s" or "0.413": the number in
- * base SI units of the given unit, or the bare number when no unit follows.
- * FALSE when the text is no finite number or carries another unit. */
-static gboolean
-parse_meta_quantity(const gchar *text, const gchar *unit, gdouble *value)
-{
-    GwySIUnit *siunit;
-    gchar *end, *rest;
-    gint power10 = 0;
-    gboolean ok;
-    gdouble v;
-
-    v = g_ascii_strtod(text, &end);
-    if (end == text || !isfinite(v))
-        return FALSE;
-    rest = g_strstrip(g_strdup(end));
-    if (!*rest) {
-        g_free(rest);
-        *value = v;
-        return TRUE;
-    }
-    siunit = gwy_si_unit_new_parse(rest, &power10);
-    ok = gwy_si_unit_equal_string(siunit, unit);
-    g_object_unref(siunit);
-    g_free(rest);
-    if (ok)
-        *value = v*pow(10.0, power10);
-    return ok;
-}
-
-/* The first of the keys (NULL-terminated) whose value parses. */
-static gboolean
-meta_quantity(GwyContainer *meta, const gchar *const *keys, const gchar *unit, gdouble *value)
-{
-    const guchar *text;
-
-    for (; *keys; keys++) {
-        if (gwy_container_gis_string_by_name(meta, *keys, &text)
-            && parse_meta_quantity((const gchar*)text, unit, value))
-            return TRUE;
-    }
-    return FALSE;
-}
-
-static gboolean
-meta_positive(GwyContainer *meta, const gchar *const *keys, const gchar *unit, gdouble *value)
-{
-    gdouble v;
-
-    if (!meta_quantity(meta, keys, unit, &v) || v <= 0.0)
-        return FALSE;
-    *value = v;
-    return TRUE;
-}
-
-static gboolean
-meta_line_time(GwyContainer *meta, gint yres, gdouble *line_time)
-{
-    static const gchar *const line_time_keys[] = { "Line time (s)", "Line time", "Line Time", NULL };
-    static const gchar *const line_rate_keys[] = { "Scan rate", "Scan Rate", "ScanRate", NULL };
-    static const gchar *const frame_time_keys[] = { "Frame time (s)", NULL };
-    gdouble v;
-
-    if (meta_positive(meta, line_time_keys, "s", line_time))
-        return TRUE;
-    if (meta_positive(meta, line_rate_keys, "Hz", &v)) {
-        *line_time = 1.0/v;
-        return TRUE;
-    }
-    if (yres > 0 && meta_positive(meta, frame_time_keys, "s", &v)) {
-        *line_time = v/yres;
-        return TRUE;
-    }
-    return FALSE;
-}
-
-/* The text begins with the word (any case), perhaps followed by more. */
-static gboolean
-starts_with_word(const gchar *text, const gchar *word)
-{
-    gsize len = strlen(word);
-
-    while (g_ascii_isspace(*text))
-        text++;
-    return !g_ascii_strncasecmp(text, word, len) && !g_ascii_isalnum(text[len]);
-}
-
-static gboolean
-meta_direction(GwyContainer *meta, ScanDirection *direction)
-{
-    static const gchar *const keys[] = { "Slow scan", "Frame direction", NULL };
-    const gchar *const *key;
-    const guchar *text;
-
-    for (key = keys; *key; key++) {
-        if (!gwy_container_gis_string_by_name(meta, *key, &text))
-            continue;
-        if (starts_with_word((const gchar*)text, "down")) {
-            *direction = SCAN_DIRECTION_DOWN;
-            return TRUE;
-        }
-        if (starts_with_word((const gchar*)text, "up")) {
-            *direction = SCAN_DIRECTION_UP;
-            return TRUE;
-        }
-    }
-    return FALSE;
-}
-
-static gboolean
-meta_frame_start(GwyContainer *meta, gdouble *frame_start)
-{
-    static const gchar *const keys[] = { "Frame start (s)", "Time since first kept frame (s)", NULL };
-
-    return meta_quantity(meta, keys, "s", frame_start);
-}
-
 LocalscanTimingFound
 localscan_channel_scan_timing(GwyContainer *data, gint id, ScanDirection fallback_direction,
                               ScanTiming *timing)
 {
-    GwyContainer *meta = channel_meta(data, id, FALSE);
-    GwyDataField *field = NULL;
+    ScanMetaTiming meta;
+    ScanMetaFound meta_found;
     LocalscanTimingFound found = 0;
+    GwyDataField *field = NULL;
     gchar key[32];
-    gdouble line_time = LOCALSCAN_DEFAULT_LINE_TIME, frame_start = 0.0;
-    ScanDirection direction = fallback_direction;
     gint xres = 0, yres = 0;
 
     g_snprintf(key, sizeof(key), "/%d/data", id);
@@ -229,15 +112,20 @@ localscan_channel_scan_timing(GwyContainer *data, gint id, ScanDirection fallbac
         xres = gwy_data_field_get_xres(field);
         yres = gwy_data_field_get_yres(field);
     }
-    if (meta) {
-        if (meta_line_time(meta, yres, &line_time))
-            found |= LOCALSCAN_TIMING_LINE_TIME;
-        if (meta_direction(meta, &direction))
-            found |= LOCALSCAN_TIMING_DIRECTION;
-        if (meta_frame_start(meta, &frame_start))
-            found |= LOCALSCAN_TIMING_FRAME_START;
-    }
-    scan_timing_init(timing, xres, yres, frame_start, line_time, direction);
+    meta.line_time = LOCALSCAN_DEFAULT_LINE_TIME;
+    meta.direction = fallback_direction;
+    meta.frame_start = 0.0;
+    meta_found = scan_timing_meta_read_channel(data, id, &meta);
+    if (meta_found & SCAN_META_LINE_TIME)
+        found |= LOCALSCAN_TIMING_LINE_TIME;
+    if (meta_found & SCAN_META_DIRECTION)
+        found |= LOCALSCAN_TIMING_DIRECTION;
+    /* A date is no clock a table's t_image, t_local are written in. */
+    if ((meta_found & SCAN_META_FRAME_START) && !meta.wall_clock)
+        found |= LOCALSCAN_TIMING_FRAME_START;
+    else
+        meta.frame_start = 0.0;
+    scan_timing_init(timing, xres, yres, meta.frame_start, meta.line_time, meta.direction);
     return found;
 }
 

@@ -106,18 +106,12 @@ void         localscan_channel_store_table_text(GwyContainer *data,
                                                 const gchar *text);
 
 /* The scan timing of channel id (its field's xres, yres) from its metadata
- * "/<id>/meta":
- * - line time: "Line time (s)" (simscan), "Line time"/"Line Time" (with a
- *   time unit or bare seconds), else the line rate "Scan rate"/"Scan Rate"
- *   (Nanoscope)/"ScanRate" (Anasys, Asylum) in Hz, else "Frame time (s)"
- *   (HS-AFM) over the rows; else LOCALSCAN_DEFAULT_LINE_TIME;
- * - slow-scan direction: "Slow scan" (simscan) or "Frame direction"
- *   (Nanoscope), "down" or "up" in any case; else fallback_direction;
- * - frame start, s: "Frame start (s)" (simscan) or "Time since first kept
- *   frame (s)" (HS-AFM); else 0.  A table's t_image, t_local columns are
- *   in this clock.
- * Values that do not parse count as absent.  Returns the parts found in
- * the metadata. */
+ * "/<id>/meta" as scan_timing_meta_read() finds it; where it says nothing:
+ * line time LOCALSCAN_DEFAULT_LINE_TIME, fallback_direction, frame start 0.
+ * A frame start that is a date (Nanoscope "Date", Anasys "TimeStamp") is
+ * not used: a table's t_image, t_local columns are in the frame start's
+ * clock, and no table is written in dates.  Returns the parts found in the
+ * metadata. */
 LocalscanTimingFound localscan_channel_scan_timing(GwyContainer *data,
                                                    gint id,
                                                    ScanDirection fallback_direction,

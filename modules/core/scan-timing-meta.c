@@ -1,0 +1,231 @@
+/*
+ *  A channel's scan timing as its file's metadata states it.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <stdio.h>
+#include <string.h>
+#include <math.h>
+#include <libgwyddion/gwymacros.h>
+#include <libgwyddion/gwysiunit.h>
+#include <libprocess/datafield.h>
+#include "scan-timing-meta.h"
+
+/* A metadata value such as "2.325 Hz", "0.5 s" or "0.413": the number in
+ * base SI units of the given unit, or the bare number when no unit follows.
+ * FALSE when the text is no finite number or carries another unit. */
+static gboolean
+parse_meta_quantity(const gchar *text, const gchar *unit, gdouble *value)
+{
+    GwySIUnit *siunit;
+    gchar *end, *rest;
+    gint power10 = 0;
+    gboolean ok;
+    gdouble v;
+
+    v = g_ascii_strtod(text, &end);
+    if (end == text || !isfinite(v))
+        return FALSE;
+    rest = g_strstrip(g_strdup(end));
+    if (!*rest) {
+        g_free(rest);
+        *value = v;
+        return TRUE;
+    }
+    siunit = gwy_si_unit_new_parse(rest, &power10);
+    ok = gwy_si_unit_equal_string(siunit, unit);
+    g_object_unref(siunit);
+    g_free(rest);
+    if (ok)
+        *value = v*pow(10.0, power10);
+    return ok;
+}
+
+static const gchar*
+meta_string(GwyContainer *meta, const gchar *key)
+{
+    const guchar *text = NULL;
+
+    if (gwy_container_gis_string_by_name(meta, key, &text))
+        return (const gchar*)text;
+    return NULL;
+}
+
+/* The first of the keys (NULL-terminated) whose value parses. */
+static gboolean
+meta_quantity(GwyContainer *meta, const gchar *const *keys, const gchar *unit, gdouble *value)
+{
+    const gchar *text;
+
+    for (; *keys; keys++) {
+        if ((text = meta_string(meta, *keys)) && parse_meta_quantity(text, unit, value))
+            return TRUE;
+    }
+    return FALSE;
+}
+
+static gboolean
+meta_positive(GwyContainer *meta, const gchar *const *keys, const gchar *unit, gdouble *value)
+{
+    gdouble v;
+
+    if (!meta_quantity(meta, keys, unit, &v) || v <= 0.0)
+        return FALSE;
+    *value = v;
+    return TRUE;
+}
+
+static gboolean
+meta_line_time(GwyContainer *meta, gint yres, gdouble *line_time)
+{
+    static const gchar *const line_time_keys[] = { "Line time (s)", "Line time", "Line Time", NULL };
+    static const gchar *const line_rate_keys[] = { "Scan rate", "Scan Rate", "ScanRate", NULL };
+    static const gchar *const frame_time_keys[] = { "Frame time (s)", NULL };
+    gdouble v;
+
+    if (meta_positive(meta, line_time_keys, "s", line_time))
+        return TRUE;
+    if (meta_positive(meta, line_rate_keys, "Hz", &v)) {
+        *line_time = 1.0/v;
+        return TRUE;
+    }
+    if (yres > 0 && meta_positive(meta, frame_time_keys, "s", &v)) {
+        *line_time = v/yres;
+        return TRUE;
+    }
+    return FALSE;
+}
+
+/* The text begins with the word (any case), perhaps followed by more. */
+static gboolean
+starts_with_word(const gchar *text, const gchar *word)
+{
+    gsize len = strlen(word);
+
+    while (g_ascii_isspace(*text))
+        text++;
+    return !g_ascii_strncasecmp(text, word, len) && !g_ascii_isalnum(text[len]);
+}
+
+static gboolean
+meta_direction(GwyContainer *meta, ScanDirection *direction)
+{
+    static const gchar *const keys[] = { "Slow scan", "Frame direction", NULL };
+    const gchar *const *key;
+    const gchar *text;
+
+    for (key = keys; *key; key++) {
+        if (!(text = meta_string(meta, *key)))
+            continue;
+        if (starts_with_word(text, "down")) {
+            *direction = SCAN_DIRECTION_DOWN;
+            return TRUE;
+        }
+        if (starts_with_word(text, "up")) {
+            *direction = SCAN_DIRECTION_UP;
+            return TRUE;
+        }
+    }
+    return FALSE;
+}
+
+/* Nanoscope "Date": "04:06:25 PM Thu Sep 26 2019", as s since 1970 (UTC,
+ * the file does not say its zone; only differences matter). */
+static gboolean
+parse_nanoscope_date(const gchar *text, gdouble *t)
+{
+    static const gchar months[] = "JanFebMarAprMayJunJulAugSepOctNovDec";
+    gint h, m, sec, day, year;
+    gchar ampm[4], wday[4], mon[4];
+    const gchar *p;
+    GDateTime *dt;
+
+    if (sscanf(text, "%d:%d:%d %2s %3s %3s %d %d", &h, &m, &sec, ampm, wday, mon, &day, &year) != 8)
+        return FALSE;
+    if (strlen(mon) != 3 || !(p = strstr(months, mon)) || (p - months) % 3)
+        return FALSE;
+    h %= 12;
+    if (g_ascii_toupper(ampm[0]) == 'P')
+        h += 12;
+    if (!(dt = g_date_time_new_utc(year, (p - months)/3 + 1, day, h, m, sec)))
+        return FALSE;
+    *t = (gdouble)g_date_time_to_unix(dt);
+    g_date_time_unref(dt);
+    return TRUE;
+}
+
+static gboolean
+parse_iso_time(const gchar *text, gdouble *t)
+{
+    GDateTime *dt = g_date_time_new_from_iso8601(text, NULL);
+
+    if (!dt)
+        return FALSE;
+    *t = g_date_time_to_unix(dt) + 1e-6*g_date_time_get_microsecond(dt);
+    g_date_time_unref(dt);
+    return TRUE;
+}
+
+static gboolean
+meta_frame_start(GwyContainer *meta, ScanMetaTiming *timing)
+{
+    static const gchar *const keys[] = {
+        "Frame start (s)", "Time since first kept frame (s)", "Relative frame time", NULL
+    };
+    const gchar *text;
+    gdouble t;
+
+    if (meta_quantity(meta, keys, "s", &t)) {
+        timing->frame_start = t;
+        timing->start_is_end = timing->wall_clock = FALSE;
+        return TRUE;
+    }
+    /* Anasys nanoIR stamps an image when it is stored, that is when its
+     * last line has been scanned. */
+    if ((text = meta_string(meta, "TimeStamp")) && parse_iso_time(text, &t)) {
+        timing->frame_start = t;
+        timing->start_is_end = timing->wall_clock = TRUE;
+        return TRUE;
+    }
+    if ((text = meta_string(meta, "Date")) && parse_nanoscope_date(text, &t)) {
+        timing->frame_start = t;
+        timing->start_is_end = FALSE;
+        timing->wall_clock = TRUE;
+        return TRUE;
+    }
+    return FALSE;
+}
+
+ScanMetaFound
+scan_timing_meta_read(GwyContainer *meta, gint yres, ScanMetaTiming *timing)
+{
+    ScanMetaFound found = 0;
+
+    if (!meta)
+        return 0;
+    if (meta_line_time(meta, yres, &timing->line_time))
+        found |= SCAN_META_LINE_TIME;
+    if (meta_direction(meta, &timing->direction))
+        found |= SCAN_META_DIRECTION;
+    if (meta_frame_start(meta, timing))
+        found |= SCAN_META_FRAME_START;
+    return found;
+}
+
+ScanMetaFound
+scan_timing_meta_read_channel(GwyContainer *data, gint id, ScanMetaTiming *timing)
+{
+    GwyContainer *meta = NULL;
+    GObject *field = NULL;
+    gchar key[32];
+    gint yres = 0;
+
+    g_snprintf(key, sizeof(key), "/%d/data", id);
+    if (gwy_container_gis_object_by_name(data, key, &field) && GWY_IS_DATA_FIELD(field))
+        yres = gwy_data_field_get_yres(GWY_DATA_FIELD(field));
+    g_snprintf(key, sizeof(key), "/%d/meta", id);
+    if (!gwy_container_gis_object_by_name(data, key, &meta) || !GWY_IS_CONTAINER(meta))
+        return 0;
+    return scan_timing_meta_read(meta, yres, timing);
+}
