@@ -8,7 +8,6 @@
 #include <cairo.h>
 #include <fontconfig/fontconfig.h>
 #include <libprocess/stats.h>
-#include "simscan-output.h"
 #include "channel-png.h"
 
 #define CAPTION_FONT_SIZE 14.0
@@ -107,9 +106,8 @@ draw_caption(cairo_t *cr, gchar **lines, gint width, gint top)
     }
 }
 
-gboolean
-channel_png_write_styled(GwyDataField *field, const ChannelPngStyle *style,
-                         const gchar *filename, GError **error)
+GByteArray*
+channel_png_render(GwyDataField *field, const ChannelPngStyle *style)
 {
     gint width = gwy_data_field_get_xres(field)*MAX(style->scale, 1);
     gint height = gwy_data_field_get_yres(field)*MAX(style->scale, 1);
@@ -121,7 +119,6 @@ channel_png_write_styled(GwyDataField *field, const ChannelPngStyle *style,
     cairo_surface_t *surface;
     GByteArray *png = g_byte_array_new();
     cairo_t *cr;
-    gboolean ok;
 
     own.scale = MAX(style->scale, 1);
     surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, width,
@@ -136,9 +133,7 @@ channel_png_write_styled(GwyDataField *field, const ChannelPngStyle *style,
     cairo_surface_write_to_png_stream(surface, append_png, png);
     cairo_surface_destroy(surface);
     g_strfreev(lines);
-    ok = simscan_write_file(filename, png->data, png->len, error);
-    g_byte_array_free(png, TRUE);
-    return ok;
+    return png;
 }
 
 void

@@ -28,11 +28,9 @@ typedef struct {
 void      channel_png_style_init  (ChannelPngStyle *style,
                                    GwyDataField *field);
 
-/* Written atomically (temporary file, rename). */
-gboolean  channel_png_write_styled(GwyDataField *field,
-                                   const ChannelPngStyle *style,
-                                   const gchar *filename,
-                                   GError **error);
+/* The PNG file's bytes (free with g_byte_array_unref()). */
+GByteArray* channel_png_render    (GwyDataField *field,
+                                   const ChannelPngStyle *style);
 
 /* Lets leak checkers see a clean exit once no more captions are drawn
  * (cairo's toy font API caches fonts for the life of the process). */

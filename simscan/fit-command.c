@@ -400,8 +400,8 @@ write_output(const gchar *filename, const gchar *text, GError **error)
         fputc('\n', stdout);
         return TRUE;
     }
-    /* g_file_set_contents writes a temporary file and renames it. */
-    return g_file_set_contents(filename, text, -1, error);
+    return output_files_write_one(filename, (const guchar*)text,
+                                  strlen(text), error);
 }
 
 static gboolean

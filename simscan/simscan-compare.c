@@ -136,25 +136,29 @@ channel_mask(GwyContainer *data, gint id)
 
 /* One picture; the caption is its title line, then what all share. */
 static gboolean
-write_picture(GwyDataField *field, ChannelPngStyle *style, const gchar *title,
-              const gchar *what, const gchar *filename, GError **error)
+add_picture(OutputFiles *files, GwyDataField *field, ChannelPngStyle *style,
+            const gchar *title, const gchar *what, const gchar *filename,
+            GError **error)
 {
-    gchar *caption = g_strdup_printf("%s\n%s\n"
-                                     "%s", title, what,
+    gchar *caption = g_strdup_printf("%s\n%s\n%s", title, what,
                                      style->caption);
     const gchar *shared = style->caption;
+    GByteArray *png;
     gboolean ok;
 
     style->caption = caption;
-    ok = channel_png_write_styled(field, style, filename, error);
+    png = channel_png_render(field, style);
     style->caption = shared;
     g_free(caption);
+    ok = output_files_add(files, filename, png->data, png->len, error);
+    g_byte_array_unref(png);
     return ok;
 }
 
 /* Before, after and truth on one grey scale (the truth's, substrate to
  * highest particle), enlarged to PICTURE_SIZE, with rings where the
- * particles belong, so the drift and its removal can be seen. */
+ * particles belong, so the drift and its removal can be seen.  All three
+ * pictures are written or none. */
 static gboolean
 write_pngs(GwyContainer *data, gint comp_id, const CompareOptions *options,
            const gdouble *truth, gint n, GError **error)
@@ -163,6 +167,7 @@ write_pngs(GwyContainer *data, gint comp_id, const CompareOptions *options,
     GwyDataField *drift_free = channel(data, 1);
     gint res = MAX(gwy_data_field_get_xres(before),
                    gwy_data_field_get_yres(before));
+    OutputFiles *files = output_files_new();
     ChannelPngStyle style;
     gchar *shared;
     gboolean ok;
@@ -175,27 +180,29 @@ write_pngs(GwyContainer *data, gint comp_id, const CompareOptions *options,
     style.caption = shared;
     style.rings = truth;
     style.n_rings = n;
-    ok = ((!options->before_png
-           || write_picture(before, &style,
-                            _("Before: the drift-contaminated scan"),
-                            _("red rings: where the particles truly are"),
-                            options->before_png, error))
-          && (!options->after_png
-              || (style.mask = channel_mask(data, comp_id),
-                  write_picture(after, &style,
-                                _("After: compensated by gwy-localscan "
-                                  "(paper mode)"),
-                                _("red rings: true places; blue: filled "
-                                  "pixels (no data)"),
-                                options->after_png, error))));
+    ok = (!options->before_png
+          || add_picture(files, before, &style,
+                         _("Before: the drift-contaminated scan"),
+                         _("red rings: where the particles truly are"),
+                         options->before_png, error));
+    style.mask = channel_mask(data, comp_id);
+    ok = ok && (!options->after_png
+                || add_picture(files, after, &style,
+                               _("After: compensated by gwy-localscan "
+                                 "(paper mode)"),
+                               _("red rings: true places; blue: filled "
+                                 "pixels (no data)"),
+                               options->after_png, error));
     style.mask = NULL;
     style.n_rings = 0;
     ok = ok && (!options->truth_png || !drift_free
-                || write_picture(drift_free, &style,
-                                 _("Truth: the sample scanned without drift"),
-                                 _("(the local scans saw it shifted by the "
-                                   "drift at their time)"),
-                                 options->truth_png, error));
+                || add_picture(files, drift_free, &style,
+                               _("Truth: the sample scanned without drift"),
+                               _("(the local scans saw it shifted by the "
+                                 "drift at their time)"),
+                               options->truth_png, error));
+    ok = ok && output_files_commit(files, error);
+    output_files_free(files);
     if (options->before_png || options->after_png || options->truth_png)
         channel_png_release_fonts();
     g_free(shared);

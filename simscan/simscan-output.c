@@ -261,13 +261,6 @@ simscan_output_json(const SimscanScene *scene, const SimscanMeasurement *m)
     return text;
 }
 
-gboolean
-simscan_write_file(const gchar *filename, const guchar *data, gsize length,
-                   GError **error)
-{
-    return output_files_write_one(filename, data, length, error);
-}
-
 static GByteArray*
 gwy_file_bytes(const SimscanScene *scene, const SimscanMeasurement *m)
 {

@@ -36,15 +36,10 @@ const gchar*   simscan_output_particles  (GwyContainer *data);
 gchar*         simscan_output_json       (const SimscanScene *scene,
                                           const SimscanMeasurement *m);
 
-/* Writes every output the configuration asks for, all or nothing. */
+/* Writes every output the configuration asks for, all or nothing
+ * (output-files.h). */
 gboolean       simscan_output_write_all  (const SimscanScene *scene,
                                           const SimscanMeasurement *m,
-                                          GError **error);
-
-/* Writes data atomically (output_files_write_one). */
-gboolean       simscan_write_file        (const gchar *filename,
-                                          const guchar *data,
-                                          gsize length,
                                           GError **error);
 
 G_END_DECLS

@@ -8,7 +8,7 @@
 #include <string.h>
 #include <cairo.h>
 #include <fontconfig/fontconfig.h>
-#include "simscan-output.h"
+#include "output-files.h"
 #include "sweep-plot.h"
 #include "simscan-i18n.h"
 
@@ -174,7 +174,7 @@ sweep_plot_write_png(const SweepPoint *points, gint n_points,
      * else draws afterwards, so let leak checkers see a clean exit. */
     cairo_debug_reset_static_data();
     FcFini();
-    ok = simscan_write_file(filename, png->data, png->len, error);
+    ok = output_files_write_one(filename, png->data, png->len, error);
     g_byte_array_free(png, TRUE);
     return ok;
 }

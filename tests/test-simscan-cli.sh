@@ -318,6 +318,25 @@ check
 [ "$(grep -c '^[0-9]*,-\{0,1\}[0-9]' "$tmp/high-id.csv")" -ge 4 ] \
     || fail "--sample with channel id 5000: too few stripes measured"
 
+# simscan compare on files gwy-localscan compensated (when it is built
+# and LOCALSCAN_MODULE points at the module).
+localscan=$(dirname "$simscan")/../tools/gwy-localscan
+if [ -x "$localscan" ] && [ -r "${LOCALSCAN_MODULE:-}" ]; then
+    "$localscan" -o "$tmp/a-paper.gwy" "$tmp/a.gwy" || fail "gwy-localscan (paper) exited non-zero"
+    # The pictures are written all or none.
+    mkdir "$tmp/p-folder"
+    "$simscan" compare "$tmp/a-paper.gwy" --before-png "$tmp/p-before.png" \
+        --after-png "$tmp/p-folder" >"$tmp/out" 2>"$tmp/err"
+    status=$?
+    check
+    [ $status -ne 0 ] || fail "compare with a folder as --after-png exited 0"
+    check
+    [ ! -e "$tmp/p-before.png" ] || fail "compare left --before-png although --after-png failed"
+    rmdir "$tmp/p-folder"
+else
+    echo "test-simscan-cli: SKIPPED the compare checks: $localscan or LOCALSCAN_MODULE missing"
+fi
+
 # The sweep runs and plots.
 "$simscan" sweep $small --n-list 1,4 --plot "$tmp/s.png" >"$tmp/sweep" \
     || fail "sweep exited non-zero"
