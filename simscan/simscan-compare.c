@@ -11,6 +11,7 @@
 #include <libgwymodule/gwymodule-file.h>
 #include <app/gwyapp.h>
 #include "localscan-channel.h"
+#include "localscan-params.h"
 #include "particle-detect.h"
 #include "centre-error.h"
 #include "simscan-output.h"
@@ -59,6 +60,61 @@ find_compensated(GwyContainer *data)
     }
     g_free(ids);
     return found;
+}
+
+/* The mode the channel's log says it was compensated in ("proc::" entries
+ * list the function's parameters): -1 when the log does not say. */
+static gint
+compensation_mode(GwyContainer *data, gint id)
+{
+    static const gchar call[] = "::" LOCALSCAN_FUNCTION_NAME "(";
+    static const gchar key[] = LOCALSCAN_KEY_MODE "=";
+    GwyStringList *log = NULL;
+    const gchar *entry, *p;
+    gchar name[40];
+    gint i, mode = -1;
+    gchar *end;
+
+    g_snprintf(name, sizeof(name), "/%d/data/log", id);
+    if (!gwy_container_gis_object_by_name(data, name, &log)
+        || !GWY_IS_STRING_LIST(log))
+        return -1;
+    /* The last compensation made the channel. */
+    for (i = gwy_string_list_get_length(log) - 1; i >= 0 && mode < 0; i--) {
+        entry = gwy_string_list_get(log, i);
+        if (!entry || !(p = strstr(entry, call)))
+            continue;
+        for (p += strlen(call); (p = strstr(p, key)); p++) {
+            if (p[-1] == '(' || p[-1] == ' ') {
+                mode = (gint)g_ascii_strtoll(p + strlen(key), &end, 10);
+                if (end == p + strlen(key))
+                    mode = -1;
+                break;
+            }
+        }
+    }
+    return mode;
+}
+
+/* The after picture's title: what the file says was done. */
+static const gchar*
+after_title(gint mode)
+{
+    if (mode == LOCALSCAN_MODE_PAPER)
+        return _("After: compensated by local scans (paper mode)");
+    if (mode == LOCALSCAN_MODE_CONTINUOUS)
+        return _("After: compensated by local scans (continuous mode)");
+    return _("After: compensated by local scans");
+}
+
+static const gchar*
+mode_name(gint mode)
+{
+    if (mode == LOCALSCAN_MODE_PAPER)
+        return _("paper mode");
+    if (mode == LOCALSCAN_MODE_CONTINUOUS)
+        return _("continuous mode");
+    return _("mode not recorded");
 }
 
 /* The simulator's particle list: true and shown positions, px. */
@@ -188,8 +244,7 @@ write_pngs(GwyContainer *data, gint comp_id, const CompareOptions *options,
     style.mask = channel_mask(data, comp_id);
     ok = ok && (!options->after_png
                 || add_picture(files, after, &style,
-                               _("After: compensated by gwy-localscan "
-                                 "(paper mode)"),
+                               after_title(compensation_mode(data, comp_id)),
                                _("red rings: true places; blue: filled "
                                  "pixels (no data)"),
                                options->after_png, error));
@@ -238,8 +293,9 @@ compare_file(const gchar *filename, const CompareOptions *options,
         radius = match_radius(truth, n);
         measure(channel(data, 0), shown, truth, n, radius, &before);
         measure(channel(data, comp_id), truth, truth, n, radius, &after);
-        printf(_("%s: particle centres against their true places\n"),
-               filename);
+        printf(_("%s: particle centres against their true places (channel "
+                 "%d, %s)\n"),
+               filename, comp_id, mode_name(compensation_mode(data, comp_id)));
         simscan_report_centre_error(stdout, _("before"), &before);
         simscan_report_centre_error(stdout, _("after"), &after);
     }

@@ -333,6 +333,17 @@ if [ -x "$localscan" ] && [ -r "${LOCALSCAN_MODULE:-}" ]; then
     check
     [ ! -e "$tmp/p-before.png" ] || fail "compare left --before-png although --after-png failed"
     rmdir "$tmp/p-folder"
+    # What compare says was done is what the channel's log records.
+    "$localscan" -m continuous -o "$tmp/a-cont.gwy" "$tmp/a.gwy" \
+        || fail "gwy-localscan (continuous) exited non-zero"
+    for mode in paper continuous; do
+        [ $mode = paper ] && f="$tmp/a-paper.gwy" || f="$tmp/a-cont.gwy"
+        "$simscan" compare "$f" --after-png "$tmp/p-after.png" >"$tmp/out" \
+            || fail "compare ($mode) exited non-zero"
+        check
+        head -n 1 "$tmp/out" | grep -q "channel 2, $mode mode)" \
+            || fail "compare of a $mode-mode file says: $(head -n 1 "$tmp/out")"
+    done
 else
     echo "test-simscan-cli: SKIPPED the compare checks: $localscan or LOCALSCAN_MODULE missing"
 fi
