@@ -516,8 +516,10 @@ simscan_fit_main(int argc, char **argv)
     GError *error = NULL;
     gint status = 1;
 
-    context = g_option_context_new(_("FRAME... - fit drift models to a time "
-                                     "series of frames"));
+    /* The FRAME... entry names the arguments itself. */
+    context = g_option_context_new(_("- fit drift models to a time series of "
+                                     "frames"));
+    g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
     g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
     if (!g_option_context_parse(context, &argc, &argv, &error))
         goto end;
