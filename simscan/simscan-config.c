@@ -1,6 +1,6 @@
 /*
- *  simscan's run configuration: defaults, a measured sample's defaults and
- *  the Figure 6 drift.
+ *  simscan's run configuration: defaults and a measured sample's
+ *  defaults.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -44,26 +44,6 @@ simscan_config_clear(SimscanConfig *config)
     g_free(config->table);
     g_free(config->json);
     config->sample_file = config->output = config->table = config->json = NULL;
-}
-
-void
-simscan_figure6_drift(gint n, gdouble *dx, gdouble *dy)
-{
-    gint s;
-
-    for (s = 0; s < n; s++) {
-        dx[s] = -(s + 1);
-        dy[s] = -((4*s)/n);
-    }
-}
-
-const gchar*
-simscan_preset_name(SimscanPreset preset)
-{
-    static const gchar *const names[] = { "none", "paper", "figure6" };
-
-    g_return_val_if_fail(preset <= SIMSCAN_PRESET_FIGURE6, NULL);
-    return names[preset];
 }
 
 static GQuark

@@ -64,12 +64,6 @@ typedef enum {
 void         simscan_config_init          (SimscanConfig *config);
 void         simscan_config_clear         (SimscanConfig *config);
 
-/* The Figure 6 stripe drift in px: stripe s (0-based) dx = -(s+1), dy =
- * -(s/4), for n = 16; other n repeat the pattern by stripe groups of n/4. */
-void         simscan_figure6_drift        (gint n, gdouble *dx, gdouble *dy);
-
-const gchar* simscan_preset_name          (SimscanPreset preset);
-
 /* Defaults taken from a measured sample for what the user did not give
  * (given: SimscanGiven flags): the scan covers the sample's own size at its
  * own resolution; the local scans' particle radius is the typical radius of

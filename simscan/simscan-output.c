@@ -10,6 +10,7 @@
 #include <libgwyddion/gwyserializable.h>
 #include "localscan-channel.h"
 #include "output-files.h"
+#include "simscan-presets.h"
 #include "simscan-output.h"
 #include "simscan-i18n.h"
 

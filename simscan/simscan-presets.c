@@ -6,6 +6,15 @@
 #include "config.h"
 #include "simscan-presets.h"
 
+const gchar*
+simscan_preset_name(SimscanPreset preset)
+{
+    static const gchar *const names[] = { "none", "paper", "figure6" };
+
+    g_return_val_if_fail(preset <= SIMSCAN_PRESET_FIGURE6, NULL);
+    return names[preset];
+}
+
 gboolean
 simscan_preset_from_name(const gchar *name, SimscanPreset *preset)
 {
@@ -42,5 +51,16 @@ simscan_preset_apply(SimscanConfig *config, SimscanPreset preset)
          * measured on a grain cut by a stripe boundary is part of the honest
          * result (simscan marks such stripes with a star). */
         config->local.choice = PARTICLE_CHOICE_CLOSEST;
+    }
+}
+
+void
+simscan_figure6_drift(gint n, gdouble *dx, gdouble *dy)
+{
+    gint s;
+
+    for (s = 0; s < n; s++) {
+        dx[s] = -(s + 1);
+        dy[s] = -((4*s)/n);
     }
 }

@@ -4,6 +4,7 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include "simscan-presets.h"
 #include "simscan-report.h"
 #include "simscan-i18n.h"
 

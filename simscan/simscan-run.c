@@ -8,6 +8,7 @@
 #include <math.h>
 #include "stripe-geometry.h"
 #include "paper-compensate.h"
+#include "simscan-presets.h"
 #include "simscan-run.h"
 #include "simscan-i18n.h"
 
