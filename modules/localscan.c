@@ -38,6 +38,8 @@ enum {
     PARAM_MODE,
     PARAM_INTERPOLATION,
     PARAM_DIRECTION,
+    PARAM_LINE_TIME,
+    PARAM_FRAME_START,
     PARAM_FILL,
     PARAM_ADD_MASK,
     PARAM_PLOT_DRIFT,
@@ -80,7 +82,7 @@ typedef struct {
     GtkWidget *file_button;
     GwyContainer *data;
     GwyGraphModel *drift_gmodel;
-    gboolean direction_in_meta;
+    LocalscanTimingFound timing_in_meta;
     guint stripes_settle_id;
 } ModuleGUI;
 
@@ -199,6 +201,10 @@ define_module_params(void)
     gwy_param_def_add_gwyenum(paramdef, PARAM_DIRECTION, LOCALSCAN_KEY_DIRECTION, _("Slow scan _direction"),
                               translate_enum(directions, G_N_ELEMENTS(directions)), G_N_ELEMENTS(directions),
                               LOCALSCAN_DEFAULT_DIRECTION);
+    gwy_param_def_add_double(paramdef, PARAM_LINE_TIME, LOCALSCAN_KEY_LINE_TIME, _("_Line time"),
+                             LOCALSCAN_LINE_TIME_MIN, LOCALSCAN_LINE_TIME_MAX, LOCALSCAN_LINE_TIME_DEFAULT);
+    gwy_param_def_add_double(paramdef, PARAM_FRAME_START, LOCALSCAN_KEY_FRAME_START, _("Frame _start"),
+                             LOCALSCAN_FRAME_START_MIN, LOCALSCAN_FRAME_START_MAX, LOCALSCAN_FRAME_START_DEFAULT);
     gwy_param_def_add_gwyenum(paramdef, PARAM_FILL, LOCALSCAN_KEY_FILL, _("_Fill value"),
                               translate_enum(fills, G_N_ELEMENTS(fills)), G_N_ELEMENTS(fills),
                               LOCALSCAN_DEFAULT_FILL);
@@ -446,11 +452,13 @@ execute(ModuleArgs *args, GError **error)
     if (!(args->table = load_drift_table(args, error)))
         return FALSE;
 
-    /* The direction setting is only the fallback for files that do not
-     * say how they were scanned. */
-    args->timing_found = localscan_channel_scan_timing(args->data, args->id,
-                                                       gwy_params_get_enum(params, PARAM_DIRECTION),
-                                                       &args->timing);
+    /* The timing settings are only the fallbacks for files that do not say
+     * how they were scanned. */
+    args->timing_found = localscan_channel_scan_timing_fallback(args->data, args->id,
+                                                                gwy_params_get_double(params, PARAM_LINE_TIME),
+                                                                gwy_params_get_enum(params, PARAM_DIRECTION),
+                                                                gwy_params_get_double(params, PARAM_FRAME_START),
+                                                                &args->timing);
     options.mode = gwy_params_get_enum(params, PARAM_MODE);
     options.fill = gwy_params_get_enum(params, PARAM_FILL);
     options.interpolation = gwy_params_get_enum(params, PARAM_INTERPOLATION);
@@ -575,9 +583,7 @@ run_gui(ModuleArgs *args)
                             GWY_DATA_ITEM_REAL_SQUARE,
                             0);
 
-    gui.direction_in_meta = (localscan_channel_scan_timing(args->data, args->id, SCAN_DIRECTION_DOWN,
-                                                           &args->timing)
-                             & LOCALSCAN_TIMING_DIRECTION);
+    gui.timing_in_meta = localscan_channel_scan_timing(args->data, args->id, SCAN_DIRECTION_DOWN, &args->timing);
     gui.dialog = gwy_dialog_new(_("Local Scan Drift"));
     dialog = GWY_DIALOG(gui.dialog);
     gwy_dialog_add_buttons(dialog, GWY_RESPONSE_RESET, GTK_RESPONSE_CANCEL, GTK_RESPONSE_OK, 0);
@@ -607,6 +613,10 @@ run_gui(ModuleArgs *args)
     gwy_param_table_append_radio(table, PARAM_MODE);
     gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
     gwy_param_table_append_combo(table, PARAM_DIRECTION);
+    gwy_param_table_append_entry(table, PARAM_LINE_TIME);
+    gwy_param_table_set_unitstr(table, PARAM_LINE_TIME, "s");
+    gwy_param_table_append_entry(table, PARAM_FRAME_START);
+    gwy_param_table_set_unitstr(table, PARAM_FRAME_START, "s");
     gwy_param_table_append_combo(table, PARAM_FILL);
     gwy_param_table_append_header(table, -1, _("Output"));
     gwy_param_table_append_checkbox(table, PARAM_ADD_MASK);
@@ -769,8 +779,16 @@ param_changed(ModuleGUI *gui, gint id)
     }
     if (id < 0 || id == PARAM_MODE) {
         gwy_param_table_set_sensitive(table, PARAM_INTERPOLATION, mode == LOCALSCAN_MODE_CONTINUOUS);
+        /* The settings stand in only for what the metadata does not say. */
         gwy_param_table_set_sensitive(table, PARAM_DIRECTION,
-                                      mode == LOCALSCAN_MODE_CONTINUOUS && !gui->direction_in_meta);
+                                      mode == LOCALSCAN_MODE_CONTINUOUS
+                                      && !(gui->timing_in_meta & LOCALSCAN_TIMING_DIRECTION));
+        gwy_param_table_set_sensitive(table, PARAM_LINE_TIME,
+                                      mode == LOCALSCAN_MODE_CONTINUOUS
+                                      && !(gui->timing_in_meta & LOCALSCAN_TIMING_LINE_TIME));
+        gwy_param_table_set_sensitive(table, PARAM_FRAME_START,
+                                      mode == LOCALSCAN_MODE_CONTINUOUS
+                                      && !(gui->timing_in_meta & LOCALSCAN_TIMING_FRAME_START));
     }
     if (id == PARAM_ADD_MASK || id == PARAM_PLOT_DRIFT || id == PARAM_MASK_COLOR)
         return;
@@ -825,17 +843,17 @@ append_registration(GString *status, ModuleArgs *args)
 static void
 append_timing(GString *status, const ScanTiming *timing, LocalscanTimingFound found)
 {
-    const gchar *from_meta = _("metadata"), *assumed = _("assumed");
+    const gchar *from_meta = _("metadata"), *setting = _("setting");
 
     g_string_append_printf(status, _("Line time %g s (%s),"), timing->line_time,
-                           (found & LOCALSCAN_TIMING_LINE_TIME) ? from_meta : assumed);
+                           (found & LOCALSCAN_TIMING_LINE_TIME) ? from_meta : setting);
     g_string_append_c(status, '\n');
     g_string_append_printf(status,
                            timing->direction == SCAN_DIRECTION_UP ? _("slow scan up (%s),") : _("slow scan down (%s),"),
-                           (found & LOCALSCAN_TIMING_DIRECTION) ? from_meta : _("setting"));
+                           (found & LOCALSCAN_TIMING_DIRECTION) ? from_meta : setting);
     g_string_append_c(status, '\n');
     g_string_append_printf(status, _("frame start %g s (%s)."), timing->frame_start,
-                           (found & LOCALSCAN_TIMING_FRAME_START) ? from_meta : assumed);
+                           (found & LOCALSCAN_TIMING_FRAME_START) ? from_meta : setting);
 }
 
 /* Short lines: the message must not widen the dialog. */

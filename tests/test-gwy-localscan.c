@@ -25,6 +25,7 @@
 #include "paper-compensate.h"
 #include "registration-frames.h"
 #include "localscan-channel.h"
+#include "localscan-params.h"
 #include "simscan-file-case.h"
 
 #define TOOL_PATH TEST_BUILDDIR "/tools/gwy-localscan"
@@ -915,7 +916,8 @@ START_TEST(test_help_lists_options)
     static const gchar *options[] = {
         "-o, --output=OUT.gwy", "-d, --drift=TABLE.csv", "-c, --channel=ID",
         "-m, --mode=paper|continuous", "--reference=FILE[:ID]", "--stripes=N",
-        "--write-drift=TABLE.csv", "--version", "INPUT",
+        "--write-drift=TABLE.csv", "--version", "INPUT", "--line-time=S", "--direction=down|up",
+        "--frame-start=S",
     };
     ToolRun run;
     guint i;
@@ -924,6 +926,8 @@ START_TEST(test_help_lists_options)
     ck_assert_int_eq(run.status, 0);
     for (i = 0; i < G_N_ELEMENTS(options); i++)
         ck_assert_msg(strstr(run.out, options[i]), "--help does not list %s:\n%s", options[i], run.out);
+    ck_assert_msg(strstr(run.out, "(the metadata wins; default 1)"),
+                  "--help does not say that the file's timing wins over --line-time:\n%s", run.out);
     ck_assert_msg(strstr(run.out, "(default 16; at most 4096 and the image's rows)"),
                   "--help does not state the module's stripe default and limit:\n%s", run.out);
     ck_assert_msg(strstr(run.out, "timed by the file's metadata"), "--help does not say where continuous mode's "
@@ -1041,6 +1045,14 @@ static const ErrorCase error_cases[] = {
     { "reference id one beyond gint", GOOD_TABLE, NULL,
       { "--reference", "@IN:2147483648", "-o", "@OUT", "@IN", }, 2,
       "gwy-localscan: --reference @IN:2147483648: channel id 2147483648 is out of range (0 to 2147483647)" },
+    { "line time zero", GOOD_TABLE, NULL, { "-m", "continuous", "--line-time", "0", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --line-time must be a number of seconds from 1e-06 to 10000, not '0'" },
+    { "line time not a number", GOOD_TABLE, NULL, { "--line-time", "1s", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --line-time must be a number of seconds from 1e-06 to 10000, not '1s'" },
+    { "frame start NaN", GOOD_TABLE, NULL, { "--frame-start", "nan", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --frame-start must be a number of seconds from -1e+09 to 1e+09, not 'nan'" },
+    { "unknown direction", GOOD_TABLE, NULL, { "--direction", "left", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: unknown direction 'left' (known: down, up)" },
     { "both outputs one file", GOOD_TABLE, NULL, { "-o", "@OUT", "--write-drift", "@OUTDIR/./out.gwy", "@IN", }, 2,
       "gwy-localscan: -o and --write-drift name the same file @OUTDIR/./out.gwy" },
 };
@@ -1217,6 +1229,110 @@ START_TEST(test_write_drift_failure_keeps_old_output)
     g_free(adir);
     g_free(output);
     g_free(input);
+}
+END_TEST
+
+/* Continuous mode's timing options stand in where the file's metadata is
+ * silent and never override it; a table with times matched to an assumed
+ * timing gets one warning line. */
+#define TIMED_TABLE "stripe,dx,dy,t_image,t_local\n0,0,0,2,30\n1,0.5,0.25,5,31\n2,1,0.5,8,32\n"
+
+typedef struct {
+    const gchar *name;
+    const gchar *meta[7];      /* key, value pairs of the channel's metadata */
+    const gchar *args[7];      /* timing options */
+    gdouble line_time;         /* the timing the result must have */
+    ScanDirection direction;
+    gdouble frame_start;
+    const gchar *warning;      /* stderr; NULL: nothing */
+} TimingCase;
+
+static const TimingCase timing_cases[] = {
+    { "nothing known", { NULL }, { NULL }, 1.0, SCAN_DIRECTION_DOWN, 0.0,
+      "gwy-localscan: warning: the table's t_image/t_local times are matched with an assumed line time 1 s "
+      "(--line-time), slow scan down (--direction), frame start 0 s (--frame-start): @IN channel 0 does not say\n" },
+    { "options", { NULL }, { "--line-time", "0.5", "--direction", "up", "--frame-start", "1.5", NULL },
+      0.5, SCAN_DIRECTION_UP, 1.5, NULL },
+    { "line time only", { NULL }, { "--line-time", "0.5", NULL }, 0.5, SCAN_DIRECTION_DOWN, 0.0,
+      "gwy-localscan: warning: the table's t_image/t_local times are matched with an assumed slow scan down "
+      "(--direction), frame start 0 s (--frame-start): @IN channel 0 does not say\n" },
+    { "metadata wins", { "Line time (s)", "1.5", "Slow scan", "up", "Frame start (s)", "-2", NULL },
+      { "--line-time", "0.5", "--direction", "down", "--frame-start", "1.5", NULL },
+      1.5, SCAN_DIRECTION_UP, -2.0, NULL },
+    { "metadata and an option", { "Scan Rate", "4 Hz", NULL }, { "--direction", "up", "--frame-start", "3", NULL },
+      0.25, SCAN_DIRECTION_UP, 3.0, NULL },
+};
+
+static GwyDataField*
+expected_continuous(GwyDataField *source, const DriftTable *table, const TimingCase *tc)
+{
+    GwyDataField *want = gwy_data_field_new_alike(source, FALSE);
+    LocalscanOptions lo;
+
+    lo.mode = LOCALSCAN_MODE_CONTINUOUS;
+    lo.fill = LOCALSCAN_FILL_MEAN;
+    lo.interpolation = LOCALSCAN_DEFAULT_INTERPOLATION;
+    lo.line_time = tc->line_time;
+    lo.direction = tc->direction;
+    lo.frame_start = tc->frame_start;
+    ck_assert(localscan_compensate_field(source, table, &lo, want, NULL, NULL, NULL));
+    return want;
+}
+
+START_TEST(test_continuous_timing_options)
+{
+    const TimingCase *tc = timing_cases + _i;
+    GRand *rng = g_rand_new_with_seed(seed + 11);
+    GwyDataField *field = random_field(rng, 24, 18, 1e-9, 1e-9), *want;
+    GwyContainer *data = gwy_container_new(), *out;
+    gchar *input = in_path("in.gwy"), *output = out_path("out.gwy"), *warning;
+    DriftTable *table = drift_table_parse(TIMED_TABLE, -1, "t", NULL);
+    const gchar *args[16];
+    ToolRun run;
+    guint i, n = 0;
+
+    add_channel(data, 0, field, "Timed", TIMED_TABLE);
+    for (i = 0; tc->meta[i]; i += 2)
+        gwy_container_set_const_string_by_name(channel_meta(data, 0, TRUE), tc->meta[i],
+                                               (const guchar*)tc->meta[i+1]);
+    save_gwy(data, input);
+    args[n++] = "-m";
+    args[n++] = "continuous";
+    for (i = 0; tc->args[i]; i++)
+        args[n++] = tc->args[i];
+    args[n++] = "-o";
+    args[n++] = output;
+    args[n++] = input;
+    args[n] = NULL;
+    run_tool(&run, args);
+    printf("timing case \"%s\": %s", tc->name, *run.err ? run.err : "no warning\n");
+    ck_assert_msg(run.status == 0, "status %d: %s", run.status, run.err);
+    warning = substitute(tc->warning ? tc->warning : "", input, output, "");
+    ck_assert_str_eq(run.err, warning);
+
+    out = load_gwy(output);
+    want = expected_continuous(field, table, tc);
+    if (tc != timing_cases) {
+        /* Else the comparison could not tell the timings apart. */
+        GwyDataField *assumed = expected_continuous(field, table, timing_cases);
+
+        ck_assert(!fields_identical(want, assumed));
+        g_object_unref(assumed);
+    }
+    ck_assert_msg(fields_identical(get_field(out, gwy_app_get_data_key_for_id(1)), want),
+                  "the result is not compensated with line time %g s, direction %d, frame start %g s",
+                  tc->line_time, tc->direction, tc->frame_start);
+
+    g_object_unref(want);
+    g_object_unref(out);
+    g_free(warning);
+    tool_run_clear(&run);
+    drift_table_free(table);
+    g_object_unref(data);
+    g_object_unref(field);
+    g_free(input);
+    g_free(output);
+    g_rand_free(rng);
 }
 END_TEST
 
@@ -1878,6 +1994,7 @@ gwy_localscan_suite(void)
     tcase_add_test(tc, test_user_settings_do_not_leak);
     tcase_add_test(tc, test_nanoscope_input);
     tcase_add_test(tc, test_continuous_mode_accepts_fractions);
+    tcase_add_loop_test(tc, test_continuous_timing_options, 0, G_N_ELEMENTS(timing_cases));
     suite_add_tcase(suite, tc);
 
     tc = tcase_create("continuous on simscan files");

@@ -205,8 +205,12 @@ START_TEST(test_status_names_timing_source)
     static const gchar gentle_table[] = "stripe,dx,dy\n0,0,0\n1,0.5,0\n2,1,0\n";
     DialogProbe with_meta = { "frame start 2.5 s (metadata).", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, FALSE, FALSE,
                               "Line time 1.5 s (metadata),\nslow scan up (metadata),\n", FALSE };
-    DialogProbe without = { "frame start 0 s (assumed).", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, FALSE, FALSE,
-                            "Line time 1 s (assumed),\nslow scan down (setting),\n", FALSE };
+    DialogProbe without = { "frame start 0 s (setting).", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, FALSE, FALSE,
+                            "Line time 1 s (setting),\nslow scan down (setting),\n", FALSE };
+    DialogProbe set = { "frame start 3 s (setting).", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, FALSE, FALSE,
+                        "Line time 0.25 s (setting),\nslow scan up (setting),\n", FALSE };
+    DialogProbe overridden = { "frame start 2.5 s (metadata).", GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, FALSE, FALSE,
+                               "Line time 0.25 s (setting),\nslow scan down (metadata),\n", FALSE };
     GwyContainer *settings = gwy_app_settings_get(), *data, *meta;
 
     set_stored_table_settings();
@@ -215,6 +219,25 @@ START_TEST(test_status_names_timing_source)
     data = make_container(gentle_table);
     run_dialog(data, &without);
     ck_assert_msg(without.found_text && without.found_also, "no timing source shown without metadata");
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+
+    /* The timing settings stand in for what the metadata does not say. */
+    gwy_container_set_double_by_name(settings, LOCALSCAN_SETTINGS_KEY(LINE_TIME), 0.25);
+    gwy_container_set_int32_by_name(settings, LOCALSCAN_SETTINGS_KEY(DIRECTION), SCAN_DIRECTION_UP);
+    gwy_container_set_double_by_name(settings, LOCALSCAN_SETTINGS_KEY(FRAME_START), 3.0);
+    data = make_container(gentle_table);
+    run_dialog(data, &set);
+    ck_assert_msg(set.found_text && set.found_also, "the timing settings are not used");
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+
+    data = make_container(gentle_table);
+    ck_assert(gwy_container_gis_object_by_name(data, "/0/meta", &meta));
+    gwy_container_set_const_string_by_name(meta, "Slow scan", (const guchar*)"down");
+    gwy_container_set_const_string_by_name(meta, "Frame start (s)", (const guchar*)"2.5");
+    run_dialog(data, &overridden);
+    ck_assert_msg(overridden.found_text && overridden.found_also, "the metadata does not win over the settings");
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
 

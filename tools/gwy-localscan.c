@@ -6,6 +6,7 @@
  */
 #include "config.h"
 #include <locale.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,6 +44,9 @@ typedef struct {
     gchar *write_drift;
     gchar *reference;
     gint stripes;
+    gchar *line_time_arg;
+    gchar *direction_name;
+    gchar *frame_start_arg;
     gboolean show_version;
     gchar **inputs;
 } Options;
@@ -74,7 +78,8 @@ static GOptionEntry option_table[] = {
     { "mode", 'm', 0, G_OPTION_ARG_STRING, &options.mode_name,
       N_("Compensation mode: paper (default) or continuous (line by line, "
          "timed by the file's metadata: line time or line rate, slow-scan "
-         "direction, frame start)"),
+         "direction, frame start; where it says nothing, by --line-time, "
+         "--direction, --frame-start)"),
       N_("paper|continuous") },
     { "reference", 0, 0, G_OPTION_ARG_FILENAME, &options.reference,
       N_("Measure the drift by registering stripes of the image against "
@@ -83,6 +88,16 @@ static GOptionEntry option_table[] = {
          "channel ID of INPUT.  Not with -d"), N_("FILE[:ID]") },
     { "stripes", 0, 0, G_OPTION_ARG_INT, &options.stripes,
       NULL, N_("N") },   /* stripes_help() */
+    { "line-time", 0, 0, G_OPTION_ARG_STRING, &options.line_time_arg,
+      N_("Continuous mode: seconds per scan line, trace and retrace, where the "
+         "file's metadata does not give it (the metadata wins; default 1)"), N_("S") },
+    { "direction", 0, 0, G_OPTION_ARG_STRING, &options.direction_name,
+      N_("Continuous mode: slow-scan direction where the file's metadata does "
+         "not give it (the metadata wins; default down)"), N_("down|up") },
+    { "frame-start", 0, 0, G_OPTION_ARG_STRING, &options.frame_start_arg,
+      N_("Continuous mode: start of the frame, seconds in the clock of the "
+         "table's t_image and t_local, where the file's metadata does not give "
+         "it (the metadata wins; default 0)"), N_("S") },
     { "write-drift", 0, 0, G_OPTION_ARG_FILENAME, &options.write_drift,
       N_("Also write the drift table used to TABLE.csv"), N_("TABLE.csv") },
     { "version", 0, 0, G_OPTION_ARG_NONE, &options.show_version,
@@ -90,6 +105,19 @@ static GOptionEntry option_table[] = {
     { G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &options.inputs,
       NULL, N_("INPUT") },
     { NULL, 0, 0, 0, NULL, NULL, NULL },
+};
+
+/* Continuous mode's timing where the metadata does not say, and which
+ * parts the command line gave. */
+typedef struct {
+    gdouble line_time;
+    ScanDirection direction;
+    gdouble frame_start;
+    LocalscanTimingFound given;
+} TimingFallback;
+
+static TimingFallback timing_fallback = {
+    LOCALSCAN_LINE_TIME_DEFAULT, LOCALSCAN_DEFAULT_DIRECTION, LOCALSCAN_FRAME_START_DEFAULT, 0,
 };
 
 /* The modes of -m; whole_pixels is what the module's validation of the
@@ -128,6 +156,9 @@ free_options(void)
     g_free(options.mode_name);
     g_free(options.write_drift);
     g_free(options.reference);
+    g_free(options.line_time_arg);
+    g_free(options.direction_name);
+    g_free(options.frame_start_arg);
     g_free(reference_spec.file);
     g_strfreev(options.inputs);
 }
@@ -311,6 +342,55 @@ check_outputs_distinct(GError **error)
     return ok;
 }
 
+/* A whole argument that is a finite number within [min, max]. */
+static gboolean
+parse_seconds(const gchar *option, const gchar *arg, gdouble min, gdouble max, gdouble *value,
+              GError **error)
+{
+    gchar *end;
+    gdouble v = g_ascii_strtod(arg, &end);
+
+    if (end == arg || *end || !isfinite(v) || v < min || v > max) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("%s must be a number of seconds from %g to %g, not '%s'"), option, min, max, arg);
+        return FALSE;
+    }
+    *value = v;
+    return TRUE;
+}
+
+static gboolean
+parse_timing_options(GError **error)
+{
+    TimingFallback *tf = &timing_fallback;
+
+    if (options.line_time_arg) {
+        if (!parse_seconds("--line-time", options.line_time_arg,
+                           LOCALSCAN_LINE_TIME_MIN, LOCALSCAN_LINE_TIME_MAX, &tf->line_time, error))
+            return FALSE;
+        tf->given |= LOCALSCAN_TIMING_LINE_TIME;
+    }
+    if (options.frame_start_arg) {
+        if (!parse_seconds("--frame-start", options.frame_start_arg,
+                           LOCALSCAN_FRAME_START_MIN, LOCALSCAN_FRAME_START_MAX, &tf->frame_start, error))
+            return FALSE;
+        tf->given |= LOCALSCAN_TIMING_FRAME_START;
+    }
+    if (options.direction_name) {
+        if (gwy_strequal(options.direction_name, "down"))
+            tf->direction = SCAN_DIRECTION_DOWN;
+        else if (gwy_strequal(options.direction_name, "up"))
+            tf->direction = SCAN_DIRECTION_UP;
+        else {
+            g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                        _("unknown direction '%s' (known: down, up)"), options.direction_name);
+            return FALSE;
+        }
+        tf->given |= LOCALSCAN_TIMING_DIRECTION;
+    }
+    return TRUE;
+}
+
 static const CompensationMode*
 check_command_line(GError **error)
 {
@@ -347,6 +427,8 @@ check_command_line(GError **error)
         return NULL;
     }
     if (options.reference && !parse_reference(options.reference, &reference_spec, error))
+        return NULL;
+    if (!parse_timing_options(error))
         return NULL;
     if (!check_outputs_distinct(error))
         return NULL;
@@ -566,6 +648,9 @@ compensate_channel(GwyContainer *data, gint id, const gchar *table_file,
                      ? LOCALSCAN_SOURCE_FILE : LOCALSCAN_SOURCE_STORED);
     params.table_file = table_file;
     params.mode = mode->value;
+    params.line_time = timing_fallback.line_time;
+    params.direction = timing_fallback.direction;
+    params.frame_start = timing_fallback.frame_start;
     localscan_settings_apply(&params);
     return headless_run_process(data, id, LOCALSCAN_FUNCTION_NAME, error) >= 0;
 }
@@ -621,6 +706,42 @@ save_results(GwyContainer *data, const DriftTable *table, GError **error)
     return ok;
 }
 
+/* Times in the table are compared with the scan's own: a timing neither the
+ * file nor the command line gave is a guess the user should know of. */
+static void
+warn_assumed_timing(GwyContainer *data, const gchar *filename, gint id, const DriftTable *table,
+                    const CompensationMode *mode)
+{
+    const TimingFallback *tf = &timing_fallback;
+    LocalscanTimingFound known;
+    GString *parts;
+    ScanTiming timing;
+
+    if (mode->value != LOCALSCAN_MODE_CONTINUOUS
+        || (drift_table_find_column(table, "t_image") < 0 && drift_table_find_column(table, "t_local") < 0))
+        return;
+    known = tf->given | localscan_channel_scan_timing_fallback(data, id, tf->line_time, tf->direction,
+                                                               tf->frame_start, &timing);
+    if ((known & LOCALSCAN_TIMING_LINE_TIME) && (known & LOCALSCAN_TIMING_DIRECTION)
+        && (known & LOCALSCAN_TIMING_FRAME_START))
+        return;
+    parts = g_string_new(NULL);
+    if (!(known & LOCALSCAN_TIMING_LINE_TIME))
+        g_string_append_printf(parts, _("line time %g s (--line-time)"), timing.line_time);
+    if (!(known & LOCALSCAN_TIMING_DIRECTION)) {
+        g_string_append(parts, parts->len ? ", " : "");
+        g_string_append(parts, timing.direction == SCAN_DIRECTION_UP
+                               ? _("slow scan up (--direction)") : _("slow scan down (--direction)"));
+    }
+    if (!(known & LOCALSCAN_TIMING_FRAME_START)) {
+        g_string_append(parts, parts->len ? ", " : "");
+        g_string_append_printf(parts, _("frame start %g s (--frame-start)"), timing.frame_start);
+    }
+    fprintf(stderr, _("%s: warning: the table's t_image/t_local times are matched with an assumed %s: "
+                      "%s channel %d does not say\n"), PROGRAM_NAME, parts->str, filename, id);
+    g_string_free(parts, TRUE);
+}
+
 static gboolean
 run_batch(const CompensationMode *mode, GError **error)
 {
@@ -640,6 +761,7 @@ run_batch(const CompensationMode *mode, GError **error)
     field = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
     if (!check_table_fits(table, field, mode, error))
         goto end;
+    warn_assumed_timing(data, input, id, table, mode);
 
     if (options.reference)
         ok = compensate_with_measured(data, id, table, mode, error);

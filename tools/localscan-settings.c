@@ -25,6 +25,9 @@ localscan_settings_apply(const LocalscanBatchParams *params)
                                          (const guchar*)table_file);
     }
     gwy_container_set_int32_by_name(settings, KEY(MODE), params->mode);
+    gwy_container_set_double_by_name(settings, KEY(LINE_TIME), params->line_time);
+    gwy_container_set_int32_by_name(settings, KEY(DIRECTION), params->direction);
+    gwy_container_set_double_by_name(settings, KEY(FRAME_START), params->frame_start);
     gwy_container_set_int32_by_name(settings, KEY(FILL), LOCALSCAN_FILL_MEAN);
     gwy_container_set_boolean_by_name(settings, KEY(ADD_MASK), TRUE);
     gwy_container_set_boolean_by_name(settings, KEY(PLOT_DRIFT), FALSE);

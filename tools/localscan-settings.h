@@ -13,13 +13,17 @@
 
 G_BEGIN_DECLS
 
-/* What a batch run decides; everything else the module reads (interpolation
- * and scan direction of continuous mode) stays as the user's settings have
- * it, as in a pygwy script. */
+/* What a batch run decides; everything else the module reads (the
+ * interpolation of continuous mode) stays as the user's settings have it, as
+ * in a pygwy script. */
 typedef struct {
     LocalscanSource source;
     const gchar *table_file;     /* LOCALSCAN_SOURCE_FILE only */
     LocalscanMode mode;
+    /* Continuous mode's timing where the file's metadata does not say. */
+    gdouble line_time;
+    ScanDirection direction;
+    gdouble frame_start;
     /* Reference registration adds the reference image and stripe count. */
 } LocalscanBatchParams;
 

@@ -100,6 +100,15 @@ LocalscanTimingFound
 localscan_channel_scan_timing(GwyContainer *data, gint id, ScanDirection fallback_direction,
                               ScanTiming *timing)
 {
+    return localscan_channel_scan_timing_fallback(data, id, LOCALSCAN_DEFAULT_LINE_TIME, fallback_direction,
+                                                  0.0, timing);
+}
+
+LocalscanTimingFound
+localscan_channel_scan_timing_fallback(GwyContainer *data, gint id, gdouble fallback_line_time,
+                                       ScanDirection fallback_direction, gdouble fallback_frame_start,
+                                       ScanTiming *timing)
+{
     ScanMetaTiming meta;
     ScanMetaFound meta_found;
     LocalscanTimingFound found = 0;
@@ -112,9 +121,9 @@ localscan_channel_scan_timing(GwyContainer *data, gint id, ScanDirection fallbac
         xres = gwy_data_field_get_xres(field);
         yres = gwy_data_field_get_yres(field);
     }
-    meta.line_time = LOCALSCAN_DEFAULT_LINE_TIME;
+    meta.line_time = fallback_line_time;
     meta.direction = fallback_direction;
-    meta.frame_start = 0.0;
+    meta.frame_start = fallback_frame_start;
     meta_found = scan_timing_meta_read_channel(data, id, &meta);
     if (meta_found & SCAN_META_LINE_TIME)
         found |= LOCALSCAN_TIMING_LINE_TIME;
@@ -124,7 +133,7 @@ localscan_channel_scan_timing(GwyContainer *data, gint id, ScanDirection fallbac
     if ((meta_found & SCAN_META_FRAME_START) && !meta.wall_clock)
         found |= LOCALSCAN_TIMING_FRAME_START;
     else
-        meta.frame_start = 0.0;
+        meta.frame_start = fallback_frame_start;
     scan_timing_init(timing, xres, yres, meta.frame_start, meta.line_time, meta.direction);
     return found;
 }

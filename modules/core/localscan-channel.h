@@ -116,6 +116,15 @@ LocalscanTimingFound localscan_channel_scan_timing(GwyContainer *data,
                                                    gint id,
                                                    ScanDirection fallback_direction,
                                                    ScanTiming *timing);
+/* The same with every fallback given: the module's settings (line time,
+ * slow-scan direction, frame start) stand in for what the metadata does
+ * not say; the metadata always wins. */
+LocalscanTimingFound localscan_channel_scan_timing_fallback(GwyContainer *data,
+                                                            gint id,
+                                                            gdouble fallback_line_time,
+                                                            ScanDirection fallback_direction,
+                                                            gdouble fallback_frame_start,
+                                                            ScanTiming *timing);
 
 gdouble      localscan_fill_value            (GwyDataField *field,
                                               LocalscanFill fill);

@@ -28,6 +28,8 @@
 #define LOCALSCAN_KEY_MODE              "mode"
 #define LOCALSCAN_KEY_INTERPOLATION     "interpolation"
 #define LOCALSCAN_KEY_DIRECTION         "direction"
+#define LOCALSCAN_KEY_LINE_TIME         "line-time"
+#define LOCALSCAN_KEY_FRAME_START       "frame-start"
 #define LOCALSCAN_KEY_FILL              "fill"
 #define LOCALSCAN_KEY_ADD_MASK          "add-mask"
 #define LOCALSCAN_KEY_PLOT_DRIFT        "plot-drift"
@@ -45,6 +47,17 @@
 #define LOCALSCAN_STRIPES_MIN           1
 #define LOCALSCAN_STRIPES_MAX           4096
 #define LOCALSCAN_STRIPES_DEFAULT       16
+
+/* Scan timing used where the channel's metadata does not give it
+ * (continuous mode; the metadata always wins): seconds per line, trace and
+ * retrace, and the frame's start in the clock of the table's t_image,
+ * t_local. */
+#define LOCALSCAN_LINE_TIME_MIN         1e-6
+#define LOCALSCAN_LINE_TIME_MAX         1e4
+#define LOCALSCAN_LINE_TIME_DEFAULT     LOCALSCAN_DEFAULT_LINE_TIME
+#define LOCALSCAN_FRAME_START_MIN       -1e9
+#define LOCALSCAN_FRAME_START_MAX       1e9
+#define LOCALSCAN_FRAME_START_DEFAULT   0.0
 
 /* A channel id of the image's own file, for batch callers; -1: none. */
 #define LOCALSCAN_REFERENCE_CHANNEL_NONE -1
