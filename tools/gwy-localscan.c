@@ -16,6 +16,7 @@
 #include <app/gwyapp.h>
 #include "drift-table.h"
 #include "stripe-registration.h"
+#include "continuous-compensate.h"
 #include "channel-spec.h"
 #include "headless-run.h"
 #include "localscan-settings.h"
@@ -618,20 +619,67 @@ obtain_drift_table(GwyContainer *data, const gchar *filename, gint id,
     return load_stored_table(data, filename, id, error);
 }
 
-/* The same checks the module makes, so that every problem is reported here
- * with file and line instead of as a silent no-op of the module. */
+/* The interpolation continuous mode will use: the user's, as in a pygwy
+ * script. */
+static GwyInterpolationType
+settings_interpolation(void)
+{
+    gint32 interpolation = LOCALSCAN_DEFAULT_INTERPOLATION;
+
+    gwy_container_gis_int32_by_name(gwy_app_settings_get(), LOCALSCAN_SETTINGS_KEY(INTERPOLATION),
+                                    &interpolation);
+    return interpolation;
+}
+
+/* Continuous compensation done here as the module will do it, so that its
+ * refusals name the table as the user named it (not the absolute path the
+ * module is given); the few that do not name it get its name. */
 static gboolean
-check_table_fits(const DriftTable *table, GwyDataField *field,
+check_continuous(GwyContainer *data, gint id, const DriftTable *table, GwyDataField *field,
+                 GError **error)
+{
+    const TimingFallback *tf = &timing_fallback;
+    GwyDataField *result = gwy_data_field_new_alike(field, FALSE);
+    LocalscanOptions lo;
+    ScanTiming timing;
+    GError *err = NULL;
+    gboolean ok;
+
+    localscan_channel_scan_timing_fallback(data, id, tf->line_time, tf->direction, tf->frame_start, &timing);
+    lo.mode = LOCALSCAN_MODE_CONTINUOUS;
+    lo.fill = LOCALSCAN_FILL_MEAN;
+    lo.interpolation = settings_interpolation();
+    lo.line_time = timing.line_time;
+    lo.direction = timing.direction;
+    lo.frame_start = timing.frame_start;
+    ok = localscan_compensate_field(field, table, &lo, result, NULL, NULL, &err);
+    g_object_unref(result);
+    if (ok)
+        return TRUE;
+    if (g_error_matches(err, CONTINUOUS_COMPENSATE_ERROR, CONTINUOUS_COMPENSATE_ERROR_TOO_FAST))
+        g_set_error(error, err->domain, err->code, "%s: %s", table->source_name, err->message);
+    else
+        g_propagate_error(error, g_error_copy(err));
+    g_error_free(err);
+    return FALSE;
+}
+
+/* The same checks the module makes, so that every problem is reported here
+ * with file and line instead of as a silent no-op of the module or its
+ * message about a file name it was given. */
+static gboolean
+check_table_fits(GwyContainer *data, gint id, const DriftTable *table, GwyDataField *field,
                  const CompensationMode *mode, GError **error)
 {
     gdouble *dx = g_new(gdouble, table->n_stripes);
     gdouble *dy = g_new(gdouble, table->n_stripes);
     gboolean ok;
 
-    ok = localscan_table_to_field_pixels(table, field, mode->whole_pixels,
-                                         dx, dy, error);
+    ok = localscan_table_to_field_pixels(table, field, mode->whole_pixels, dx, dy, error);
     g_free(dx);
     g_free(dy);
+    if (ok && mode->value == LOCALSCAN_MODE_CONTINUOUS)
+        ok = check_continuous(data, id, table, field, error);
     return ok;
 }
 
@@ -759,7 +807,7 @@ run_batch(const CompensationMode *mode, GError **error)
     if (!(table = obtain_drift_table(data, input, id, mode, error)))
         goto end;
     field = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
-    if (!check_table_fits(table, field, mode, error))
+    if (!check_table_fits(data, id, table, field, mode, error))
         goto end;
     warn_assumed_timing(data, input, id, table, mode);
 
