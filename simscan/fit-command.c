@@ -425,10 +425,9 @@ run_fit(const FitArgs *args, gchar **files, gint n_files, GError **error)
     if (!choose_blocks(series, numbers.blocks, &doptions.n_blocks, error))
         goto end;
     drift_fit_options_init(&foptions);
-    /* A block averages the drift over its lines: periods and time constants
-     * shorter than a few blocks cannot be told from registration error. */
-    foptions.min_period = 3.0*series->frames[0].timing.line_time
-                          * series->frames[0].timing.yres/doptions.n_blocks;
+    foptions.min_period = drift_fit_min_period(series->frames[0].timing.line_time,
+                                               series->frames[0].timing.yres,
+                                               doptions.n_blocks);
     if (numbers.bic_margin >= 0.0)
         foptions.bic_margin = numbers.bic_margin;
     if (!fit_report_compute(series, &doptions, &foptions, &report)) {
