@@ -18,7 +18,6 @@
 #include "localscan-channel.h"
 #include "localscan-params.h"
 #include "stripe-registration.h"
-#include "stripe-geometry.h"
 
 /* Our strings live in our own domain, not in Gwyddion's. */
 #undef _
@@ -308,26 +307,14 @@ remember_reference_channel(ModuleArgs *args)
     gwy_params_set_int(args->params, PARAM_REFERENCE_CHANNEL, channel);
 }
 
-static gchar*
-format_field_size(GwyDataField *field)
-{
-    GwySIValueFormat *vf = gwy_data_field_get_value_format_xy(field, GWY_SI_UNIT_FORMAT_PLAIN, NULL);
-    gchar *text;
-
-    text = g_strdup_printf("%d x %d px, %.*f x %.*f%s%s",
-                           gwy_data_field_get_xres(field), gwy_data_field_get_yres(field),
-                           vf->precision, gwy_data_field_get_xreal(field)/vf->magnitude,
-                           vf->precision, gwy_data_field_get_yreal(field)/vf->magnitude,
-                           *vf->units ? " " : "", vf->units);
-    gwy_si_unit_value_format_free(vf);
-    return text;
-}
-
+/* The chosen reference, checked to be another scan of the image's area
+ * that the stripe count fits. */
 static GwyDataField*
 find_reference(ModuleArgs *args, GwyAppDataId *refid, GError **error)
 {
     GwyDataField *reference;
-    gchar *refsize, *size;
+    gchar *image_name, *reference_name;
+    gboolean ok;
 
     *refid = gwy_params_get_data_id(args->params, PARAM_REFERENCE);
     if (refid->id < 0 && args->batch_reference >= 0) {
@@ -350,17 +337,13 @@ find_reference(ModuleArgs *args, GwyAppDataId *refid, GError **error)
                     _("The reference must be another channel than the image itself."));
         return NULL;
     }
-    if (!reference_filter(gwy_app_data_browser_get(refid->datano), refid->id, args)) {
-        refsize = format_field_size(reference);
-        size = format_field_size(args->field);
-        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE,
-                    _("The reference channel %d (%s) is not a scan of the image's size (%s)."),
-                    refid->id, refsize, size);
-        g_free(refsize);
-        g_free(size);
-        return NULL;
-    }
-    return reference;
+    image_name = g_strdup_printf(_("channel %d"), args->id);
+    reference_name = g_strdup_printf(_("channel %d"), refid->id);
+    ok = localscan_reference_check(args->field, image_name, reference, reference_name,
+                                   gwy_params_get_int(args->params, PARAM_STRIPES), error);
+    g_free(reference_name);
+    g_free(image_name);
+    return ok ? reference : NULL;
 }
 
 static void
@@ -378,17 +361,12 @@ static const DriftTable*
 measure_reference_drift(ModuleArgs *args, GError **error)
 {
     MeasuredDrift *measured = &args->measured;
-    gint n = gwy_params_get_int(args->params, PARAM_STRIPES), yres = gwy_data_field_get_yres(args->field);
+    gint n = gwy_params_get_int(args->params, PARAM_STRIPES);
     GwyDataField *reference;
     GwyAppDataId refid;
 
     if (!(reference = find_reference(args, &refid, error)))
         return NULL;
-    if (n > yres) {
-        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_STRIPES,
-                    _("%d stripes do not fit an image of %d rows."), n, yres);
-        return NULL;
-    }
     if (!measured->valid || measured->stripes != n
         || measured->reference.datano != refid.datano || measured->reference.id != refid.id) {
         measured_drift_clear(measured);
@@ -502,23 +480,19 @@ create_outputs(ModuleArgs *args)
         add_drift_graph(args);
 }
 
-static void
-add_drift_graph(ModuleArgs *args)
+/* The two curves, dx and dy over the stripes' y positions, in the image's
+ * lateral unit. */
+static GwyGraphModel*
+new_drift_graph_model(GwyDataField *field)
 {
     static const gchar *names[2] = { "dx", "dy" };
-    GwyAppDataId target = GWY_APP_DATA_ID_NONE;
-    gint n = args->applied.n_stripes, i;
+    GwySIUnit *unit = gwy_data_field_get_si_unit_xy(field);
     GwyGraphCurveModel *gcmodel;
     GwyGraphModel *gmodel;
-    GwySIUnit *unit;
-    gdouble *ypos = g_new(gdouble, n), *dx = g_new(gdouble, n), *dy = g_new(gdouble, n);
-    gdouble *curves[2] = { dx, dy };
+    gint i;
 
-    localscan_applied_to_physical(&args->applied, args->field, ypos, dx, dy);
-    unit = gwy_data_field_get_si_unit_xy(args->field);
     gmodel = gwy_graph_model_new();
     g_object_set(gmodel,
-                 "title", _("Local-scan drift"),
                  "axis-label-bottom", "y",
                  "axis-label-left", _("drift"),
                  "si-unit-x", unit,
@@ -526,7 +500,6 @@ add_drift_graph(ModuleArgs *args)
                  NULL);
     for (i = 0; i < 2; i++) {
         gcmodel = gwy_graph_curve_model_new();
-        gwy_graph_curve_model_set_data(gcmodel, ypos, curves[i], n);
         g_object_set(gcmodel,
                      "description", names[i],
                      "mode", GWY_GRAPH_CURVE_LINE_POINTS,
@@ -535,11 +508,30 @@ add_drift_graph(ModuleArgs *args)
         gwy_graph_model_add_curve(gmodel, gcmodel);
         g_object_unref(gcmodel);
     }
+    return gmodel;
+}
+
+static void
+set_drift_curves(GwyGraphModel *gmodel, const gdouble *ypos, const gdouble *dx, const gdouble *dy, gint n)
+{
+    gwy_graph_curve_model_set_data(gwy_graph_model_get_curve(gmodel, 0), ypos, dx, n);
+    gwy_graph_curve_model_set_data(gwy_graph_model_get_curve(gmodel, 1), ypos, dy, n);
+}
+
+static void
+add_drift_graph(ModuleArgs *args)
+{
+    GwyAppDataId target = GWY_APP_DATA_ID_NONE;
+    gint n = args->applied.n_stripes;
+    GwyGraphModel *gmodel = new_drift_graph_model(args->field);
+    gdouble *ypos = g_new(gdouble, 3*n), *dx = ypos + n, *dy = dx + n;
+
+    localscan_applied_to_physical(&args->applied, args->field, ypos, dx, dy);
+    set_drift_curves(gmodel, ypos, dx, dy, n);
+    g_object_set(gmodel, "title", _("Local-scan drift"), NULL);
     gwy_app_add_graph_or_curves(gmodel, args->data, &target, 1);
     g_object_unref(gmodel);
     g_free(ypos);
-    g_free(dx);
-    g_free(dy);
 }
 
 /* Without a GUI (batch, pygwy, the command-line tool) the message is the
@@ -641,32 +633,14 @@ run_gui(ModuleArgs *args)
 
 /* The drift each stripe of the table states (measured, for a reference),
  * in the lateral unit; stripes without a drift have no point. */
+/* The drift each stripe of the table states (measured, for a reference),
+ * in the lateral unit; stripes without a drift have no point. */
 static GtkWidget*
 create_drift_graph(ModuleGUI *gui)
 {
-    static const gchar *names[2] = { "dx", "dy" };
-    GwySIUnit *unit = gwy_data_field_get_si_unit_xy(gui->args->field);
-    GwyGraphCurveModel *gcmodel;
     GtkWidget *graph;
-    gint i;
 
-    gui->drift_gmodel = gwy_graph_model_new();
-    g_object_set(gui->drift_gmodel,
-                 "axis-label-bottom", "y",
-                 "axis-label-left", _("drift"),
-                 "si-unit-x", unit,
-                 "si-unit-y", unit,
-                 NULL);
-    for (i = 0; i < 2; i++) {
-        gcmodel = gwy_graph_curve_model_new();
-        g_object_set(gcmodel,
-                     "description", names[i],
-                     "mode", GWY_GRAPH_CURVE_LINE_POINTS,
-                     "color", gwy_graph_get_preset_color(i),
-                     NULL);
-        gwy_graph_model_add_curve(gui->drift_gmodel, gcmodel);
-        g_object_unref(gcmodel);
-    }
+    gui->drift_gmodel = new_drift_graph_model(gui->args->field);
     graph = gwy_graph_new(gui->drift_gmodel);
     gwy_graph_enable_user_input(GWY_GRAPH(graph), FALSE);
     gtk_widget_set_size_request(graph, PREVIEW_SIZE, DRIFT_GRAPH_HEIGHT);
@@ -678,13 +652,12 @@ static gint
 stated_drift(ModuleArgs *args, gdouble *ypos, gdouble *dx, gdouble *dy)
 {
     GwyDataField *field = args->field;
-    gint n = args->table->n_stripes, yres = gwy_data_field_get_yres(field), count, k;
+    gint n = args->table->n_stripes, count, k;
     gint *stripes = g_new(gint, n);
 
     count = localscan_table_stated_px(args->table, field, stripes, dx, dy, NULL);
     for (k = 0; k < count; k++) {
-        ypos[k] = gwy_data_field_get_yoffset(field)
-                  + (stripe_centre_row(stripes[k], n, yres) + 0.5)*gwy_data_field_get_dy(field);
+        ypos[k] = localscan_stripe_centre_y(field, stripes[k], n);
         dx[k] *= gwy_data_field_get_dx(field);
         dy[k] *= gwy_data_field_get_dy(field);
     }
@@ -701,8 +674,7 @@ update_drift_graph(ModuleGUI *gui, gboolean ok)
 
     if (ok)
         count = stated_drift(args, ypos, dx, dy);
-    gwy_graph_curve_model_set_data(gwy_graph_model_get_curve(gui->drift_gmodel, 0), ypos, dx, count);
-    gwy_graph_curve_model_set_data(gwy_graph_model_get_curve(gui->drift_gmodel, 1), ypos, dy, count);
+    set_drift_curves(gui->drift_gmodel, ypos, dx, dy, count);
     g_free(ypos);
 }
 
@@ -759,9 +731,7 @@ reference_filter(GwyContainer *data, gint id, gpointer user_data)
         return FALSE;
     if (!gwy_container_gis_object(data, gwy_app_get_data_key_for_id(id), &other))
         return FALSE;
-    return !gwy_data_field_check_compatibility(args->field, other,
-                                               GWY_DATA_COMPATIBILITY_RES | GWY_DATA_COMPATIBILITY_REAL
-                                               | GWY_DATA_COMPATIBILITY_LATERAL);
+    return localscan_reference_fits(args->field, other);
 }
 
 static void

@@ -1799,9 +1799,9 @@ static const ReferenceErrorCase reference_error_cases[] = {
       "gwy-localscan: the reference @IN channel 0 is the image itself: "
       "name another channel with --reference FILE:ID" },
     { "reference of another size", { "--reference", ":2", "-o", "@OUT", "@IN", }, 1,
-      "gwy-localscan: the reference @IN channel 2 is 80 x 160 px but the image @IN channel 0 is 160 x 160 px" },
+      "gwy-localscan: the reference @IN channel 2 (80 x 160 px, *" },
     { "more stripes than rows", { "--reference", ":1", "--stripes", "161", "-o", "@OUT", "@IN", }, 1,
-      "gwy-localscan: --stripes 161 is more than the 160 rows of the image @IN channel 0" },
+      "gwy-localscan: 161 stripes do not fit the 160 rows of the image @IN channel 0" },
     { "nothing matches", { "--reference", ":1", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: no stripe of @IN channel 0 matched the reference @IN channel 1" },
 };

@@ -1102,8 +1102,8 @@ START_TEST(test_reference_refused)
     check_reference_refused(data, 1, REF_STRIPES, "another channel than the image itself");
     check_reference_refused(data, 7, REF_STRIPES, "reference channel 7 does not exist");
     check_reference_refused(data, 2, REF_STRIPES, "reference channel 2 (128 x 256 px");
-    check_reference_refused(data, 3, REF_STRIPES, "is not a scan of the image's size (256 x 256 px");
-    check_reference_refused(data, 0, REF_SIZE + 1, "257 stripes do not fit an image of 256 rows");
+    check_reference_refused(data, 3, REF_STRIPES, "is not a scan of the size of the image channel 1 (256 x 256 px");
+    check_reference_refused(data, 0, REF_SIZE + 1, "257 stripes do not fit the 256 rows of the image channel 1");
     ck_assert_int_eq(count_ids(gwy_app_data_browser_get_data_ids(data)), 4);
 
     g_object_unref(narrow);

@@ -474,61 +474,27 @@ pick_channel(GwyContainer *data, const gchar *filename, gint wanted,
     return id;
 }
 
+/* Messages read "in.gwy, channel 0 drift table:LINE: ...". */
 static DriftTable*
-load_stored_table(GwyContainer *data, const gchar *filename, gint id,
-                  GError **error)
+load_stored_table(GwyContainer *data, const gchar *filename, gint id, GError **error)
 {
-    const gchar *text = localscan_channel_stored_table_text(data, id);
-    DriftTable *table = NULL;
-    gchar *label;
+    GError *err = NULL;
+    DriftTable *table;
 
-    if (!text) {
-        g_set_error(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_IO,
-                    _("%s: channel %d has no stored drift table (metadata "
-                      "item '%s'); give one with -d TABLE.csv"),
-                    filename, id, DRIFT_TABLE_META_KEY);
-    }
-    else {
-        /* Messages then read "in.gwy, channel 0 drift table:LINE: ...". */
-        label = localscan_channel_table_label(filename, id);
-        table = drift_table_parse(text, -1, label, error);
-        g_free(label);
-    }
-    return table;
+    if ((table = localscan_channel_stored_table_of_file(data, id, filename, &err)))
+        return table;
+    if (g_error_matches(err, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE))
+        g_set_error(error, err->domain, err->code, _("%s; give one with -d TABLE.csv"), err->message);
+    else
+        g_propagate_error(error, g_error_copy(err));
+    g_error_free(err);
+    return NULL;
 }
 
 static gchar*
 describe_channel(const gchar *filename, gint id)
 {
     return g_strdup_printf(_("%s channel %d"), filename, id);
-}
-
-static gboolean
-check_reference_fits(GwyDataField *image, const gchar *image_name,
-                     GwyDataField *reference, const gchar *reference_name,
-                     gint n, GError **error)
-{
-    gint xres = gwy_data_field_get_xres(image);
-    gint yres = gwy_data_field_get_yres(image);
-    gint rxres = gwy_data_field_get_xres(reference);
-    gint ryres = gwy_data_field_get_yres(reference);
-
-    if (rxres != xres || ryres != yres) {
-        g_set_error(error, STRIPE_REGISTRATION_ERROR,
-                    STRIPE_REGISTRATION_ERROR_SIZE,
-                    _("the reference %s is %d x %d px but the image %s is "
-                      "%d x %d px"),
-                    reference_name, rxres, ryres, image_name, xres, yres);
-        return FALSE;
-    }
-    if (n > yres) {
-        g_set_error(error, STRIPE_REGISTRATION_ERROR,
-                    STRIPE_REGISTRATION_ERROR_STRIPES,
-                    _("--stripes %d is more than the %d rows of the image %s"),
-                    n, yres, image_name);
-        return FALSE;
-    }
-    return TRUE;
 }
 
 /* Registration's own messages name neither image nor reference; the one
@@ -592,8 +558,7 @@ measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
     image = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
     reference = gwy_container_get_object(refdata,
                                          gwy_app_get_data_key_for_id(refid));
-    if (check_reference_fits(image, image_name, reference, reference_name,
-                             options.stripes, error)) {
+    if (localscan_reference_check(image, image_name, reference, reference_name, options.stripes, error)) {
         table = register_stripes(image, image_name, reference, reference_name,
                                  options.stripes, mode, error);
     }

@@ -856,6 +856,12 @@ drift_table_check_image(const DriftTable *table, gint yres, GError **error)
     return FALSE;
 }
 
+gdouble
+drift_px_round(gdouble v)
+{
+    return round(v) + 0.0;
+}
+
 /* Physical values are rounded to the nearest pixel for whole_pixels: a
  * measured length is never an exact multiple of the pixel size, so insisting
  * on whole numbers would refuse every real table.  A px table, however, says
@@ -889,7 +895,7 @@ convert_value(const DriftTable *table, const DriftTableRow *row,
                            name, format_number(buf, value));
             return FALSE;
         }
-        v = round(v);
+        v = drift_px_round(v);
     }
     /* Adding +0.0 turns a -0 into 0, so callers never see a negative zero. */
     *px = v + 0.0;

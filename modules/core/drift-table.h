@@ -101,6 +101,11 @@ void         drift_table_set_extra      (DriftTable *table,
                                          const gchar *name,
                                          gdouble value);
 
+/* The whole pixel nearest to v, halves away from zero (-0.5 -> -1, 0.5 ->
+ * 1, -1.5 -> -2): the one rounding of drift to whole pixels, so a drift
+ * and its negative round to opposite shifts.  Never a negative zero. */
+gdouble      drift_px_round             (gdouble v);
+
 const gchar* drift_unit_name            (DriftUnit unit);
 gboolean     drift_unit_from_name       (const gchar *name, DriftUnit *unit);
 

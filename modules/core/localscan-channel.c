@@ -9,6 +9,7 @@
 #include <libgwyddion/gwymacros.h>
 #include <libgwyddion/gwysiunit.h>
 #include <libprocess/stats.h>
+#include <libprocess/arithmetic.h>
 #include "localscan-channel.h"
 #include "paper-compensate.h"
 #include "continuous-compensate.h"
@@ -66,20 +67,81 @@ localscan_channel_stored_table_text(GwyContainer *data, gint id)
 DriftTable*
 localscan_channel_stored_table(GwyContainer *data, gint id, GError **error)
 {
+    return localscan_channel_stored_table_of_file(data, id, NULL, error);
+}
+
+DriftTable*
+localscan_channel_stored_table_of_file(GwyContainer *data, gint id, const gchar *filename, GError **error)
+{
     const gchar *text = localscan_channel_stored_table_text(data, id);
     DriftTable *table = NULL;
     gchar *label;
 
     if (text) {
-        label = localscan_channel_table_label(NULL, id);
+        label = localscan_channel_table_label(filename, id);
         table = drift_table_parse(text, -1, label, error);
         g_free(label);
+    }
+    else if (filename) {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE,
+                    "%s: channel %d has no stored drift table (metadata item '%s')",
+                    filename, id, DRIFT_TABLE_META_KEY);
     }
     else {
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE,
                     "Channel %d has no stored drift table (metadata item '%s').", id, DRIFT_TABLE_META_KEY);
     }
     return table;
+}
+
+/* Both sizes, "160 x 160 px, 320.0 x 320.0 nm", for messages. */
+static gchar*
+format_field_size(GwyDataField *field)
+{
+    GwySIValueFormat *vf = gwy_data_field_get_value_format_xy(field, GWY_SI_UNIT_FORMAT_PLAIN, NULL);
+    gchar *text;
+
+    text = g_strdup_printf("%d x %d px, %.*f x %.*f%s%s",
+                           gwy_data_field_get_xres(field), gwy_data_field_get_yres(field),
+                           vf->precision, gwy_data_field_get_xreal(field)/vf->magnitude,
+                           vf->precision, gwy_data_field_get_yreal(field)/vf->magnitude,
+                           *vf->units ? " " : "", vf->units);
+    gwy_si_unit_value_format_free(vf);
+    return text;
+}
+
+gboolean
+localscan_reference_fits(GwyDataField *image, GwyDataField *reference)
+{
+    return !gwy_data_field_check_compatibility(image, reference,
+                                               GWY_DATA_COMPATIBILITY_RES | GWY_DATA_COMPATIBILITY_REAL
+                                               | GWY_DATA_COMPATIBILITY_LATERAL);
+}
+
+gboolean
+localscan_reference_check(GwyDataField *image, const gchar *image_name,
+                          GwyDataField *reference, const gchar *reference_name,
+                          gint n_stripes, GError **error)
+{
+    gint yres = gwy_data_field_get_yres(image);
+    gchar *size, *refsize;
+
+    if (!localscan_reference_fits(image, reference)) {
+        size = format_field_size(image);
+        refsize = format_field_size(reference);
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE,
+                    "the reference %s (%s) is not a scan of the size of the image %s (%s)",
+                    reference_name, refsize, image_name, size);
+        g_free(refsize);
+        g_free(size);
+        return FALSE;
+    }
+    if (n_stripes > yres) {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_STRIPES,
+                    "%d stripes do not fit the %d rows of the image %s", n_stripes, yres, image_name);
+        return FALSE;
+    }
+    return TRUE;
 }
 
 void
@@ -180,8 +242,8 @@ paper_compensate_field(GwyDataField *field, const LocalscanApplied *applied, gdo
     gint *dx = g_new(gint, n), *dy = g_new(gint, n);
 
     for (s = 0; s < n; s++) {
-        dx[s] = (gint)floor(applied->dx_px[s] + 0.5);
-        dy[s] = (gint)floor(applied->dy_px[s] + 0.5);
+        dx[s] = (gint)drift_px_round(applied->dx_px[s]);
+        dy[s] = (gint)drift_px_round(applied->dy_px[s]);
     }
     paper_compensate(gwy_data_field_get_data_const(field),
                      gwy_data_field_get_xres(field), gwy_data_field_get_yres(field),
@@ -272,16 +334,23 @@ localscan_applied_clear(LocalscanApplied *applied)
     applied->n_stripes = applied->n_filled = 0;
 }
 
+gdouble
+localscan_stripe_centre_y(GwyDataField *field, gint stripe, gint n_stripes)
+{
+    return gwy_data_field_get_yoffset(field)
+           + (stripe_centre_row(stripe, n_stripes, gwy_data_field_get_yres(field)) + 0.5)
+             *gwy_data_field_get_dy(field);
+}
+
 void
 localscan_applied_to_physical(const LocalscanApplied *applied, GwyDataField *field,
                               gdouble *ypos, gdouble *dx, gdouble *dy)
 {
-    gint yres = gwy_data_field_get_yres(field), n = applied->n_stripes, s;
+    gint n = applied->n_stripes, s;
     gdouble xstep = gwy_data_field_get_dx(field), ystep = gwy_data_field_get_dy(field);
-    gdouble yoff = gwy_data_field_get_yoffset(field);
 
     for (s = 0; s < n; s++) {
-        ypos[s] = yoff + (stripe_centre_row(s, n, yres) + 0.5)*ystep;
+        ypos[s] = localscan_stripe_centre_y(field, s, n);
         dx[s] = applied->dx_px[s]*xstep;
         dy[s] = applied->dy_px[s]*ystep;
     }
@@ -299,8 +368,8 @@ localscan_table_round_px(const DriftTable *table)
         DriftTableRow *row = rounded->rows + s;
 
         if (row->has_drift) {
-            row->dx = floor(row->dx + 0.5);
-            row->dy = floor(row->dy + 0.5);
+            row->dx = drift_px_round(row->dx);
+            row->dy = drift_px_round(row->dy);
         }
     }
     return rounded;

@@ -96,6 +96,13 @@ const gchar* localscan_channel_stored_table_text(GwyContainer *data,
 DriftTable*  localscan_channel_stored_table  (GwyContainer *data,
                                               gint id,
                                               GError **error);
+/* The same named for messages as localscan_channel_table_label(filename,
+ * id) names it; a missing table is "FILE: channel ID has no stored drift
+ * table (...)" (code LOCALSCAN_CHANNEL_ERROR_NO_TABLE). */
+DriftTable*  localscan_channel_stored_table_of_file(GwyContainer *data,
+                                                    gint id,
+                                                    const gchar *filename,
+                                                    GError **error);
 /* Store the table (its text) with channel id, in its metadata, which is
  * created if absent; other metadata items are kept. */
 void         localscan_channel_store_table   (GwyContainer *data,
@@ -151,10 +158,10 @@ gboolean     localscan_compensate_field      (GwyDataField *field,
                                               GError **error);
 void         localscan_applied_clear         (LocalscanApplied *applied);
 
-/* A copy of a px table with dx, dy rounded to whole pixels as
- * stripe_registration_to_table() rounds them (floor(v + 0.5)), extra columns
- * kept: the paper-mode form of a measured table, made without measuring
- * again. */
+/* A copy of a px table with dx, dy rounded to whole pixels by
+ * drift_px_round(), as stripe_registration_to_table() rounds them, extra
+ * columns kept: the paper-mode form of a measured table, made without
+ * measuring again. */
 DriftTable*  localscan_table_round_px        (const DriftTable *table);
 
 /* The drift the table states for each stripe that has one, in px of field:
@@ -167,6 +174,26 @@ gint         localscan_table_stated_px       (const DriftTable *table,
                                               gdouble *dx_px,
                                               gdouble *dy_px,
                                               GError **error);
+
+/* Registration compares the image with another scan of the same area:
+ * TRUE when reference has the image's pixels, physical size and lateral
+ * unit. */
+gboolean     localscan_reference_fits        (GwyDataField *image,
+                                              GwyDataField *reference);
+/* The same with a message naming both, and n_stripes (< 1: not checked)
+ * at most the image's rows. */
+gboolean     localscan_reference_check       (GwyDataField *image,
+                                              const gchar *image_name,
+                                              GwyDataField *reference,
+                                              const gchar *reference_name,
+                                              gint n_stripes,
+                                              GError **error);
+
+/* The centre of stripe (of n_stripes) in y, physical, with the field's y
+ * offset: where a stripe's drift is plotted. */
+gdouble      localscan_stripe_centre_y       (GwyDataField *field,
+                                              gint stripe,
+                                              gint n_stripes);
 
 /* Stripe drift as curves in physical units: ypos[s] the stripe's centre
  * (lateral unit, with the field's y offset), dx[s], dy[s] the drift. */

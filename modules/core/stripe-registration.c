@@ -780,8 +780,8 @@ stripe_registration_to_table(const StripeShift *shifts, gint n, gboolean whole_p
         row->stripe = s;
         row->has_drift = shift->accepted;
         if (shift->accepted) {
-            row->dx = whole_pixels ? floor(shift->dx + 0.5) : shift->dx;
-            row->dy = whole_pixels ? floor(shift->dy + 0.5) : shift->dy;
+            row->dx = whole_pixels ? drift_px_round(shift->dx) : shift->dx;
+            row->dy = whole_pixels ? drift_px_round(shift->dy) : shift->dy;
         }
         else
             row->dx = row->dy = 0.0;
