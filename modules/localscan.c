@@ -474,6 +474,7 @@ create_outputs(ModuleArgs *args)
     /* The table as read, so the new channel can be compensated or inspected
      * again; the applied per-stripe values follow from it and the image. */
     localscan_channel_store_table(data, newid, args->table);
+    localscan_channel_drop_source_meta(data, newid);
     gwy_app_channel_log_add_proc(data, id, newid);
 
     if (gwy_params_get_boolean(args->params, PARAM_PLOT_DRIFT))

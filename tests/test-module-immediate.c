@@ -807,6 +807,32 @@ START_TEST(test_scan_timing_meta_dates)
 }
 END_TEST
 
+/* The new channel carries the source's metadata except what describes the
+ * source's content: simscan's particle positions in the drifting image. */
+START_TEST(test_source_content_meta_dropped)
+{
+    GwyDataField *field = make_worked_example(1, 1.0, 1.0, "m");
+    GwyContainer *data = make_container(field, worked_table), *meta;
+    const guchar *text;
+    gint id;
+
+    ck_assert(gwy_container_gis_object_by_name(data, "/0/meta", &meta));
+    set_string(meta, "Simulated particles (px)", "x,y,x_shown,y_shown\n1.0,2.0,1.5,2.5\n");
+    set_string(meta, "Line time (s)", "0.5");
+    set_module_settings(&default_settings);
+    id = run_module(data, NULL);
+    ck_assert_int_ge(id, 1);
+    ck_assert(gwy_container_gis_object_by_name(data, "/1/meta", &meta));
+    ck_assert(!gwy_container_contains_by_name(meta, "Simulated particles (px)"));
+    ck_assert(gwy_container_gis_string_by_name(meta, "Line time (s)", &text));
+    ck_assert_str_eq((const gchar*)text, "0.5");
+    ck_assert(gwy_container_gis_object_by_name(data, "/0/meta", &meta));
+    ck_assert(gwy_container_contains_by_name(meta, "Simulated particles (px)"));
+    drop_container(data);
+    g_object_unref(field);
+}
+END_TEST
+
 /************************************************************************
  * Drift from registration to a reference channel
  ************************************************************************/
@@ -1417,6 +1443,7 @@ main(void)
     tcase_add_test(tc, test_bad_sources_refused);
     tcase_add_test(tc, test_scan_timing_from_metadata);
     tcase_add_test(tc, test_scan_timing_meta_dates);
+    tcase_add_test(tc, test_source_content_meta_dropped);
     tcase_add_loop_test(tc, test_measured_files_timing, 0, G_N_ELEMENTS(measured_timings));
     tcase_add_test(tc, test_simscan_default_timing);
     tcase_add_test(tc, test_simscan_up_timing);

@@ -200,6 +200,17 @@ localscan_channel_scan_timing_fallback(GwyContainer *data, gint id, gdouble fall
     return found;
 }
 
+void
+localscan_channel_drop_source_meta(GwyContainer *data, gint id)
+{
+    static const gchar *const source_only[] = { LOCALSCAN_META_SIMULATED_PARTICLES, };
+    GwyContainer *meta = channel_meta(data, id, FALSE);
+    guint i;
+
+    for (i = 0; meta && i < G_N_ELEMENTS(source_only); i++)
+        gwy_container_remove_by_name(meta, source_only[i]);
+}
+
 gdouble
 localscan_fill_value(GwyDataField *field, LocalscanFill fill)
 {

@@ -20,6 +20,11 @@ G_BEGIN_DECLS
  * it is never translated. */
 #define LOCALSCAN_TITLE_SUFFIX " (local-scan compensated)"
 
+/* Metadata items of ours that describe the content of the channel they
+ * are attached to, not its scan (the simulator's particle positions, in
+ * the drift-contaminated image): a compensated copy must not carry them. */
+#define LOCALSCAN_META_SIMULATED_PARTICLES "Simulated particles (px)"
+
 /* Line time assumed when the channel's metadata does not give one. */
 #define LOCALSCAN_DEFAULT_LINE_TIME 1.0
 
@@ -132,6 +137,12 @@ LocalscanTimingFound localscan_channel_scan_timing_fallback(GwyContainer *data,
                                                             ScanDirection fallback_direction,
                                                             gdouble fallback_frame_start,
                                                             ScanTiming *timing);
+
+/* Removes from channel id's metadata the items that describe the source's
+ * content (LOCALSCAN_META_SIMULATED_PARTICLES); for a new channel made from
+ * a copy of its source's metadata. */
+void         localscan_channel_drop_source_meta(GwyContainer *data,
+                                                gint id);
 
 gdouble      localscan_fill_value            (GwyDataField *field,
                                               LocalscanFill fill);
