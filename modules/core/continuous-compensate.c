@@ -11,6 +11,8 @@
 #include <emmintrin.h>
 #endif
 #include "continuous-compensate.h"
+#include "interpolation-kernels.h"
+#include "vector-loops.h"
 
 /*
  * The image is resampled in two separable passes.  First every scanned row
@@ -38,29 +40,7 @@
  * compiled for AVX2 too (VECTOR_CLONES); output rows bypass the caches.
  */
 
-#if defined(__GNUC__)
-#define KERNEL_INLINE static inline __attribute__((always_inline))
-#else
-#define KERNEL_INLINE static inline
-#endif
-
-/* The hot loops are compiled twice where GCC can pick the version when
- * the library is loaded: for the x86-64 baseline (SSE2, two doubles per
- * vector) and for x86-64-v3 (AVX2 and FMA, four), which halves their
- * instruction count.  Results differ by rounding only (FMA). */
-#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11 \
-    && defined(__x86_64__) && defined(__linux__)
-#define VECTOR_CLONES \
-    __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define VECTOR_CLONES /* */
-#endif
-
 enum {
-    KERNEL_TAPS = 4,
-    /* Columns per inner loop.  A constant count lets GCC vectorise at -O2,
-     * whose cost model refuses loops that would need a scalar epilogue. */
-    CHUNK = 16,
     /* Rows kept while rebuilding the output: four taps, mirrored at the
      * image edges, always fall within four consecutive rows. */
     RING_ROWS = 8,
@@ -95,139 +75,6 @@ GQuark
 continuous_compensate_error_quark(void)
 {
     return g_quark_from_static_string("continuous-compensate-error-quark");
-}
-
-static inline gdouble
-keys_inner(gdouble d)
-{
-    return (1.5*d - 2.5)*d*d + 1.0;
-}
-
-static inline gdouble
-keys_outer(gdouble d)
-{
-    return d*(-0.5 + d*(1.0 - 0.5*d));
-}
-
-static inline gdouble
-omoms_inner(gdouble d)
-{
-    return 13.0/21.0 + d*(1.0/14.0 + d*(-1.0 + 0.5*d));
-}
-
-static inline gdouble
-omoms_outer(gdouble d)
-{
-    return 4.0/21.0 + d*(-11.0/21.0 + d*(0.5 - d*(1.0/6.0)));
-}
-
-/* Weights of the taps at i-1, i, i+1, i+2 for the position i + x,
- * 0 <= x < 1.  Two-point kernels leave the outer taps at zero. */
-KERNEL_INLINE void
-kernel_weights(GwyInterpolationType type, gdouble x, gdouble *w)
-{
-    gdouble y = 1.0 - x, s, d0, d1, d2, d3;
-
-    switch (type) {
-        case GWY_INTERPOLATION_ROUND:
-        w[0] = w[3] = 0.0;
-        w[1] = (x < 0.5) ? 1.0 : (x > 0.5 ? 0.0 : 0.5);
-        w[2] = 1.0 - w[1];
-        break;
-
-        case GWY_INTERPOLATION_LINEAR:
-        w[0] = w[3] = 0.0;
-        w[1] = y;
-        w[2] = x;
-        break;
-
-        case GWY_INTERPOLATION_KEY:
-        w[0] = keys_outer(x);
-        w[1] = keys_inner(x);
-        w[2] = keys_inner(y);
-        w[3] = keys_outer(y);
-        break;
-
-        case GWY_INTERPOLATION_SCHAUM:
-        /* Cubic Lagrange polynomials through the nodes -1, 0, 1, 2. */
-        w[0] = x*y*(x - 2.0)*(1.0/6.0);
-        w[1] = (x + 1.0)*y*(2.0 - x)*0.5;
-        w[2] = (x + 1.0)*x*(2.0 - x)*0.5;
-        w[3] = -(x + 1.0)*x*y*(1.0/6.0);
-        break;
-
-        case GWY_INTERPOLATION_BSPLINE:
-        w[0] = y*y*y*(1.0/6.0);
-        w[1] = 2.0/3.0 - x*x*(1.0 - 0.5*x);
-        w[2] = 2.0/3.0 - y*y*(1.0 - 0.5*y);
-        w[3] = x*x*x*(1.0/6.0);
-        break;
-
-        case GWY_INTERPOLATION_OMOMS:
-        w[0] = omoms_outer(x);
-        w[1] = omoms_inner(x);
-        w[2] = omoms_inner(y);
-        w[3] = omoms_outer(y);
-        break;
-
-        case GWY_INTERPOLATION_NNA:
-        /* Inverse fourth powers of the distances 1+x, x, y, 1+y, each
-         * multiplied by the product of all four fourth powers: one
-         * division, and x = 0 needs no branch (only w[1] is nonzero). */
-        d0 = (1.0 + x)*(1.0 + x);
-        d1 = x*x;
-        d2 = y*y;
-        d3 = (1.0 + y)*(1.0 + y);
-        d0 *= d0;
-        d1 *= d1;
-        d2 *= d2;
-        d3 *= d3;
-        w[0] = d1*d2*d3;
-        w[1] = d0*d2*d3;
-        w[2] = d0*d1*d3;
-        w[3] = d0*d1*d2;
-        s = 1.0/(w[0] + w[1] + w[2] + w[3]);
-        w[0] *= s;
-        w[1] *= s;
-        w[2] *= s;
-        w[3] *= s;
-        break;
-
-        default:
-        g_assert_not_reached();
-        break;
-    }
-}
-
-/* Index into n values extended by mirroring with the border value
- * repeated: -1 -> 0, -2 -> 1, n -> n-1. */
-static inline gint
-mirror_index(gint i, gint n)
-{
-    while (i < 0 || i >= n) {
-        if (i < 0)
-            i = -1 - i;
-        else
-            i = 2*n - 1 - i;
-    }
-    return i;
-}
-
-static gboolean
-kernel_needs_prefilter(GwyInterpolationType type, gdouble *centre,
-                       gdouble *side)
-{
-    if (type == GWY_INTERPOLATION_BSPLINE) {
-        *centre = 2.0/3.0;
-        *side = 1.0/6.0;
-        return TRUE;
-    }
-    if (type == GWY_INTERPOLATION_OMOMS) {
-        *centre = 13.0/21.0;
-        *side = 4.0/21.0;
-        return TRUE;
-    }
-    return FALSE;
 }
 
 /* Factors the symmetric tridiagonal system (side, centre, side) with the
@@ -437,8 +284,8 @@ resample_pixel(GwyInterpolationType type, const gdouble *src, gint n,
     x = CLAMP(x, -0.5, n - 0.5);
     i = (gint)(x + 1.0) - 1;
     kernel_weights(type, x - i, w);
-    return (w[0]*src[mirror_index(i-1, n)] + w[1]*src[mirror_index(i, n)]
-            + w[2]*src[mirror_index(i+1, n)] + w[3]*src[mirror_index(i+2, n)]);
+    return (w[0]*src[kernel_mirror_index(i-1, n)] + w[1]*src[kernel_mirror_index(i, n)]
+            + w[2]*src[kernel_mirror_index(i+1, n)] + w[3]*src[kernel_mirror_index(i+2, n)]);
 }
 
 /* Output pixels from c on that read the source at the same offset d = i - c
@@ -466,21 +313,6 @@ constant_offset_run(gdouble x_start, gdouble x_step, gint n, gint c, gint *d)
     return MIN(last, MIN(n - 4 - *d, n - 1));
 }
 
-static inline gboolean
-kernel_has_two_taps(GwyInterpolationType type)
-{
-    return type == GWY_INTERPOLATION_ROUND || type == GWY_INTERPOLATION_LINEAR;
-}
-
-/* The pixel value from taps s[-1] .. s[2] with weights w. */
-KERNEL_INLINE gdouble
-kernel_apply(GwyInterpolationType type, const gdouble *s, const gdouble *w)
-{
-    if (kernel_has_two_taps(type))
-        return w[1]*s[0] + w[2]*s[1];
-    return w[0]*s[-1] + w[1]*s[0] + w[2]*s[1] + w[3]*s[2];
-}
-
 /* row -= q prev: the forward elimination of the y prefilter. */
 static void VECTOR_CLONES
 eliminate_row(gdouble *restrict row, const gdouble *restrict prev, gdouble q,
@@ -488,8 +320,8 @@ eliminate_row(gdouble *restrict row, const gdouble *restrict prev, gdouble q,
 {
     gint c = 0, j;
 
-    for (; c + CHUNK <= n; c += CHUNK) {
-        for (j = 0; j < CHUNK; j++)
+    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
+        for (j = 0; j < ROW_CHUNK; j++)
             row[c + j] -= q*prev[c + j];
     }
     for (; c < n; c++)
@@ -513,9 +345,9 @@ resample_run(GwyInterpolationType type, gboolean eliminate,
     gdouble w[KERNEL_TAPS], column, offset = d, v;
     gint c = first, j;
 
-    for (; c + CHUNK - 1 <= last; c += CHUNK) {
+    for (; c + ROW_CHUNK - 1 <= last; c += ROW_CHUNK) {
         column = c;
-        for (j = 0; j < CHUNK; j++) {
+        for (j = 0; j < ROW_CHUNK; j++) {
             kernel_weights(type, ((x_start + x_step*(column + j))
                                   - ((column + j) + offset)), w);
             v = kernel_apply(type, s + c + j, w);
@@ -934,7 +766,7 @@ rows_need_interpolation(const ResamplePlan *plan, gint yres)
     return FALSE;
 }
 
-/* Writes CHUNK values to dest, past the caches where the processor can
+/* Writes ROW_CHUNK values to dest, past the caches where the processor can
  * (x86: non-temporal stores, dest 16-byte aligned).  Output rows are
  * written once and not read here; an ordinary store first reads every line
  * it writes, and for an image beyond the caches that read doubles the
@@ -946,12 +778,12 @@ stream_chunk(gdouble *dest, const gdouble *block)
     gint j;
 
     if (((guintptr)dest & 15) == 0) {
-        for (j = 0; j < CHUNK; j += 2)
+        for (j = 0; j < ROW_CHUNK; j += 2)
             _mm_stream_pd(dest + j, _mm_loadu_pd(block + j));
         return;
     }
 #endif
-    memcpy(dest, block, CHUNK*sizeof(gdouble));
+    memcpy(dest, block, ROW_CHUNK*sizeof(gdouble));
 }
 
 /* Orders the non-temporal stores before anything after the call. */
@@ -969,7 +801,7 @@ copy_row(const gdouble *restrict src, gint n, gdouble *restrict dest)
 {
     gint c = 0;
 
-    for (; c + CHUNK <= n; c += CHUNK)
+    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK)
         stream_chunk(dest + c, src + c);
     for (; c < n; c++)
         dest[c] = src[c];
@@ -980,11 +812,11 @@ static void VECTOR_CLONES
 combine_two_rows(const gdouble *restrict r1, const gdouble *restrict r2,
                  gdouble w1, gdouble w2, gint n, gdouble *restrict dest)
 {
-    gdouble block[CHUNK];
+    gdouble block[ROW_CHUNK];
     gint c = 0, j;
 
-    for (; c + CHUNK <= n; c += CHUNK) {
-        for (j = 0; j < CHUNK; j++)
+    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
+        for (j = 0; j < ROW_CHUNK; j++)
             block[j] = w1*r1[c + j] + w2*r2[c + j];
         stream_chunk(dest + c, block);
     }
@@ -1000,15 +832,15 @@ combine_rows(const gdouble **rows, const gdouble *w, gint n,
 {
     const gdouble *restrict r0 = rows[0], *restrict r1 = rows[1];
     const gdouble *restrict r2 = rows[2], *restrict r3 = rows[3];
-    gdouble w0 = w[0], w1 = w[1], w2 = w[2], w3 = w[3], block[CHUNK];
+    gdouble w0 = w[0], w1 = w[1], w2 = w[2], w3 = w[3], block[ROW_CHUNK];
     gint c = 0, j;
 
     if (w0 == 0.0 && w3 == 0.0) {
         combine_two_rows(r1, r2, w1, w2, n, dest);
         return;
     }
-    for (; c + CHUNK <= n; c += CHUNK) {
-        for (j = 0; j < CHUNK; j++) {
+    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
+        for (j = 0; j < ROW_CHUNK; j++) {
             block[j] = (w0*r0[c + j] + w1*r1[c + j]
                         + w2*r2[c + j] + w3*r3[c + j]);
         }
@@ -1060,16 +892,6 @@ finish_row(const ResamplePlan *plan, gint xres, gint yres, gint r,
     fill_row(dest, mask_row, last + 1, xres, fill_value);
 }
 
-/* The source row just below rho and its fractional offset. */
-static inline gint
-source_row_below(gdouble rho, gdouble *frac)
-{
-    gint i = (gint)(rho + 1.0) - 1;
-
-    *frac = rho - i;
-    return i;
-}
-
 /* Interpolating kernels: each output row from the x-corrected rows around
  * its source row, computed on demand into a small ring (rho grows with r,
  * so every source row is shifted once, and no full-size intermediate image
@@ -1089,7 +911,7 @@ rebuild_rows_streaming(RowShifter *shifter, gint yres,
     row_ring_init(&ring, xres);
     for (r = 0; r < yres; r++) {
         if (!isnan(plan->rho[r])) {
-            i = source_row_below(plan->rho[r], &frac);
+            i = kernel_tap_below(plan->rho[r], &frac);
             if (frac == 0.0) {
                 copy_row(row_ring_shifted(&ring, shifter, i), xres,
                          result + r*(gsize)xres);
@@ -1098,7 +920,7 @@ rebuild_rows_streaming(RowShifter *shifter, gint yres,
                 kernel_weights(interpolation, frac, w);
                 outer = (w[0] != 0.0 || w[3] != 0.0);
                 for (k = 0; k < KERNEL_TAPS; k++) {
-                    tap = mirror_index(i - 1 + k, yres);
+                    tap = kernel_mirror_index(i - 1 + k, yres);
                     rows[k] = ((k == 1 || k == 2 || outer)
                                ? row_ring_shifted(&ring, shifter, tap)
                                : NULL);
@@ -1118,8 +940,8 @@ substitute_row(gdouble *restrict row, const gdouble *restrict below,
 {
     gint c = 0, j;
 
-    for (; c + CHUNK <= n; c += CHUNK) {
-        for (j = 0; j < CHUNK; j++)
+    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
+        for (j = 0; j < ROW_CHUNK; j++)
             row[c + j] = (row[c + j] - side*below[c + j])*inv;
     }
     for (; c < n; c++)
@@ -1134,8 +956,8 @@ substitute_row_over(gdouble *restrict row, const gdouble *restrict eliminated,
 {
     gint c = 0, j;
 
-    for (; c + CHUNK <= n; c += CHUNK) {
-        for (j = 0; j < CHUNK; j++)
+    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
+        for (j = 0; j < ROW_CHUNK; j++)
             row[c + j] = (eliminated[c + j] - side*row[c + j])*inv;
     }
     for (; c < n; c++)
@@ -1268,11 +1090,11 @@ output_rows_plan(const ResamplePlan *plan, gint yres,
         out[r].ready = -1;
         if (isnan(plan->rho[r]))
             continue;
-        i = source_row_below(plan->rho[r], &frac);
+        i = kernel_tap_below(plan->rho[r], &frac);
         lowest = yres;
         highest = 0;
         for (k = 0; k < KERNEL_TAPS; k++) {
-            out[r].taps[k] = mirror_index(i - 1 + k, yres);
+            out[r].taps[k] = kernel_mirror_index(i - 1 + k, yres);
             lowest = MIN(lowest, out[r].taps[k]);
             highest = MAX(highest, out[r].taps[k]);
         }
