@@ -1394,6 +1394,44 @@ START_TEST(test_german_messages)
 }
 END_TEST
 
+/* The core's messages (drift table, channel) go through the project's
+ * catalogue too: a catalogue made here translates one of each. */
+START_TEST(test_core_messages_translated)
+{
+    static const gchar po[] =
+        "msgid \"\"\nmsgstr \"Content-Type: text/plain; charset=UTF-8\\n\"\n"
+        "msgid \"bad number '%s' for %s\"\nmsgstr \"ungültige Zahl '%s' für %s\"\n"
+        "msgid \"%s, channel %d drift table\"\nmsgstr \"%s, Drifttabelle von Kanal %d\"\n";
+    gchar *input = simple_input("stripe,dx,dy\n0,1,0\n1,x,0\n"), *output = out_path("out.gwy");
+    gchar *localedir = g_build_filename(scratch, "locale", NULL);
+    gchar *modir = g_build_filename(localedir, "de", "LC_MESSAGES", NULL);
+    gchar *pofile = g_build_filename(scratch, "core.po", NULL);
+    gchar *mofile = g_build_filename(modir, GETTEXT_PACKAGE ".mo", NULL), *message;
+    const gchar *msgfmt[] = { "msgfmt", "-o", mofile, pofile, NULL };
+    const gchar *german[] = { "LC_ALL", "C.UTF-8", "LANGUAGE", "de", "LOCALSCAN_LOCALEDIR", localedir, NULL };
+    gint status = -1;
+    ToolRun run;
+
+    g_mkdir_with_parents(modir, 0700);
+    write_text(pofile, po);
+    ck_assert(g_spawn_sync(NULL, (gchar**)msgfmt, NULL, G_SPAWN_SEARCH_PATH, NULL, NULL, NULL, NULL, &status, NULL));
+    ck_assert_msg(status == 0, "msgfmt failed");
+    run_tool_env(&run, module_path(), german, (const gchar *const[]){ "-o", output, input, NULL });
+    message = g_strdup_printf("gwy-localscan: %s, Drifttabelle von Kanal 0:3: ungültige Zahl 'x' für dx", input);
+    assert_failure(&run, 1, message);
+    tool_run_clear(&run);
+    remove_tree(localedir);
+    g_unlink(pofile);
+    g_free(message);
+    g_free(mofile);
+    g_free(pofile);
+    g_free(modir);
+    g_free(localedir);
+    g_free(output);
+    g_free(input);
+}
+END_TEST
+
 /************************************************************************
  * Drift measured against a reference (--reference, --stripes)
  ************************************************************************/
@@ -2024,6 +2062,7 @@ gwy_localscan_suite(void)
     tcase_add_checked_fixture(tc, setup_scratch, teardown_scratch);
     tcase_add_test(tc, test_help_lists_options);
     tcase_add_test(tc, test_german_messages);
+    tcase_add_test(tc, test_core_messages_translated);
     tcase_add_loop_test(tc, test_error_exit, 0, G_N_ELEMENTS(error_cases));
     tcase_add_test(tc, test_error_no_channel);
     tcase_add_test(tc, test_error_module);

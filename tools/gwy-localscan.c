@@ -803,14 +803,20 @@ load_module(GError **error)
 }
 
 static void
-init_i18n(void)
+bind_catalogue(void)
 {
     const gchar *localedir = g_getenv("LOCALSCAN_LOCALEDIR");
 
-    setlocale(LC_ALL, "");
     bindtextdomain(GETTEXT_PACKAGE,
                    localedir && *localedir ? localedir : LOCALEDIR);
     bind_textdomain_codeset(GETTEXT_PACKAGE, "UTF-8");
+}
+
+static void
+init_i18n(void)
+{
+    setlocale(LC_ALL, "");
+    bind_catalogue();
 }
 
 int
@@ -835,7 +841,11 @@ main(int argc, char *argv[])
     }
     if (options.stripes == STRIPES_UNSET)
         options.stripes = LOCALSCAN_STRIPES_DEFAULT;
-    if (!load_module(&error) || !run_batch(mode, &error))
+    /* The module binds our domain to its installed catalogue when it
+     * registers; LOCALSCAN_LOCALEDIR must stay in force after it. */
+    if (load_module(&error))
+        bind_catalogue();
+    if (error || !run_batch(mode, &error))
         status = EXIT_ERROR;
     gwy_app_settings_free();
 

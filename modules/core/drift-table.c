@@ -12,6 +12,7 @@
 #include <glib/gstdio.h>
 #include "drift-table.h"
 #include "stripe-geometry.h"
+#include "localscan-intl.h"
 
 /* A drift beyond this many pixels is nonsense for any image; refusing it lets
  * callers cast pixel drift to gint safely. */
@@ -21,7 +22,7 @@
  * carry a last-digit error, but a real fraction is a wrong table. */
 #define WHOLE_PIXEL_TOLERANCE 1e-9
 
-#define DEFAULT_SOURCE_NAME "drift table"
+#define DEFAULT_SOURCE_NAME N_("drift table")
 
 static const struct {
     const gchar *name;
@@ -101,7 +102,7 @@ unit_metres(DriftUnit unit)
 static const gchar*
 table_source_name(const DriftTable *table)
 {
-    return table->source_name ? table->source_name : DEFAULT_SOURCE_NAME;
+    return table->source_name ? table->source_name : _(DEFAULT_SOURCE_NAME);
 }
 
 static void G_GNUC_PRINTF(5, 6)
@@ -281,7 +282,7 @@ parse_drift_value(DriftTableParser *parser, gint line, const gchar *name,
 {
     if (is_nan_or_infinity(field)) {
         set_line_error(error, DRIFT_TABLE_ERROR_VALUE, parser->source_name,
-                       line, "%s = %s: NaN or infinity is not a drift",
+                       line, _("%s = %s: NaN or infinity is not a drift"),
                        name, field);
         return FALSE;
     }
@@ -289,11 +290,11 @@ parse_drift_value(DriftTableParser *parser, gint line, const gchar *name,
         if (errno == ERANGE)
             set_line_error(error, DRIFT_TABLE_ERROR_VALUE,
                            parser->source_name, line,
-                           "%s = %s is out of range", name, field);
+                           _("%s = %s is out of range"), name, field);
         else
             set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX,
                            parser->source_name, line,
-                           "bad number '%s' for %s", field, name);
+                           _("bad number '%s' for %s"), field, name);
         return FALSE;
     }
     return TRUE;
@@ -345,13 +346,13 @@ parse_units_comment(DriftTableParser *parser, gint line, const gchar *text,
         return TRUE;
     if (table->header_line) {
         set_line_error(error, DRIFT_TABLE_ERROR_UNIT, parser->source_name,
-                       line, "the units line must come before the header");
+                       line, _("the units line must come before the header"));
         g_free(unit_text);
         return FALSE;
     }
     if (!drift_unit_from_name(unit_text, &unit)) {
         set_line_error(error, DRIFT_TABLE_ERROR_UNIT, parser->source_name,
-                       line, "unknown unit '%s' (known: px, m, nm, um)",
+                       line, _("unknown unit '%s' (known: px, m, nm, um)"),
                        unit_text);
         g_free(unit_text);
         return FALSE;
@@ -359,7 +360,7 @@ parse_units_comment(DriftTableParser *parser, gint line, const gchar *text,
     g_free(unit_text);
     if (table->unit_given && unit != table->unit) {
         set_line_error(error, DRIFT_TABLE_ERROR_UNIT, parser->source_name,
-                       line, "a second units line contradicts the first");
+                       line, _("a second units line contradicts the first"));
         return FALSE;
     }
     table->unit = unit;
@@ -381,8 +382,8 @@ parse_header(DriftTableParser *parser, gint line, const gchar *text,
         || !g_str_equal(fields[1], "dx")
         || !g_str_equal(fields[2], "dy")) {
         set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX, parser->source_name,
-                       line, "missing header: expected a line starting "
-                       "'stripe,dx,dy', got '%s'", text);
+                       line, _("missing header: expected a line starting "
+                       "'stripe,dx,dy', got '%s'"), text);
         g_strfreev(fields);
         return FALSE;
     }
@@ -390,7 +391,7 @@ parse_header(DriftTableParser *parser, gint line, const gchar *text,
         if (!*fields[i]) {
             set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX,
                            parser->source_name, line,
-                           "column %d of the header has no name", i + 1);
+                           _("column %d of the header has no name"), i + 1);
             g_strfreev(fields);
             return FALSE;
         }
@@ -398,7 +399,7 @@ parse_header(DriftTableParser *parser, gint line, const gchar *text,
             if (g_str_equal(fields[i], fields[j])) {
                 set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX,
                                parser->source_name, line,
-                               "column '%s' appears twice in the header",
+                               _("column '%s' appears twice in the header"),
                                fields[i]);
                 g_strfreev(fields);
                 return FALSE;
@@ -451,7 +452,7 @@ check_stripe_order(DriftTableParser *parser, gint index, gint stripe,
         return TRUE;
     if (stripe >= 0 && stripe < expected) {
         set_line_error(error, DRIFT_TABLE_ERROR_STRIPES, parser->source_name,
-                       line, "repeated stripe %d (first on line %d)",
+                       line, _("repeated stripe %d (first on line %d)"),
                        stripe, rows[stripe].line);
         return FALSE;
     }
@@ -459,12 +460,12 @@ check_stripe_order(DriftTableParser *parser, gint index, gint stripe,
              ? find_later_stripe(parser, index + 1, expected) : -1);
     if (later >= 0) {
         set_line_error(error, DRIFT_TABLE_ERROR_STRIPES, parser->source_name,
-                       line, "stripes not ascending: stripe %d comes before "
-                       "stripe %d (line %d)", stripe, expected, later + 1);
+                       line, _("stripes not ascending: stripe %d comes before "
+                       "stripe %d (line %d)"), stripe, expected, later + 1);
         return FALSE;
     }
     set_line_error(error, DRIFT_TABLE_ERROR_STRIPES, parser->source_name,
-                   line, "missing stripe: expected stripe %d, got %d",
+                   line, _("missing stripe: expected stripe %d, got %d"),
                    expected, stripe);
     return FALSE;
 }
@@ -483,20 +484,20 @@ parse_row(DriftTableParser *parser, gint index, const gchar *text,
     fields = split_fields(text, &n_fields);
     if (n_fields != parser->n_columns) {
         set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX, parser->source_name,
-                       line, "expected %d fields, got %d",
+                       line, _("expected %d fields, got %d"),
                        parser->n_columns, n_fields);
         goto end;
     }
     if (!parse_stripe(fields[0], &row.stripe)) {
         set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX, parser->source_name,
-                       line, "stripe '%s' is not an integer", fields[0]);
+                       line, _("stripe '%s' is not an integer"), fields[0]);
         goto end;
     }
     if (!check_stripe_order(parser, index, row.stripe, error))
         goto end;
     if (!*fields[1] != !*fields[2]) {
         set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX, parser->source_name,
-                       line, "%s is blank but %s is not; give both or neither",
+                       line, _("%s is blank but %s is not; give both or neither"),
                        *fields[1] ? "dy" : "dx", *fields[1] ? "dx" : "dy");
         goto end;
     }
@@ -542,8 +543,8 @@ finish_table(DriftTableParser *parser, GError **error)
         set_line_error(error, DRIFT_TABLE_ERROR_EMPTY, parser->source_name,
                        table->header_line ? table->header_line
                        : MAX(parser->n_lines, 1),
-                       table->header_line ? "empty table: no stripe rows"
-                       : "empty table: no header and no stripe rows");
+                       table->header_line ? _("empty table: no stripe rows")
+                       : _("empty table: no header and no stripe rows"));
         return FALSE;
     }
     table->n_stripes = parser->rows->len;
@@ -601,7 +602,7 @@ drift_table_parse(const gchar *text, gssize length, const gchar *source_name,
 
     table = drift_table_new(0, DRIFT_UNIT_PX);
     table->source_name = g_strdup(source_name ? source_name
-                                  : DEFAULT_SOURCE_NAME);
+                                  : _(DEFAULT_SOURCE_NAME));
     table->header_line = 0;
     memset(&parser, 0, sizeof(parser));
     parser.source_name = table->source_name;
@@ -645,7 +646,7 @@ drift_table_load(const gchar *filename, GError **error)
     if (!(fh = g_fopen(filename, "rb"))) {
         saved_errno = errno;
         g_set_error(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_IO,
-                    "%s: cannot read: %s", filename, g_strerror(saved_errno));
+                    _("%s: cannot read: %s"), filename, g_strerror(saved_errno));
         return NULL;
     }
     contents = g_string_new(NULL);
@@ -656,7 +657,7 @@ drift_table_load(const gchar *filename, GError **error)
     fclose(fh);
     if (saved_errno) {
         g_set_error(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_IO,
-                    "%s: cannot read: %s", filename, g_strerror(saved_errno));
+                    _("%s: cannot read: %s"), filename, g_strerror(saved_errno));
         g_string_free(contents, TRUE);
         return NULL;
     }
@@ -720,7 +721,7 @@ drift_table_save(const DriftTable *table, const gchar *filename,
     g_free(text);
     if (!ok) {
         g_set_error(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_IO,
-                    "%s: cannot write: %s", filename, err->message);
+                    _("%s: cannot write: %s"), filename, err->message);
         g_clear_error(&err);
     }
     return ok;
@@ -836,14 +837,14 @@ drift_table_check_image(const DriftTable *table, gint yres, GError **error)
     source_name = table_source_name(table);
     if (!table->n_stripes) {
         set_line_error(error, DRIFT_TABLE_ERROR_EMPTY, source_name,
-                       table->header_line, "empty table: no stripe rows");
+                       table->header_line, _("empty table: no stripe rows"));
         return FALSE;
     }
     if (table->n_stripes > yres) {
         set_line_error(error, DRIFT_TABLE_ERROR_IMAGE, source_name,
                        table->rows[table->n_stripes-1].line,
-                       "the table has %d stripes but the image has only "
-                       "%d rows", table->n_stripes, yres);
+                       _("the table has %d stripes but the image has only "
+                       "%d rows"), table->n_stripes, yres);
         return FALSE;
     }
     for (i = 0; i < table->n_stripes; i++) {
@@ -852,7 +853,7 @@ drift_table_check_image(const DriftTable *table, gint yres, GError **error)
     }
     set_line_error(error, DRIFT_TABLE_ERROR_EMPTY, source_name,
                    table->header_line,
-                   "no stripe has a drift (every dx,dy is blank)");
+                   _("no stripe has a drift (every dx,dy is blank)"));
     return FALSE;
 }
 
@@ -881,7 +882,7 @@ convert_value(const DriftTable *table, const DriftTableRow *row,
     if (!(fabs(v) <= MAX_DRIFT_PIXELS)) {
         set_line_error(error, DRIFT_TABLE_ERROR_VALUE,
                        table_source_name(table), row->line,
-                       "%s = %s %s is more than %g pixels", name,
+                       _("%s = %s %s is more than %g pixels"), name,
                        format_number(buf, value), unit, MAX_DRIFT_PIXELS);
         return FALSE;
     }
@@ -890,8 +891,8 @@ convert_value(const DriftTable *table, const DriftTableRow *row,
             && fabs(v - round(v)) > WHOLE_PIXEL_TOLERANCE) {
             set_line_error(error, DRIFT_TABLE_ERROR_VALUE,
                            table_source_name(table), row->line,
-                           "%s = %s px is not a whole number of pixels; "
-                           "paper mode needs whole pixels",
+                           _("%s = %s px is not a whole number of pixels; "
+                           "paper mode needs whole pixels"),
                            name, format_number(buf, value));
             return FALSE;
         }

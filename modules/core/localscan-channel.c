@@ -15,6 +15,7 @@
 #include "continuous-compensate.h"
 #include "stripe-geometry.h"
 #include "scan-timing-meta.h"
+#include "localscan-intl.h"
 
 GQuark
 localscan_channel_error_quark(void)
@@ -32,8 +33,8 @@ gchar*
 localscan_channel_table_label(const gchar *filename, gint id)
 {
     if (filename)
-        return g_strdup_printf("%s, channel %d drift table", filename, id);
-    return g_strdup_printf("channel %d drift table", id);
+        return g_strdup_printf(_("%s, channel %d drift table"), filename, id);
+    return g_strdup_printf(_("channel %d drift table"), id);
 }
 
 static GwyContainer*
@@ -84,12 +85,12 @@ localscan_channel_stored_table_of_file(GwyContainer *data, gint id, const gchar 
     }
     else if (filename) {
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE,
-                    "%s: channel %d has no stored drift table (metadata item '%s')",
+                    _("%s: channel %d has no stored drift table (metadata item '%s')"),
                     filename, id, DRIFT_TABLE_META_KEY);
     }
     else {
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE,
-                    "Channel %d has no stored drift table (metadata item '%s').", id, DRIFT_TABLE_META_KEY);
+                    _("Channel %d has no stored drift table (metadata item '%s')."), id, DRIFT_TABLE_META_KEY);
     }
     return table;
 }
@@ -130,7 +131,7 @@ localscan_reference_check(GwyDataField *image, const gchar *image_name,
         size = format_field_size(image);
         refsize = format_field_size(reference);
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE,
-                    "the reference %s (%s) is not a scan of the size of the image %s (%s)",
+                    _("the reference %s (%s) is not a scan of the size of the image %s (%s)"),
                     reference_name, refsize, image_name, size);
         g_free(refsize);
         g_free(size);
@@ -138,7 +139,7 @@ localscan_reference_check(GwyDataField *image, const gchar *image_name,
     }
     if (n_stripes > yres) {
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_STRIPES,
-                    "%d stripes do not fit the %d rows of the image %s", n_stripes, yres, image_name);
+                    _("%d stripes do not fit the %d rows of the image %s"), n_stripes, yres, image_name);
         return FALSE;
     }
     return TRUE;
@@ -235,7 +236,7 @@ localscan_table_to_field_pixels(const DriftTable *table, GwyDataField *field, gb
     if (table->unit != DRIFT_UNIT_PX && !gwy_si_unit_equal_string(xyunit, "m")) {
         unitstr = gwy_si_unit_get_string(xyunit, GWY_SI_UNIT_FORMAT_PLAIN);
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_UNITS,
-                    "%s: the table is in %s but the image's lateral unit is '%s', not metres.",
+                    _("%s: the table is in %s but the image's lateral unit is '%s', not metres."),
                     table->source_name, drift_unit_name(table->unit), unitstr);
         g_free(unitstr);
         return FALSE;
