@@ -12,6 +12,7 @@
 #endif
 #include "continuous-compensate.h"
 #include "interpolation-kernels.h"
+#include "spline-prefilter.h"
 #include "vector-loops.h"
 
 /*
@@ -44,23 +45,12 @@ enum {
     /* Rows kept while rebuilding the output: four taps, mirrored at the
      * image edges, always fall within four consecutive rows. */
     RING_ROWS = 8,
-    /* Rows whose x prefilter recursions run side by side, interleaved. */
-    PREFILTER_BATCH = 8,
     /* Padding of the x coefficient rows: rows 32 KiB apart would share
      * cache sets while they are written across. */
     PREFILTER_ROW_PAD = 8,
     /* Coefficient rows made per back substitution along y. */
     COEFF_BLOCK = 64,
 };
-
-/* The factored tridiagonal system of the B-spline/o-MOMS prefilter for one
- * length: the same for every row (or column), so factored once. */
-typedef struct {
-    gint n;
-    gdouble side;       /* off-diagonal element of the filter */
-    gdouble *factor;    /* elimination factors, n */
-    gdouble *inv_diag;  /* inverse pivots, n */
-} Prefilter;
 
 /* Where each output row and each source row takes its data from. */
 typedef struct {
@@ -76,200 +66,6 @@ continuous_compensate_error_quark(void)
 {
     return g_quark_from_static_string("continuous-compensate-error-quark");
 }
-
-/* Factors the symmetric tridiagonal system (side, centre, side) with the
- * mirror extension, whose first and last pivots see centre + side. */
-static void
-prefilter_init(Prefilter *prefilter, gint n, gdouble centre, gdouble side)
-{
-    gdouble pivot, q;
-    gint i;
-
-    prefilter->n = n;
-    prefilter->side = side;
-    prefilter->factor = g_new(gdouble, 2*n);
-    prefilter->inv_diag = prefilter->factor + n;
-    prefilter->factor[0] = 0.0;
-    if (n == 1) {
-        prefilter->inv_diag[0] = 1.0/(centre + 2.0*side);
-        return;
-    }
-    pivot = centre + side;
-    prefilter->inv_diag[0] = 1.0/pivot;
-    for (i = 1; i < n; i++) {
-        q = side/pivot;
-        pivot = (i == n-1 ? centre + side : centre) - q*side;
-        prefilter->factor[i] = q;
-        prefilter->inv_diag[i] = 1.0/pivot;
-    }
-}
-
-static void
-prefilter_clear(Prefilter *prefilter)
-{
-    g_free(prefilter->factor);
-    prefilter->factor = prefilter->inv_diag = NULL;
-}
-
-/* Steps over which an error in a back substitution's starting value
- * shrinks below 2^-60 of itself: each step multiplies it by side/pivot. */
-static gint
-prefilter_warmup(const Prefilter *prefilter)
-{
-    gdouble decay = 0.0;
-    gint i;
-
-    for (i = 0; i < prefilter->n; i++)
-        decay = MAX(decay, prefilter->side*prefilter->inv_diag[i]);
-    if (decay <= 0.0)
-        return 0;
-    return (gint)ceil(-60.0*G_LN2/log(decay));
-}
-
-/* Data values to interpolation coefficients along one row, in place. */
-static void
-prefilter_row(const Prefilter *prefilter, gdouble *data)
-{
-    const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
-    gdouble side = prefilter->side;
-    gint n = prefilter->n, i;
-
-    for (i = 1; i < n; i++)
-        data[i] -= factor[i]*data[i-1];
-    data[n-1] *= inv_diag[n-1];
-    for (i = n-2; i >= 0; i--)
-        data[i] = (data[i] - side*data[i+1])*inv_diag[i];
-}
-
-#if defined(__GNUC__)
-/* Two doubles as one value, the SSE2 vector.  The running values of the x
- * prefilter's recursions stay in registers this way; in an array GCC keeps
- * them in memory, and every step of the chain waits for a store to be
- * forwarded to the next load (wider vectors are spilled the same way where
- * AVX is missing).  Aligned as a double: the buffers are. */
-typedef gdouble Pair __attribute__((vector_size(2*sizeof(gdouble)),
-                                    aligned(sizeof(gdouble))));
-
-static inline Pair
-pair_gather(const gdouble *p, gsize stride)
-{
-    Pair v = { p[0], p[stride] };
-
-    return v;
-}
-
-static inline void
-pair_scatter(gdouble *p, gsize stride, Pair v)
-{
-    p[0] = v[0];
-    p[stride] = v[1];
-}
-
-/* Data values of PREFILTER_BATCH rows of src (src_stride apart) to
- * coefficients in rows (stride apart).  Each row's recursion is a serial
- * chain; the eight rows' chains run side by side in four Pairs, and lanes
- * keeps the forward pass (n groups of four Pairs) for the backward one.
- * rows should be padded (stride not a multiple of 4 KiB) so that writing
- * them across does not keep evicting the same cache set. */
-static void VECTOR_CLONES
-prefilter_batch(const Prefilter *prefilter, Pair *restrict lanes,
-                const gdouble *restrict src, gsize src_stride,
-                gdouble *restrict rows, gsize stride)
-{
-    const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
-    gdouble side = prefilter->side, f, inv;
-    gsize s = src_stride, t = stride;
-    gint n = prefilter->n, i;
-    Pair c0, c1, c2, c3, *lane;
-
-    G_STATIC_ASSERT(PREFILTER_BATCH == 8);
-    c0 = pair_gather(src, s);
-    c1 = pair_gather(src + 2*s, s);
-    c2 = pair_gather(src + 4*s, s);
-    c3 = pair_gather(src + 6*s, s);
-    lanes[0] = c0;
-    lanes[1] = c1;
-    lanes[2] = c2;
-    lanes[3] = c3;
-    for (i = 1; i < n; i++) {
-        f = factor[i];
-        c0 = pair_gather(src + i, s) - f*c0;
-        c1 = pair_gather(src + 2*s + i, s) - f*c1;
-        c2 = pair_gather(src + 4*s + i, s) - f*c2;
-        c3 = pair_gather(src + 6*s + i, s) - f*c3;
-        lane = lanes + 4*i;
-        lane[0] = c0;
-        lane[1] = c1;
-        lane[2] = c2;
-        lane[3] = c3;
-    }
-    inv = inv_diag[n-1];
-    c0 *= inv;
-    c1 *= inv;
-    c2 *= inv;
-    c3 *= inv;
-    pair_scatter(rows + n-1, t, c0);
-    pair_scatter(rows + 2*t + n-1, t, c1);
-    pair_scatter(rows + 4*t + n-1, t, c2);
-    pair_scatter(rows + 6*t + n-1, t, c3);
-    /* (x - side c) inv as x inv - (side inv) c: the chain waits for one
-     * multiply-add per step instead of two operations. */
-    for (i = n-2; i >= 0; i--) {
-        inv = inv_diag[i];
-        f = side*inv;
-        lane = lanes + 4*i;
-        c0 = lane[0]*inv - f*c0;
-        c1 = lane[1]*inv - f*c1;
-        c2 = lane[2]*inv - f*c2;
-        c3 = lane[3]*inv - f*c3;
-        pair_scatter(rows + i, t, c0);
-        pair_scatter(rows + 2*t + i, t, c1);
-        pair_scatter(rows + 4*t + i, t, c2);
-        pair_scatter(rows + 6*t + i, t, c3);
-    }
-}
-#else
-typedef gdouble Pair;
-
-/* Data values of PREFILTER_BATCH rows of src (src_stride apart) to
- * coefficients in rows (stride apart).  Each row's recursion is a serial
- * chain; in lanes (n groups of PREFILTER_BATCH) the rows' values at one
- * column lie side by side, so the chains run together. */
-static void
-prefilter_batch(const Prefilter *prefilter, Pair *restrict lanes,
-                const gdouble *restrict src, gsize src_stride,
-                gdouble *restrict rows, gsize stride)
-{
-    const gdouble *factor = prefilter->factor, *inv_diag = prefilter->inv_diag;
-    gdouble side = prefilter->side, f, inv;
-    gdouble *restrict lane;
-    gint n = prefilter->n, i, k;
-
-    for (k = 0; k < PREFILTER_BATCH; k++)
-        lanes[k] = src[k*src_stride];
-    for (i = 1; i < n; i++) {
-        f = factor[i];
-        lane = lanes + i*PREFILTER_BATCH;
-        for (k = 0; k < PREFILTER_BATCH; k++)
-            lane[k] = src[k*src_stride + i] - f*lane[k - PREFILTER_BATCH];
-    }
-    lane = lanes + (n-1)*PREFILTER_BATCH;
-    inv = inv_diag[n-1];
-    for (k = 0; k < PREFILTER_BATCH; k++) {
-        lane[k] *= inv;
-        rows[k*stride + n-1] = lane[k];
-    }
-    for (i = n-2; i >= 0; i--) {
-        inv = inv_diag[i];
-        f = side*inv;
-        lane = lanes + i*PREFILTER_BATCH;
-        for (k = 0; k < PREFILTER_BATCH; k++) {
-            lane[k] = lane[k]*inv - f*lane[k + PREFILTER_BATCH];
-            rows[k*stride + i] = lane[k];
-        }
-    }
-}
-#endif
 
 /* One output pixel at source position x (clamped to the image's extent:
  * values beyond it only feed neighbours of filled pixels), with mirrored
@@ -311,21 +107,6 @@ constant_offset_run(gdouble x_start, gdouble x_step, gint n, gint c, gint *d)
         span = n;
     last = (span < n) ? c + (gint)MAX(span, 0.0) : n - 1;
     return MIN(last, MIN(n - 4 - *d, n - 1));
-}
-
-/* row -= q prev: the forward elimination of the y prefilter. */
-static void VECTOR_CLONES
-eliminate_row(gdouble *restrict row, const gdouble *restrict prev, gdouble q,
-              gint n)
-{
-    gint c = 0, j;
-
-    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
-        for (j = 0; j < ROW_CHUNK; j++)
-            row[c + j] -= q*prev[c + j];
-    }
-    for (; c < n; c++)
-        row[c] -= q*prev[c];
 }
 
 /* Output pixels first .. last, all reading the source at the offset
@@ -448,7 +229,7 @@ resample_row(GwyInterpolationType type, const gdouble *restrict src, gint n,
         break;
     }
     if (prev)
-        eliminate_row(dest, prev, q, n);
+        spline_eliminate_row(dest, prev, q, n);
 }
 
 /* dest = src shifted by a whole number of columns, edge values beyond. */
@@ -621,8 +402,8 @@ typedef struct {
     const ResamplePlan *plan;
     GwyInterpolationType interpolation;
     gboolean prefilter_x;
-    Prefilter x_prefilter;
-    Pair *lanes;           /* interleaved rows of prefilter_batch() */
+    SplinePrefilter x_prefilter;
+    gdouble *lanes;        /* scratch of spline_prefilter_batch() */
     gdouble *coeffs;       /* x coefficients of rows batch_first .. */
     gsize coeff_stride;
     gint batch_first;
@@ -655,10 +436,10 @@ row_shifter_init(RowShifter *shifter, const gdouble *a, gint xres, gint yres,
     shifter->batch_first = -1;
     shifter->batch_count = 0;
     if (shifter->prefilter_x) {
-        prefilter_init(&shifter->x_prefilter, xres, centre, side);
-        shifter->lanes = g_malloc(PREFILTER_BATCH*(gsize)xres*sizeof(gdouble));
+        spline_prefilter_init(&shifter->x_prefilter, xres, centre, side);
+        shifter->lanes = g_new(gdouble, SPLINE_PREFILTER_BATCH*(gsize)xres);
         shifter->coeffs = g_new(gdouble,
-                                PREFILTER_BATCH*shifter->coeff_stride);
+                                SPLINE_PREFILTER_BATCH*shifter->coeff_stride);
     }
 }
 
@@ -666,7 +447,7 @@ static void
 row_shifter_clear(RowShifter *shifter)
 {
     if (shifter->prefilter_x)
-        prefilter_clear(&shifter->x_prefilter);
+        spline_prefilter_clear(&shifter->x_prefilter);
     g_free(shifter->lanes);
     g_free(shifter->coeffs);
 }
@@ -689,20 +470,20 @@ row_shifter_coeffs(RowShifter *shifter, gint i)
 
     if (i < shifter->batch_first
         || i >= shifter->batch_first + shifter->batch_count) {
-        if (yres < PREFILTER_BATCH) {
+        if (yres < SPLINE_PREFILTER_BATCH) {
             memcpy(shifter->coeffs, shifter->a + i*(gsize)xres,
                    xres*sizeof(gdouble));
-            prefilter_row(&shifter->x_prefilter, shifter->coeffs);
+            spline_prefilter_row(&shifter->x_prefilter, shifter->coeffs);
             shifter->batch_first = i;
             shifter->batch_count = 1;
         }
         else {
-            first = MIN(i, yres - PREFILTER_BATCH);
-            prefilter_batch(&shifter->x_prefilter, shifter->lanes,
+            first = MIN(i, yres - SPLINE_PREFILTER_BATCH);
+            spline_prefilter_batch(&shifter->x_prefilter, shifter->lanes,
                             shifter->a + first*(gsize)xres, xres,
                             shifter->coeffs, shifter->coeff_stride);
             shifter->batch_first = first;
-            shifter->batch_count = PREFILTER_BATCH;
+            shifter->batch_count = SPLINE_PREFILTER_BATCH;
         }
     }
     return shifter->coeffs + (i - shifter->batch_first)*shifter->coeff_stride;
@@ -721,7 +502,7 @@ row_shifter_shift(RowShifter *shifter, gint i, const gdouble *restrict prev,
     if (row_shift_is_whole(plan, i, xres)) {
         shift_row_whole(src, xres, (gint)plan->x_start[i], dest);
         if (prev)
-            eliminate_row(dest, prev, q, xres);
+            spline_eliminate_row(dest, prev, q, xres);
         return;
     }
     if (shifter->prefilter_x)
@@ -933,37 +714,6 @@ rebuild_rows_streaming(RowShifter *shifter, gint yres,
     g_free(ring.rows);
 }
 
-/* row = (row - side below) inv: one back substitution step. */
-static void VECTOR_CLONES
-substitute_row(gdouble *restrict row, const gdouble *restrict below,
-               gdouble side, gdouble inv, gint n)
-{
-    gint c = 0, j;
-
-    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
-        for (j = 0; j < ROW_CHUNK; j++)
-            row[c + j] = (row[c + j] - side*below[c + j])*inv;
-    }
-    for (; c < n; c++)
-        row[c] = (row[c] - side*below[c])*inv;
-}
-
-/* row = (eliminated - side row) inv: a back substitution step within one
- * buffer, for the steps whose result is not kept. */
-static void VECTOR_CLONES
-substitute_row_over(gdouble *restrict row, const gdouble *restrict eliminated,
-                    gdouble side, gdouble inv, gint n)
-{
-    gint c = 0, j;
-
-    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
-        for (j = 0; j < ROW_CHUNK; j++)
-            row[c + j] = (eliminated[c + j] - side*row[c + j])*inv;
-    }
-    for (; c < n; c++)
-        row[c] = (eliminated[c] - side*row[c])*inv;
-}
-
 /* The y coefficients of the x-corrected rows, made in blocks of
  * COEFF_BLOCK rows through a ring.  Rows from the block being made on hold
  * the forward elimination, rows before it coefficients.  The back
@@ -973,7 +723,7 @@ substitute_row_over(gdouble *restrict row, const gdouble *restrict eliminated,
  * no full-size image of eliminated rows is needed. */
 typedef struct {
     RowShifter *shifter;
-    Prefilter prefilter;
+    SplinePrefilter prefilter;
     gint warmup;
     gint ring_rows;
     gdouble *rows;
@@ -998,9 +748,9 @@ column_coeffs_init(ColumnCoeffs *cc, RowShifter *shifter,
     gint xres = shifter->xres, yres = shifter->yres;
 
     kernel_needs_prefilter(interpolation, &centre, &side);
-    prefilter_init(&cc->prefilter, yres, centre, side);
+    spline_prefilter_init(&cc->prefilter, yres, centre, side);
     cc->shifter = shifter;
-    cc->warmup = MAX(prefilter_warmup(&cc->prefilter), 1);
+    cc->warmup = MAX(spline_prefilter_warmup(&cc->prefilter), 1);
     /* Alive at once: three coefficient rows before a block (taps of output
      * rows that straddle it), the block and its warm-up rows. */
     cc->ring_rows = MIN(yres, 3 + COEFF_BLOCK + cc->warmup + 1);
@@ -1012,7 +762,7 @@ column_coeffs_init(ColumnCoeffs *cc, RowShifter *shifter,
 static void
 column_coeffs_clear(ColumnCoeffs *cc)
 {
-    prefilter_clear(&cc->prefilter);
+    spline_prefilter_clear(&cc->prefilter);
     g_free(cc->rows);
     g_free(cc->scratch);
 }
@@ -1054,7 +804,7 @@ column_coeffs_warm_up(ColumnCoeffs *cc, gint end)
     for (c = 0; c < xres; c++)
         cc->scratch[c] = eliminated[c]*inv_diag[start];
     for (i = start - 1; i >= end; i--) {
-        substitute_row_over(cc->scratch, column_coeffs_row(cc, i),
+        spline_substitute_row_over(cc->scratch, column_coeffs_row(cc, i),
                             cc->prefilter.side, inv_diag[i], xres);
     }
     return cc->scratch;
@@ -1068,7 +818,7 @@ column_coeffs_substitute(ColumnCoeffs *cc, gint i, const gdouble *below)
     gint xres = cc->shifter->xres, c;
 
     if (below) {
-        substitute_row(row, below, cc->prefilter.side, inv, xres);
+        spline_substitute_row(row, below, cc->prefilter.side, inv, xres);
         return;
     }
     for (c = 0; c < xres; c++)
