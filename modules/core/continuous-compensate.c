@@ -12,6 +12,7 @@
 #endif
 #include "continuous-compensate.h"
 #include "interpolation-kernels.h"
+#include "row-resample.h"
 #include "spline-prefilter.h"
 #include "vector-loops.h"
 
@@ -45,9 +46,6 @@ enum {
     /* Rows kept while rebuilding the output: four taps, mirrored at the
      * image edges, always fall within four consecutive rows. */
     RING_ROWS = 8,
-    /* Padding of the x coefficient rows: rows 32 KiB apart would share
-     * cache sets while they are written across. */
-    PREFILTER_ROW_PAD = 8,
     /* Coefficient rows made per back substitution along y. */
     COEFF_BLOCK = 64,
 };
@@ -65,214 +63,6 @@ GQuark
 continuous_compensate_error_quark(void)
 {
     return g_quark_from_static_string("continuous-compensate-error-quark");
-}
-
-/* One output pixel at source position x (clamped to the image's extent:
- * values beyond it only feed neighbours of filled pixels), with mirrored
- * taps near the ends. */
-KERNEL_INLINE gdouble
-resample_pixel(GwyInterpolationType type, const gdouble *src, gint n,
-               gdouble x)
-{
-    gdouble w[KERNEL_TAPS];
-    gint i;
-
-    x = CLAMP(x, -0.5, n - 0.5);
-    i = (gint)(x + 1.0) - 1;
-    kernel_weights(type, x - i, w);
-    return (w[0]*src[kernel_mirror_index(i-1, n)] + w[1]*src[kernel_mirror_index(i, n)]
-            + w[2]*src[kernel_mirror_index(i+1, n)] + w[3]*src[kernel_mirror_index(i+2, n)]);
-}
-
-/* Output pixels from c on that read the source at the same offset d = i - c
- * with all four taps inside: the last such pixel, or c - 1 if c is not one.
- * x_step is within a hair of 1, so runs span most of the row. */
-static gint
-constant_offset_run(gdouble x_start, gdouble x_step, gint n, gint c, gint *d)
-{
-    gdouble x = x_start + x_step*c, e = x_step - 1.0, frac, span;
-    gint i, last;
-
-    if (!(x >= 1.0 && x < n - 3.0))
-        return c - 1;
-    i = (gint)x;
-    *d = i - c;
-    frac = x - i;
-    /* Stop a pixel early so rounding cannot carry frac out of [0, 1). */
-    if (e > 0.0)
-        span = (1.0 - frac)/e - 1.0;
-    else if (e < 0.0)
-        span = frac/(-e) - 1.0;
-    else
-        span = n;
-    last = (span < n) ? c + (gint)MAX(span, 0.0) : n - 1;
-    return MIN(last, MIN(n - 4 - *d, n - 1));
-}
-
-/* Output pixels first .. last, all reading the source at the offset
- * d = i - c with four taps inside.  The position is computed per pixel
- * from the column, never stepped on (x_start + x_step c rounds differently
- * from one column to the next, exactly as Gwyddion's c + shift does), with
- * columns counted in doubles, which hold integers exactly.  With
- * eliminate, q times prev is subtracted (the y prefilter's forward
- * elimination, done while the values are at hand). */
-KERNEL_INLINE void
-resample_run(GwyInterpolationType type, gboolean eliminate,
-             const gdouble *restrict src, gint d,
-             gdouble x_start, gdouble x_step, gint first, gint last,
-             const gdouble *restrict prev, gdouble q, gdouble *restrict dest)
-{
-    const gdouble *s = src + d;
-    gdouble w[KERNEL_TAPS], column, offset = d, v;
-    gint c = first, j;
-
-    for (; c + ROW_CHUNK - 1 <= last; c += ROW_CHUNK) {
-        column = c;
-        for (j = 0; j < ROW_CHUNK; j++) {
-            kernel_weights(type, ((x_start + x_step*(column + j))
-                                  - ((column + j) + offset)), w);
-            v = kernel_apply(type, s + c + j, w);
-            dest[c + j] = eliminate ? v - q*prev[c + j] : v;
-        }
-    }
-    for (; c <= last; c++) {
-        kernel_weights(type, (x_start + x_step*c) - (c + d), w);
-        v = kernel_apply(type, s + c, w);
-        dest[c] = eliminate ? v - q*prev[c] : v;
-    }
-}
-
-/* Resamples one row: dest[c] = src at x_start + x_step*c (minus q prev[c]
- * with eliminate).  Within runs of constant tap offset the taps are read
- * without index arithmetic or edge checks, so the loop is a straight
- * polynomial-and-dot-product. */
-KERNEL_INLINE void
-resample_row_with(GwyInterpolationType type, gboolean eliminate,
-                  const gdouble *restrict src, gint n,
-                  gdouble x_start, gdouble x_step,
-                  const gdouble *restrict prev, gdouble q,
-                  gdouble *restrict dest)
-{
-    gint c = 0, d, last;
-
-    while (c < n) {
-        last = constant_offset_run(x_start, x_step, n, c, &d);
-        if (last < c) {
-            dest[c] = resample_pixel(type, src, n, x_start + x_step*c);
-            if (eliminate)
-                dest[c] -= q*prev[c];
-            c++;
-            continue;
-        }
-        resample_run(type, eliminate, src, d, x_start, x_step, c, last,
-                     prev, q, dest);
-        c = last + 1;
-    }
-}
-
-/* One specialised loop per kernel, so the weights are computed inline;
- * the elimination is fused only for the kernels that need it (prev may be
- * NULL for none). */
-static void VECTOR_CLONES
-resample_row(GwyInterpolationType type, const gdouble *restrict src, gint n,
-             gdouble x_start, gdouble x_step,
-             const gdouble *restrict prev, gdouble q, gdouble *restrict dest)
-{
-    switch (type) {
-        case GWY_INTERPOLATION_ROUND:
-        resample_row_with(GWY_INTERPOLATION_ROUND, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_LINEAR:
-        resample_row_with(GWY_INTERPOLATION_LINEAR, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_KEY:
-        resample_row_with(GWY_INTERPOLATION_KEY, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_SCHAUM:
-        resample_row_with(GWY_INTERPOLATION_SCHAUM, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_NNA:
-        resample_row_with(GWY_INTERPOLATION_NNA, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_BSPLINE:
-        if (prev) {
-            resample_row_with(GWY_INTERPOLATION_BSPLINE, TRUE, src, n,
-                              x_start, x_step, prev, q, dest);
-            return;
-        }
-        resample_row_with(GWY_INTERPOLATION_BSPLINE, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_OMOMS:
-        if (prev) {
-            resample_row_with(GWY_INTERPOLATION_OMOMS, TRUE, src, n,
-                              x_start, x_step, prev, q, dest);
-            return;
-        }
-        resample_row_with(GWY_INTERPOLATION_OMOMS, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        default:
-        g_assert_not_reached();
-        break;
-    }
-    if (prev)
-        spline_eliminate_row(dest, prev, q, n);
-}
-
-/* dest = src shifted by a whole number of columns, edge values beyond. */
-static void
-shift_row_whole(const gdouble *src, gint n, gint shift, gdouble *dest)
-{
-    gint c, first = CLAMP(-shift, 0, n), end = CLAMP(n - shift, first, n);
-
-    for (c = 0; c < first; c++)
-        dest[c] = src[0];
-    if (end > first)
-        memcpy(dest + first, src + first + shift,
-               (end - first)*sizeof(gdouble));
-    for (c = end; c < n; c++)
-        dest[c] = src[n-1];
-}
-
-/* Columns c whose source x_start + x_step*c lies within [-0.5, n-0.5];
- * the same expression as in resample_row_with(), so the mask agrees with
- * the clamping exactly. */
-static void
-row_valid_range(gdouble x_start, gdouble x_step, gint n,
-                gint *first, gint *last)
-{
-    gdouble lo = -0.5, hi = n - 0.5;
-    gdouble cf = ceil((lo - x_start)/x_step);
-    gdouble cl = floor((hi - x_start)/x_step);
-    gint f, l;
-
-    cf = CLAMP(cf, -1.0, (gdouble)n);
-    cl = CLAMP(cl, -1.0, (gdouble)n);
-    f = (gint)cf;
-    l = (gint)cl;
-    while (f > 0 && x_start + x_step*(f - 1) >= lo)
-        f--;
-    while (f < n && !(x_start + x_step*f >= lo))
-        f++;
-    while (l < n-1 && x_start + x_step*(l + 1) <= hi)
-        l++;
-    while (l >= 0 && !(x_start + x_step*l <= hi))
-        l--;
-    *first = MAX(f, 0);
-    *last = MIN(l, n-1);
 }
 
 static gboolean
@@ -327,7 +117,7 @@ plan_columns(const DriftTrajectory *trajectory, const ScanTiming *timing,
         step = 1.0/(1.0 - f1);
         plan->x_step[i] = step;
         plan->x_start[i] = (dx - f1*xm)*step;
-        row_valid_range(plan->x_start[i], step, xres,
+        row_resample_valid_range(plan->x_start[i], step, xres,
                         plan->valid_first + i, plan->valid_last + i);
     }
     return TRUE;
@@ -394,122 +184,12 @@ plan_rows(const DriftTrajectory *trajectory, const ScanTiming *timing,
     return TRUE;
 }
 
-/* Produces x-corrected source rows. */
-typedef struct {
-    const gdouble *a;
-    gint xres;
-    gint yres;
-    const ResamplePlan *plan;
-    GwyInterpolationType interpolation;
-    gboolean prefilter_x;
-    SplinePrefilter x_prefilter;
-    gdouble *lanes;        /* scratch of spline_prefilter_batch() */
-    gdouble *coeffs;       /* x coefficients of rows batch_first .. */
-    gsize coeff_stride;
-    gint batch_first;
-    gint batch_count;
-} RowShifter;
-
 /* The last few x-corrected rows, by row index. */
 typedef struct {
     gint xres;
     gint tags[RING_ROWS];
     gdouble *rows;
 } RowRing;
-
-static void
-row_shifter_init(RowShifter *shifter, const gdouble *a, gint xres, gint yres,
-                 const ResamplePlan *plan, GwyInterpolationType interpolation)
-{
-    gdouble centre, side;
-
-    shifter->a = a;
-    shifter->xres = xres;
-    shifter->yres = yres;
-    shifter->plan = plan;
-    shifter->interpolation = interpolation;
-    shifter->prefilter_x = kernel_needs_prefilter(interpolation,
-                                                  &centre, &side);
-    shifter->lanes = NULL;
-    shifter->coeffs = NULL;
-    shifter->coeff_stride = xres + PREFILTER_ROW_PAD;
-    shifter->batch_first = -1;
-    shifter->batch_count = 0;
-    if (shifter->prefilter_x) {
-        spline_prefilter_init(&shifter->x_prefilter, xres, centre, side);
-        shifter->lanes = g_new(gdouble, SPLINE_PREFILTER_BATCH*(gsize)xres);
-        shifter->coeffs = g_new(gdouble,
-                                SPLINE_PREFILTER_BATCH*shifter->coeff_stride);
-    }
-}
-
-static void
-row_shifter_clear(RowShifter *shifter)
-{
-    if (shifter->prefilter_x)
-        spline_prefilter_clear(&shifter->x_prefilter);
-    g_free(shifter->lanes);
-    g_free(shifter->coeffs);
-}
-
-static gboolean
-row_shift_is_whole(const ResamplePlan *plan, gint i, gint xres)
-{
-    gdouble x_start = plan->x_start[i];
-
-    return (plan->x_step[i] == 1.0 && x_start == floor(x_start)
-            && fabs(x_start) <= xres);
-}
-
-/* The x coefficients of source row i, prefiltered with the rows after it
- * (or, at the bottom, before it) in one batch. */
-static const gdouble*
-row_shifter_coeffs(RowShifter *shifter, gint i)
-{
-    gint xres = shifter->xres, yres = shifter->yres, first;
-
-    if (i < shifter->batch_first
-        || i >= shifter->batch_first + shifter->batch_count) {
-        if (yres < SPLINE_PREFILTER_BATCH) {
-            memcpy(shifter->coeffs, shifter->a + i*(gsize)xres,
-                   xres*sizeof(gdouble));
-            spline_prefilter_row(&shifter->x_prefilter, shifter->coeffs);
-            shifter->batch_first = i;
-            shifter->batch_count = 1;
-        }
-        else {
-            first = MIN(i, yres - SPLINE_PREFILTER_BATCH);
-            spline_prefilter_batch(&shifter->x_prefilter, shifter->lanes,
-                            shifter->a + first*(gsize)xres, xres,
-                            shifter->coeffs, shifter->coeff_stride);
-            shifter->batch_first = first;
-            shifter->batch_count = SPLINE_PREFILTER_BATCH;
-        }
-    }
-    return shifter->coeffs + (i - shifter->batch_first)*shifter->coeff_stride;
-}
-
-/* Source row i shifted in x into dest, minus q times prev unless prev is
- * NULL. */
-static void
-row_shifter_shift(RowShifter *shifter, gint i, const gdouble *restrict prev,
-                  gdouble q, gdouble *restrict dest)
-{
-    const ResamplePlan *plan = shifter->plan;
-    gint xres = shifter->xres;
-    const gdouble *src = shifter->a + i*(gsize)xres;
-
-    if (row_shift_is_whole(plan, i, xres)) {
-        shift_row_whole(src, xres, (gint)plan->x_start[i], dest);
-        if (prev)
-            spline_eliminate_row(dest, prev, q, xres);
-        return;
-    }
-    if (shifter->prefilter_x)
-        src = row_shifter_coeffs(shifter, i);
-    resample_row(shifter->interpolation, src, xres,
-                 plan->x_start[i], plan->x_step[i], prev, q, dest);
-}
 
 static void
 row_ring_init(RowRing *ring, gint xres)
@@ -524,12 +204,12 @@ row_ring_init(RowRing *ring, gint xres)
 
 /* x-corrected row i, computed unless still in the ring. */
 static const gdouble*
-row_ring_shifted(RowRing *ring, RowShifter *shifter, gint i)
+row_ring_shifted(RowRing *ring, RowResampler *resampler, gint i)
 {
     gdouble *row = ring->rows + (i % RING_ROWS)*(gsize)ring->xres;
 
     if (ring->tags[i % RING_ROWS] != i) {
-        row_shifter_shift(shifter, i, NULL, 0.0, row);
+        row_resampler_correct_row(resampler, i, NULL, 0.0, row);
         ring->tags[i % RING_ROWS] = i;
     }
     return row;
@@ -678,12 +358,12 @@ finish_row(const ResamplePlan *plan, gint xres, gint yres, gint r,
  * so every source row is shifted once, and no full-size intermediate image
  * is written and read back). */
 static void
-rebuild_rows_streaming(RowShifter *shifter, gint yres,
+rebuild_rows_streaming(RowResampler *resampler, const ResamplePlan *plan,
+                       gint yres,
                        GwyInterpolationType interpolation,
                        gdouble fill_value, gdouble *result, gdouble *mask)
 {
-    const ResamplePlan *plan = shifter->plan;
-    gint xres = shifter->xres, r, i, k, tap;
+    gint xres = resampler->xres, r, i, k, tap;
     const gdouble *rows[KERNEL_TAPS];
     gdouble w[KERNEL_TAPS], frac;
     gboolean outer;
@@ -694,7 +374,7 @@ rebuild_rows_streaming(RowShifter *shifter, gint yres,
         if (!isnan(plan->rho[r])) {
             i = kernel_tap_below(plan->rho[r], &frac);
             if (frac == 0.0) {
-                copy_row(row_ring_shifted(&ring, shifter, i), xres,
+                copy_row(row_ring_shifted(&ring, resampler, i), xres,
                          result + r*(gsize)xres);
             }
             else {
@@ -703,7 +383,7 @@ rebuild_rows_streaming(RowShifter *shifter, gint yres,
                 for (k = 0; k < KERNEL_TAPS; k++) {
                     tap = kernel_mirror_index(i - 1 + k, yres);
                     rows[k] = ((k == 1 || k == 2 || outer)
-                               ? row_ring_shifted(&ring, shifter, tap)
+                               ? row_ring_shifted(&ring, resampler, tap)
                                : NULL);
                 }
                 combine_rows(rows, w, xres, result + r*(gsize)xres);
@@ -722,7 +402,7 @@ rebuild_rows_streaming(RowShifter *shifter, gint yres,
  * shrinks by side/pivot per row, to below 2^-60 of itself at the block, so
  * no full-size image of eliminated rows is needed. */
 typedef struct {
-    RowShifter *shifter;
+    RowResampler *resampler;
     SplinePrefilter prefilter;
     gint warmup;
     gint ring_rows;
@@ -741,15 +421,15 @@ typedef struct {
 } OutputRow;
 
 static void
-column_coeffs_init(ColumnCoeffs *cc, RowShifter *shifter,
+column_coeffs_init(ColumnCoeffs *cc, RowResampler *resampler,
                    GwyInterpolationType interpolation)
 {
     gdouble centre = 0.0, side = 0.0;
-    gint xres = shifter->xres, yres = shifter->yres;
+    gint xres = resampler->xres, yres = resampler->yres;
 
     kernel_needs_prefilter(interpolation, &centre, &side);
     spline_prefilter_init(&cc->prefilter, yres, centre, side);
-    cc->shifter = shifter;
+    cc->resampler = resampler;
     cc->warmup = MAX(spline_prefilter_warmup(&cc->prefilter), 1);
     /* Alive at once: three coefficient rows before a block (taps of output
      * rows that straddle it), the block and its warm-up rows. */
@@ -770,7 +450,7 @@ column_coeffs_clear(ColumnCoeffs *cc)
 static inline gdouble*
 column_coeffs_row(const ColumnCoeffs *cc, gint i)
 {
-    return cc->rows + (i % cc->ring_rows)*(gsize)cc->shifter->xres;
+    return cc->rows + (i % cc->ring_rows)*(gsize)cc->resampler->xres;
 }
 
 /* x-shifts and eliminates source rows up to and including last. */
@@ -780,7 +460,7 @@ column_coeffs_eliminate(ColumnCoeffs *cc, gint last)
     gint i;
 
     for (i = cc->next_source; i <= last; i++) {
-        row_shifter_shift(cc->shifter, i,
+        row_resampler_correct_row(cc->resampler, i,
                           i ? column_coeffs_row(cc, i-1) : NULL,
                           cc->prefilter.factor[i], column_coeffs_row(cc, i));
     }
@@ -794,7 +474,7 @@ static const gdouble*
 column_coeffs_warm_up(ColumnCoeffs *cc, gint end)
 {
     const gdouble *inv_diag = cc->prefilter.inv_diag, *eliminated;
-    gint xres = cc->shifter->xres, yres = cc->shifter->yres, start, i, c;
+    gint xres = cc->resampler->xres, yres = cc->resampler->yres, start, i, c;
 
     start = MIN(end - 1 + cc->warmup, yres - 1);
     column_coeffs_eliminate(cc, start);
@@ -815,7 +495,7 @@ static void
 column_coeffs_substitute(ColumnCoeffs *cc, gint i, const gdouble *below)
 {
     gdouble *row = column_coeffs_row(cc, i), inv = cc->prefilter.inv_diag[i];
-    gint xres = cc->shifter->xres, c;
+    gint xres = cc->resampler->xres, c;
 
     if (below) {
         spline_substitute_row(row, below, cc->prefilter.side, inv, xres);
@@ -858,7 +538,7 @@ output_row_make(const ColumnCoeffs *cc, const OutputRow *out, gint r,
                 gdouble *result)
 {
     const gdouble *rows[KERNEL_TAPS];
-    gint xres = cc->shifter->xres, k;
+    gint xres = cc->resampler->xres, k;
 
     for (k = 0; k < KERNEL_TAPS; k++)
         rows[k] = column_coeffs_row(cc, out->taps[k]);
@@ -871,18 +551,18 @@ output_row_make(const ColumnCoeffs *cc, const OutputRow *out, gint r,
  * is made as soon as its last tap is, while its taps are still in cache
  * (output rows are independent, so their order does not matter). */
 static void
-rebuild_rows_prefiltered(RowShifter *shifter, gint yres,
+rebuild_rows_prefiltered(RowResampler *resampler, const ResamplePlan *plan,
+                         gint yres,
                          GwyInterpolationType interpolation,
                          gdouble fill_value, gdouble *result, gdouble *mask)
 {
-    const ResamplePlan *plan = shifter->plan;
-    gint xres = shifter->xres, first, end, i, r, r_first, r_end = 0;
+    gint xres = resampler->xres, first, end, i, r, r_first, r_end = 0;
     OutputRow *out = g_new(OutputRow, yres);
     const gdouble *below;
     ColumnCoeffs cc;
 
     output_rows_plan(plan, yres, interpolation, out);
-    column_coeffs_init(&cc, shifter, interpolation);
+    column_coeffs_init(&cc, resampler, interpolation);
     for (first = 0; first < yres; first += COEFF_BLOCK) {
         end = MIN(first + COEFF_BLOCK, yres);
         /* The output rows completed in this block (ready is monotonic). */
@@ -937,7 +617,7 @@ continuous_compensate_trajectory(const gdouble *a,
 {
     ScanTiming default_timing;
     ResamplePlan plan;
-    RowShifter shifter;
+    RowResampler resampler;
     gdouble centre = 0.0, side = 0.0;
     gboolean ok;
 
@@ -957,18 +637,19 @@ continuous_compensate_trajectory(const gdouble *a,
     if (ok) {
         if (mask)
             memset(mask, 0, xres*(gsize)yres*sizeof(gdouble));
-        row_shifter_init(&shifter, a, xres, yres, &plan, interpolation);
+        row_resampler_init(&resampler, a, xres, yres,
+                           plan.x_start, plan.x_step, interpolation);
         if (kernel_needs_prefilter(interpolation, &centre, &side)
             && rows_need_interpolation(&plan, yres)) {
-            rebuild_rows_prefiltered(&shifter, yres, interpolation,
+            rebuild_rows_prefiltered(&resampler, &plan, yres, interpolation,
                                      fill_value, result, mask);
         }
         else {
-            rebuild_rows_streaming(&shifter, yres, interpolation,
+            rebuild_rows_streaming(&resampler, &plan, yres, interpolation,
                                    fill_value, result, mask);
         }
         stream_finish();
-        row_shifter_clear(&shifter);
+        row_resampler_clear(&resampler);
     }
     resample_plan_clear(&plan);
     return ok;
