@@ -7,11 +7,9 @@
 #include "config.h"
 #include <math.h>
 #include <string.h>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 #include "continuous-compensate.h"
 #include "interpolation-kernels.h"
+#include "row-combine.h"
 #include "row-resample.h"
 #include "spline-prefilter.h"
 #include "vector-loops.h"
@@ -227,90 +225,6 @@ rows_need_interpolation(const ResamplePlan *plan, gint yres)
     return FALSE;
 }
 
-/* Writes ROW_CHUNK values to dest, past the caches where the processor can
- * (x86: non-temporal stores, dest 16-byte aligned).  Output rows are
- * written once and not read here; an ordinary store first reads every line
- * it writes, and for an image beyond the caches that read doubles the
- * traffic of writing it. */
-static inline void
-stream_chunk(gdouble *dest, const gdouble *block)
-{
-#if defined(__SSE2__)
-    gint j;
-
-    if (((guintptr)dest & 15) == 0) {
-        for (j = 0; j < ROW_CHUNK; j += 2)
-            _mm_stream_pd(dest + j, _mm_loadu_pd(block + j));
-        return;
-    }
-#endif
-    memcpy(dest, block, ROW_CHUNK*sizeof(gdouble));
-}
-
-/* Orders the non-temporal stores before anything after the call. */
-static inline void
-stream_finish(void)
-{
-#if defined(__SSE2__)
-    _mm_sfence();
-#endif
-}
-
-/* dest = src, streamed. */
-static void
-copy_row(const gdouble *restrict src, gint n, gdouble *restrict dest)
-{
-    gint c = 0;
-
-    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK)
-        stream_chunk(dest + c, src + c);
-    for (; c < n; c++)
-        dest[c] = src[c];
-}
-
-/* dest = w1 r1 + w2 r2, streamed. */
-static void VECTOR_CLONES
-combine_two_rows(const gdouble *restrict r1, const gdouble *restrict r2,
-                 gdouble w1, gdouble w2, gint n, gdouble *restrict dest)
-{
-    gdouble block[ROW_CHUNK];
-    gint c = 0, j;
-
-    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
-        for (j = 0; j < ROW_CHUNK; j++)
-            block[j] = w1*r1[c + j] + w2*r2[c + j];
-        stream_chunk(dest + c, block);
-    }
-    for (; c < n; c++)
-        dest[c] = w1*r1[c] + w2*r2[c];
-}
-
-/* dest = sum of w[k] times rows[k], streamed; the outer rows are not read
- * (and may be NULL) when both their weights are zero. */
-static void VECTOR_CLONES
-combine_rows(const gdouble **rows, const gdouble *w, gint n,
-             gdouble *restrict dest)
-{
-    const gdouble *restrict r0 = rows[0], *restrict r1 = rows[1];
-    const gdouble *restrict r2 = rows[2], *restrict r3 = rows[3];
-    gdouble w0 = w[0], w1 = w[1], w2 = w[2], w3 = w[3], block[ROW_CHUNK];
-    gint c = 0, j;
-
-    if (w0 == 0.0 && w3 == 0.0) {
-        combine_two_rows(r1, r2, w1, w2, n, dest);
-        return;
-    }
-    for (; c + ROW_CHUNK <= n; c += ROW_CHUNK) {
-        for (j = 0; j < ROW_CHUNK; j++) {
-            block[j] = (w0*r0[c + j] + w1*r1[c + j]
-                        + w2*r2[c + j] + w3*r3[c + j]);
-        }
-        stream_chunk(dest + c, block);
-    }
-    for (; c < n; c++)
-        dest[c] = w0*r0[c] + w1*r1[c] + w2*r2[c] + w3*r3[c];
-}
-
 static void
 fill_row(gdouble *dest, gdouble *mask_row, gint first, gint end,
          gdouble fill_value)
@@ -374,7 +288,7 @@ rebuild_rows_streaming(RowResampler *resampler, const ResamplePlan *plan,
         if (!isnan(plan->rho[r])) {
             i = kernel_tap_below(plan->rho[r], &frac);
             if (frac == 0.0) {
-                copy_row(row_ring_shifted(&ring, resampler, i), xres,
+                row_copy_streamed(row_ring_shifted(&ring, resampler, i), xres,
                          result + r*(gsize)xres);
             }
             else {
@@ -386,7 +300,7 @@ rebuild_rows_streaming(RowResampler *resampler, const ResamplePlan *plan,
                                ? row_ring_shifted(&ring, resampler, tap)
                                : NULL);
                 }
-                combine_rows(rows, w, xres, result + r*(gsize)xres);
+                row_combine_streamed(rows, w, xres, result + r*(gsize)xres);
             }
         }
         finish_row(plan, xres, yres, r, fill_value, result, mask);
@@ -542,7 +456,7 @@ output_row_make(const ColumnCoeffs *cc, const OutputRow *out, gint r,
 
     for (k = 0; k < KERNEL_TAPS; k++)
         rows[k] = column_coeffs_row(cc, out->taps[k]);
-    combine_rows(rows, out->w, xres, result + r*(gsize)xres);
+    row_combine_streamed(rows, out->w, xres, result + r*(gsize)xres);
 }
 
 /* B-spline and o-MOMS with fractional source rows need coefficients along
@@ -648,7 +562,7 @@ continuous_compensate_trajectory(const gdouble *a,
             rebuild_rows_streaming(&resampler, &plan, yres, interpolation,
                                    fill_value, result, mask);
         }
-        stream_finish();
+        row_stream_finish();
         row_resampler_clear(&resampler);
     }
     resample_plan_clear(&plan);
