@@ -115,8 +115,8 @@ static void             measured_drift_clear(MeasuredDrift *measured);
 static GwyModuleInfo module_info = {
     GWY_MODULE_ABI_VERSION,
     &module_register,
-    N_("Compensates thermal drift by the local-scan method: shifts image stripes back by a measured "
-       "per-stripe drift table."),
+    N_("Compensates thermal drift by the local-scan method: shifts image stripes back by a "
+       "measured per-stripe drift table."),
     "The gwy-localscan authors",
     PACKAGE_VERSION,
     "The gwy-localscan authors",
@@ -185,38 +185,44 @@ define_module_params(void)
     paramdef = gwy_param_def_new();
     gwy_param_def_set_function_name(paramdef, LOCALSCAN_FUNCTION_NAME);
     gwy_param_def_add_gwyenum(paramdef, PARAM_SOURCE, LOCALSCAN_KEY_SOURCE, _("Drift source"),
-                              translate_enum(sources, G_N_ELEMENTS(sources)), G_N_ELEMENTS(sources),
-                              LOCALSCAN_DEFAULT_SOURCE);
+                              translate_enum(sources, G_N_ELEMENTS(sources)),
+                              G_N_ELEMENTS(sources), LOCALSCAN_DEFAULT_SOURCE);
     gwy_param_def_add_string(paramdef, PARAM_TABLE_FILE, LOCALSCAN_KEY_TABLE_FILE, _("Table _file"),
                              GWY_PARAM_STRING_NULL_IS_EMPTY, NULL, "");
-    gwy_param_def_add_image_id(paramdef, PARAM_REFERENCE, LOCALSCAN_KEY_REFERENCE, _("_Reference image"));
+    gwy_param_def_add_image_id(paramdef, PARAM_REFERENCE, LOCALSCAN_KEY_REFERENCE,
+                               _("_Reference image"));
     gwy_param_def_add_int(paramdef, PARAM_STRIPES, LOCALSCAN_KEY_STRIPES, _("_Stripes"),
                           LOCALSCAN_STRIPES_MIN, LOCALSCAN_STRIPES_MAX, LOCALSCAN_STRIPES_DEFAULT);
     gwy_param_def_add_gwyenum(paramdef, PARAM_MODE, LOCALSCAN_KEY_MODE, _("Mode"),
-                              translate_enum(modes, G_N_ELEMENTS(modes)), G_N_ELEMENTS(modes),
-                              LOCALSCAN_DEFAULT_MODE);
-    gwy_param_def_add_enum(paramdef, PARAM_INTERPOLATION, LOCALSCAN_KEY_INTERPOLATION, NULL, GWY_TYPE_INTERPOLATION_TYPE,
-                           LOCALSCAN_DEFAULT_INTERPOLATION);
-    gwy_param_def_add_gwyenum(paramdef, PARAM_DIRECTION, LOCALSCAN_KEY_DIRECTION, _("Slow scan _direction"),
-                              translate_enum(directions, G_N_ELEMENTS(directions)), G_N_ELEMENTS(directions),
-                              LOCALSCAN_DEFAULT_DIRECTION);
+                              translate_enum(modes, G_N_ELEMENTS(modes)),
+                              G_N_ELEMENTS(modes), LOCALSCAN_DEFAULT_MODE);
+    gwy_param_def_add_enum(paramdef, PARAM_INTERPOLATION, LOCALSCAN_KEY_INTERPOLATION, NULL,
+                           GWY_TYPE_INTERPOLATION_TYPE, LOCALSCAN_DEFAULT_INTERPOLATION);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_DIRECTION, LOCALSCAN_KEY_DIRECTION,
+                              _("Slow scan _direction"),
+                              translate_enum(directions, G_N_ELEMENTS(directions)),
+                              G_N_ELEMENTS(directions), LOCALSCAN_DEFAULT_DIRECTION);
     gwy_param_def_add_double(paramdef, PARAM_LINE_TIME, LOCALSCAN_KEY_LINE_TIME, _("_Line time"),
-                             LOCALSCAN_LINE_TIME_MIN, LOCALSCAN_LINE_TIME_MAX, LOCALSCAN_LINE_TIME_DEFAULT);
-    gwy_param_def_add_double(paramdef, PARAM_FRAME_START, LOCALSCAN_KEY_FRAME_START, _("Frame _start"),
-                             LOCALSCAN_FRAME_START_MIN, LOCALSCAN_FRAME_START_MAX, LOCALSCAN_FRAME_START_DEFAULT);
+                             LOCALSCAN_LINE_TIME_MIN, LOCALSCAN_LINE_TIME_MAX,
+                             LOCALSCAN_LINE_TIME_DEFAULT);
+    gwy_param_def_add_double(paramdef, PARAM_FRAME_START, LOCALSCAN_KEY_FRAME_START,
+                             _("Frame _start"),
+                             LOCALSCAN_FRAME_START_MIN, LOCALSCAN_FRAME_START_MAX,
+                             LOCALSCAN_FRAME_START_DEFAULT);
     gwy_param_def_add_gwyenum(paramdef, PARAM_FILL, LOCALSCAN_KEY_FILL, _("_Fill value"),
-                              translate_enum(fills, G_N_ELEMENTS(fills)), G_N_ELEMENTS(fills),
-                              LOCALSCAN_DEFAULT_FILL);
-    gwy_param_def_add_boolean(paramdef, PARAM_ADD_MASK, LOCALSCAN_KEY_ADD_MASK, _("_Mask filled pixels"),
-                              LOCALSCAN_DEFAULT_ADD_MASK);
-    gwy_param_def_add_boolean(paramdef, PARAM_PLOT_DRIFT, LOCALSCAN_KEY_PLOT_DRIFT, _("_Plot drift graph"),
-                              LOCALSCAN_DEFAULT_PLOT_DRIFT);
+                              translate_enum(fills, G_N_ELEMENTS(fills)),
+                              G_N_ELEMENTS(fills), LOCALSCAN_DEFAULT_FILL);
+    gwy_param_def_add_boolean(paramdef, PARAM_ADD_MASK, LOCALSCAN_KEY_ADD_MASK,
+                              _("_Mask filled pixels"), LOCALSCAN_DEFAULT_ADD_MASK);
+    gwy_param_def_add_boolean(paramdef, PARAM_PLOT_DRIFT, LOCALSCAN_KEY_PLOT_DRIFT,
+                              _("_Plot drift graph"), LOCALSCAN_DEFAULT_PLOT_DRIFT);
     gwy_param_def_add_mask_color(paramdef, PARAM_MASK_COLOR, NULL, NULL);
     /* The reference by its channel id in the image's own file, for batch
      * callers: an image id parameter is remembered only in the running
      * session's memory, never in the settings. */
     gwy_param_def_add_int(paramdef, PARAM_REFERENCE_CHANNEL, LOCALSCAN_KEY_REFERENCE_CHANNEL, NULL,
-                          LOCALSCAN_REFERENCE_CHANNEL_NONE, G_MAXINT32, LOCALSCAN_REFERENCE_CHANNEL_NONE);
+                          LOCALSCAN_REFERENCE_CHANNEL_NONE, G_MAXINT32,
+                          LOCALSCAN_REFERENCE_CHANNEL_NONE);
     return paramdef;
 }
 
@@ -324,7 +330,8 @@ find_reference(ModuleArgs *args, GwyAppDataId *refid, GError **error)
     }
     if (refid->id < 0) {
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE, "%s",
-                    _("No reference image is chosen (another channel of the same pixel and physical size)."));
+                    _("No reference image is chosen (another channel of the same pixel and "
+                      "physical size)."));
         return NULL;
     }
     if (!(reference = gwy_params_get_image(args->params, PARAM_REFERENCE))) {
@@ -370,8 +377,10 @@ measure_reference_drift(ModuleArgs *args, GError **error)
     if (!measured->valid || measured->stripes != n
         || measured->reference.datano != refid.datano || measured->reference.id != refid.id) {
         measured_drift_clear(measured);
-        g_debug("%s: registering %d stripes against channel %d", LOCALSCAN_FUNCTION_NAME, n, refid.id);
-        measured->table = stripe_registration_table_for_fields(args->field, reference, n, 0.0, FALSE,
+        g_debug("%s: registering %d stripes against channel %d",
+                LOCALSCAN_FUNCTION_NAME, n, refid.id);
+        measured->table = stripe_registration_table_for_fields(args->field, reference, n, 0.0,
+                                                               FALSE,
                                                                &measured->error);
         measured->valid = TRUE;
         measured->reference = refid;
@@ -432,11 +441,12 @@ execute(ModuleArgs *args, GError **error)
 
     /* The timing settings are only the fallbacks for files that do not say
      * how they were scanned. */
-    args->timing_found = localscan_channel_scan_timing_fallback(args->data, args->id,
-                                                                gwy_params_get_double(params, PARAM_LINE_TIME),
-                                                                gwy_params_get_enum(params, PARAM_DIRECTION),
-                                                                gwy_params_get_double(params, PARAM_FRAME_START),
-                                                                &args->timing);
+    args->timing_found
+        = localscan_channel_scan_timing_fallback(args->data, args->id,
+                                                 gwy_params_get_double(params, PARAM_LINE_TIME),
+                                                 gwy_params_get_enum(params, PARAM_DIRECTION),
+                                                 gwy_params_get_double(params, PARAM_FRAME_START),
+                                                 &args->timing);
     options.mode = gwy_params_get_enum(params, PARAM_MODE);
     options.fill = gwy_params_get_enum(params, PARAM_FILL);
     options.interpolation = gwy_params_get_enum(params, PARAM_INTERPOLATION);
@@ -459,7 +469,8 @@ create_outputs(ModuleArgs *args)
     newid = gwy_app_data_browser_add_data_field(args->result, data, TRUE);
     title = gwy_app_get_data_field_title(data, id);
     newtitle = localscan_channel_result_title(title);
-    gwy_container_set_string(data, gwy_app_get_data_title_key_for_id(newid), (const guchar*)newtitle);
+    gwy_container_set_string(data, gwy_app_get_data_title_key_for_id(newid),
+                             (const guchar*)newtitle);
     g_free(title);
     gwy_app_sync_data_items(data, data, id, newid, FALSE,
                             GWY_DATA_ITEM_GRADIENT,
@@ -513,7 +524,8 @@ new_drift_graph_model(GwyDataField *field)
 }
 
 static void
-set_drift_curves(GwyGraphModel *gmodel, const gdouble *ypos, const gdouble *dx, const gdouble *dy, gint n)
+set_drift_curves(GwyGraphModel *gmodel, const gdouble *ypos, const gdouble *dx, const gdouble *dy,
+                 gint n)
 {
     gwy_graph_curve_model_set_data(gwy_graph_model_get_curve(gmodel, 0), ypos, dx, n);
     gwy_graph_curve_model_set_data(gwy_graph_model_get_curve(gmodel, 1), ypos, dy, n);
@@ -549,7 +561,8 @@ report_error(ModuleArgs *args, const GError *error)
     }
     parent = gwy_app_find_window_for_channel(args->data, args->id);
     dialog = gtk_message_dialog_new(parent ? parent : GTK_WINDOW(main_window),
-                                    GTK_DIALOG_DESTROY_WITH_PARENT, GTK_MESSAGE_ERROR, GTK_BUTTONS_OK,
+                                    GTK_DIALOG_DESTROY_WITH_PARENT, GTK_MESSAGE_ERROR,
+                                    GTK_BUTTONS_OK,
                                     "%s", _("Local-scan drift compensation failed."));
     gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(dialog), "%s", error->message);
     gtk_dialog_run(GTK_DIALOG(dialog));
@@ -576,7 +589,8 @@ run_gui(ModuleArgs *args)
                             GWY_DATA_ITEM_REAL_SQUARE,
                             0);
 
-    gui.timing_in_meta = localscan_channel_scan_timing(args->data, args->id, SCAN_DIRECTION_DOWN, &args->timing);
+    gui.timing_in_meta = localscan_channel_scan_timing(args->data, args->id, SCAN_DIRECTION_DOWN,
+                                                       &args->timing);
     gui.dialog = gwy_dialog_new(_("Local Scan Drift"));
     dialog = GWY_DIALOG(gui.dialog);
     gwy_dialog_add_buttons(dialog, GWY_RESPONSE_RESET, GTK_RESPONSE_CANCEL, GTK_RESPONSE_OK, 0);
@@ -601,7 +615,9 @@ run_gui(ModuleArgs *args)
     gwy_param_table_append_image_id(table, PARAM_REFERENCE);
     gwy_param_table_data_id_set_filter(table, PARAM_REFERENCE, reference_filter, args, NULL);
     gwy_param_table_append_slider(table, PARAM_STRIPES);
-    gwy_param_table_slider_restrict_range(table, PARAM_STRIPES, 1, MIN(LOCALSCAN_STRIPES_MAX, gwy_data_field_get_yres(args->field)));
+    gwy_param_table_slider_restrict_range(table, PARAM_STRIPES, LOCALSCAN_STRIPES_MIN,
+                                          MIN(LOCALSCAN_STRIPES_MAX,
+                                              gwy_data_field_get_yres(args->field)));
     gwy_param_table_append_header(table, -1, _("Compensation"));
     gwy_param_table_append_radio(table, PARAM_MODE);
     gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
@@ -749,7 +765,8 @@ param_changed(ModuleGUI *gui, gint id)
         gwy_param_table_set_sensitive(table, PARAM_STRIPES, source == LOCALSCAN_SOURCE_REFERENCE);
     }
     if (id < 0 || id == PARAM_MODE) {
-        gwy_param_table_set_sensitive(table, PARAM_INTERPOLATION, mode == LOCALSCAN_MODE_CONTINUOUS);
+        gwy_param_table_set_sensitive(table, PARAM_INTERPOLATION,
+                                      mode == LOCALSCAN_MODE_CONTINUOUS);
         /* The settings stand in only for what the metadata does not say. */
         gwy_param_table_set_sensitive(table, PARAM_DIRECTION,
                                       mode == LOCALSCAN_MODE_CONTINUOUS
@@ -803,7 +820,8 @@ append_registration(GString *status, ModuleArgs *args)
     }
     g_string_append_printf(status, _("Registered %d of %d stripes,"), count, n);
     g_string_append_c(status, '\n');
-    g_string_append_printf(status, _("dx %.2f to %.2f px, dy %.2f to %.2f px."), xmin, xmax, ymin, ymax);
+    g_string_append_printf(status, _("dx %.2f to %.2f px, dy %.2f to %.2f px."),
+                           xmin, xmax, ymin, ymax);
     g_string_append_c(status, '\n');
     g_string_append_printf(status, _("%d filled pixels."), args->applied.n_filled);
     g_free(stripes);
@@ -820,7 +838,8 @@ append_timing(GString *status, const ScanTiming *timing, LocalscanTimingFound fo
                            (found & LOCALSCAN_TIMING_LINE_TIME) ? from_meta : setting);
     g_string_append_c(status, '\n');
     g_string_append_printf(status,
-                           timing->direction == SCAN_DIRECTION_UP ? _("slow scan up (%s),") : _("slow scan down (%s),"),
+                           (timing->direction == SCAN_DIRECTION_UP
+                            ? _("slow scan up (%s),") : _("slow scan down (%s),")),
                            (found & LOCALSCAN_TIMING_DIRECTION) ? from_meta : setting);
     g_string_append_c(status, '\n');
     g_string_append_printf(status, _("frame start %g s (%s)."), timing->frame_start,

@@ -72,7 +72,8 @@ localscan_channel_stored_table(GwyContainer *data, gint id, GError **error)
 }
 
 DriftTable*
-localscan_channel_stored_table_of_file(GwyContainer *data, gint id, const gchar *filename, GError **error)
+localscan_channel_stored_table_of_file(GwyContainer *data, gint id, const gchar *filename,
+                                       GError **error)
 {
     const gchar *text = localscan_channel_stored_table_text(data, id);
     DriftTable *table = NULL;
@@ -90,7 +91,8 @@ localscan_channel_stored_table_of_file(GwyContainer *data, gint id, const gchar 
     }
     else {
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE,
-                    _("Channel %d has no stored drift table (metadata item '%s')."), id, DRIFT_TABLE_META_KEY);
+                    _("Channel %d has no stored drift table (metadata item '%s')."),
+                    id, DRIFT_TABLE_META_KEY);
     }
     return table;
 }
@@ -99,7 +101,8 @@ localscan_channel_stored_table_of_file(GwyContainer *data, gint id, const gchar 
 static gchar*
 format_field_size(GwyDataField *field)
 {
-    GwySIValueFormat *vf = gwy_data_field_get_value_format_xy(field, GWY_SI_UNIT_FORMAT_PLAIN, NULL);
+    GwySIValueFormat *vf = gwy_data_field_get_value_format_xy(field, GWY_SI_UNIT_FORMAT_PLAIN,
+                                                              NULL);
     gchar *text;
 
     text = g_strdup_printf("%d x %d px, %.*f x %.*f%s%s",
@@ -115,7 +118,8 @@ gboolean
 localscan_reference_fits(GwyDataField *image, GwyDataField *reference)
 {
     return !gwy_data_field_check_compatibility(image, reference,
-                                               GWY_DATA_COMPATIBILITY_RES | GWY_DATA_COMPATIBILITY_REAL
+                                               GWY_DATA_COMPATIBILITY_RES
+                                               | GWY_DATA_COMPATIBILITY_REAL
                                                | GWY_DATA_COMPATIBILITY_LATERAL);
 }
 
@@ -139,7 +143,8 @@ localscan_reference_check(GwyDataField *image, const gchar *image_name,
     }
     if (n_stripes > yres) {
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_STRIPES,
-                    _("%d stripes do not fit the %d rows of the image %s"), n_stripes, yres, image_name);
+                    _("%d stripes do not fit the %d rows of the image %s"),
+                    n_stripes, yres, image_name);
         return FALSE;
     }
     return TRUE;
@@ -163,13 +168,15 @@ LocalscanTimingFound
 localscan_channel_scan_timing(GwyContainer *data, gint id, ScanDirection fallback_direction,
                               ScanTiming *timing)
 {
-    return localscan_channel_scan_timing_fallback(data, id, LOCALSCAN_DEFAULT_LINE_TIME, fallback_direction,
-                                                  0.0, timing);
+    return localscan_channel_scan_timing_fallback(data, id, LOCALSCAN_DEFAULT_LINE_TIME,
+                                                  fallback_direction, 0.0, timing);
 }
 
 LocalscanTimingFound
-localscan_channel_scan_timing_fallback(GwyContainer *data, gint id, gdouble fallback_line_time,
-                                       ScanDirection fallback_direction, gdouble fallback_frame_start,
+localscan_channel_scan_timing_fallback(GwyContainer *data, gint id,
+                                       gdouble fallback_line_time,
+                                       ScanDirection fallback_direction,
+                                       gdouble fallback_frame_start,
                                        ScanTiming *timing)
 {
     ScanMetaTiming meta;
@@ -266,17 +273,20 @@ paper_compensate_field(GwyDataField *field, const LocalscanApplied *applied, gdo
 }
 
 static gboolean
-continuous_compensate_field(GwyDataField *field, const DriftTable *table, const LocalscanOptions *options,
-                            gdouble fill_value, GwyDataField *result, GwyDataField *mask, GError **error)
+continuous_compensate_field(GwyDataField *field, const DriftTable *table,
+                            const LocalscanOptions *options, gdouble fill_value,
+                            GwyDataField *result, GwyDataField *mask, GError **error)
 {
     gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
     ScanTiming timing;
 
-    scan_timing_init(&timing, xres, yres, options->frame_start, options->line_time, options->direction);
+    scan_timing_init(&timing, xres, yres,
+                     options->frame_start, options->line_time, options->direction);
     return continuous_compensate_table(gwy_data_field_get_data_const(field), xres, yres, table,
                                        gwy_data_field_get_dx(field), gwy_data_field_get_dy(field),
                                        &timing, options->interpolation, fill_value,
-                                       gwy_data_field_get_data(result), gwy_data_field_get_data(mask),
+                                       gwy_data_field_get_data(result),
+                                       gwy_data_field_get_data(mask),
                                        error);
 }
 
@@ -292,7 +302,8 @@ count_filled(GwyDataField *mask)
 }
 
 gboolean
-localscan_compensate_field(GwyDataField *field, const DriftTable *table, const LocalscanOptions *options,
+localscan_compensate_field(GwyDataField *field, const DriftTable *table,
+                           const LocalscanOptions *options,
                            GwyDataField *result, GwyDataField *mask, LocalscanApplied *applied,
                            GError **error)
 {
