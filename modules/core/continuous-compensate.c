@@ -13,6 +13,7 @@
 #include "row-resample.h"
 #include "spline-prefilter.h"
 #include "vector-loops.h"
+#include "localscan-intl.h"
 
 /*
  * The image is resampled in two separable passes.  First every scanned row
@@ -72,8 +73,8 @@ check_inputs(gint xres, gint yres, const ScanTiming *timing,
         || !isfinite(timing->frame_start)) {
         g_set_error(error, CONTINUOUS_COMPENSATE_ERROR,
                     CONTINUOUS_COMPENSATE_ERROR_TIMING,
-                    "scan timing (%d x %d pixels, line time %g s) does not "
-                    "describe the %d x %d image",
+                    _("scan timing (%d x %d pixels, line time %g s) does not "
+                    "describe the %d x %d image"),
                     timing->xres, timing->yres, timing->line_time,
                     xres, yres);
         return FALSE;
@@ -82,7 +83,7 @@ check_inputs(gint xres, gint yres, const ScanTiming *timing,
         || interpolation > GWY_INTERPOLATION_SCHAUM) {
         g_set_error(error, CONTINUOUS_COMPENSATE_ERROR,
                     CONTINUOUS_COMPENSATE_ERROR_INTERPOLATION,
-                    "interpolation type %d cannot resample an image",
+                    _("interpolation type %d cannot resample an image"),
                     (gint)interpolation);
         return FALSE;
     }
@@ -108,8 +109,8 @@ plan_columns(const DriftTrajectory *trajectory, const ScanTiming *timing,
         if (!(fabs(f1) < 0.5) || !isfinite(dx)) {
             g_set_error(error, CONTINUOUS_COMPENSATE_ERROR,
                         CONTINUOUS_COMPENSATE_ERROR_TOO_FAST,
-                        "x drift of %g px per pixel in row %d is too fast "
-                        "to compensate", f1, i);
+                        _("x drift of %g px per pixel in row %d is too fast "
+                        "to compensate"), f1, i);
             return FALSE;
         }
         step = 1.0/(1.0 - f1);
@@ -137,8 +138,8 @@ sample_row_map(const DriftTrajectory *trajectory, const ScanTiming *timing,
         if (!isfinite(g[k+1]) || (k > -1 && !(g[k+1] > g[k]))) {
             g_set_error(error, CONTINUOUS_COMPENSATE_ERROR,
                         CONTINUOUS_COMPENSATE_ERROR_TOO_FAST,
-                        "y drift near row %d is a line or more per line, "
-                        "too fast to compensate", k);
+                        _("y drift near row %d is a line or more per line, "
+                        "too fast to compensate"), k);
             return FALSE;
         }
     }

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include "drift-trajectory.h"
 #include "stripe-geometry.h"
+#include "localscan-intl.h"
 
 /*
  * Why a not-a-knot cubic spline through the per-stripe positions:
@@ -694,7 +695,7 @@ check_measurements(const DriftMeasurement *meas, gint n, GError **error)
 
     if (n < 1) {
         g_set_error(error, DRIFT_TRAJECTORY_ERROR, DRIFT_TRAJECTORY_ERROR_EMPTY,
-                    "no stripe has a drift measurement");
+                    _("no stripe has a drift measurement"));
         return FALSE;
     }
     for (i = 0; i < n; i++) {
@@ -702,7 +703,7 @@ check_measurements(const DriftMeasurement *meas, gint n, GError **error)
             || !isfinite(meas[i].dx) || !isfinite(meas[i].dy)) {
             g_set_error(error, DRIFT_TRAJECTORY_ERROR,
                         DRIFT_TRAJECTORY_ERROR_VALUE,
-                        "drift measurement %d is not a finite number", i);
+                        _("drift measurement %d is not a finite number"), i);
             return FALSE;
         }
     }
@@ -828,8 +829,8 @@ check_timing(const DriftTable *table, const ScanTiming *timing,
         || !isfinite(timing->frame_start)) {
         g_set_error(error, DRIFT_TRAJECTORY_ERROR,
                     DRIFT_TRAJECTORY_ERROR_TIMING,
-                    "%s: scan timing is unusable (line time %g s, "
-                    "%d x %d pixels)",
+                    _("%s: scan timing is unusable (line time %g s, "
+                    "%d x %d pixels)"),
                     table->source_name ? table->source_name : "drift table",
                     timing->line_time, timing->xres, timing->yres);
         return FALSE;
@@ -852,7 +853,7 @@ extra_or_default(const DriftTable *table, gint s, const gchar *name,
         return TRUE;
     }
     g_set_error(error, DRIFT_TRAJECTORY_ERROR, DRIFT_TRAJECTORY_ERROR_VALUE,
-                "%s:%d: %s is not a finite number",
+                _("%s:%d: %s is not a finite number"),
                 table->source_name ? table->source_name : "drift table",
                 table->rows[s].line, name);
     return FALSE;

@@ -11,6 +11,7 @@
 #include "stripe-registration.h"
 #include "stripe-geometry.h"
 #include "fft-correlation.h"
+#include "localscan-intl.h"
 
 /*
  * How it works.
@@ -629,24 +630,24 @@ check_arguments(const gdouble *image, const gdouble *reference, gint xres, gint 
 {
     if (xres < 4 || yres < 4) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE,
-                    "The image (%d x %d px) is too small to register: it needs at least 4 x 4 px.",
+                    _("The image (%d x %d px) is too small to register: it needs at least 4 x 4 px."),
                     xres, yres);
         return FALSE;
     }
     if (n < 1 || n > yres) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_STRIPES,
-                    "The number of stripes (%d) must be between 1 and the image's %d rows.",
+                    _("The number of stripes (%d) must be between 1 and the image's %d rows."),
                     n, yres);
         return FALSE;
     }
     if (!all_finite(image, (gsize)xres*yres)) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
-                    "The image contains NaN or infinite values.");
+                    _("The image contains NaN or infinite values."));
         return FALSE;
     }
     if (!all_finite(reference, (gsize)xres*yres)) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
-                    "The reference contains NaN or infinite values.");
+                    _("The reference contains NaN or infinite values."));
         return FALSE;
     }
     return TRUE;
@@ -715,7 +716,7 @@ stripe_registration_measure_around(const gdouble *image, const gdouble *referenc
     for (s = 0; s < n; s++) {
         if (!isfinite(predicted_dx[s]) || !isfinite(predicted_dy[s])) {
             g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
-                        "The predicted shift of stripe %d is not a finite number.", s);
+                        _("The predicted shift of stripe %d is not a finite number."), s);
             return FALSE;
         }
     }
@@ -746,7 +747,7 @@ stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference,
     ryres = gwy_data_field_get_yres(reference);
     if (xres != rxres || yres != ryres) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE,
-                    "The reference (%d x %d px) does not have the image's size (%d x %d px).",
+                    _("The reference (%d x %d px) does not have the image's size (%d x %d px)."),
                     rxres, ryres, xres, yres);
         return FALSE;
     }
@@ -807,8 +808,8 @@ stripe_registration_table_for_fields(GwyDataField *image, GwyDataField *referenc
             table = stripe_registration_to_table(shifts, n, whole_pixels);
         else {
             g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_NO_MATCH,
-                        "No stripe of the image could be registered against the reference "
-                        "(featureless, periodic, or not the same area).");
+                        _("No stripe of the image could be registered against the reference "
+                        "(featureless, periodic, or not the same area)."));
         }
     }
     g_free(shifts);
