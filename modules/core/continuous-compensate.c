@@ -9,11 +9,12 @@
 #include <string.h>
 #include "continuous-compensate.h"
 #include "interpolation-kernels.h"
+#include "prefilter-rows.h"
 #include "row-combine.h"
 #include "row-resample.h"
 #include "spline-prefilter.h"
-#include "vector-loops.h"
 #include "localscan-intl.h"
+#include "vector-loops.h"
 
 /*
  * The image is resampled in two separable passes.  First every scanned row
@@ -45,8 +46,6 @@ enum {
     /* Rows kept while rebuilding the output: four taps, mirrored at the
      * image edges, always fall within four consecutive rows. */
     RING_ROWS = 8,
-    /* Coefficient rows made per back substitution along y. */
-    COEFF_BLOCK = 64,
 };
 
 /* Where each output row and each source row takes its data from. */
@@ -309,23 +308,6 @@ rebuild_rows_streaming(RowResampler *resampler, const ResamplePlan *plan,
     g_free(ring.rows);
 }
 
-/* The y coefficients of the x-corrected rows, made in blocks of
- * COEFF_BLOCK rows through a ring.  Rows from the block being made on hold
- * the forward elimination, rows before it coefficients.  The back
- * substitution of a block starts warmup rows below it from the elimination
- * alone (as if the coefficient below were zero); the error that makes
- * shrinks by side/pivot per row, to below 2^-60 of itself at the block, so
- * no full-size image of eliminated rows is needed. */
-typedef struct {
-    RowResampler *resampler;
-    SplinePrefilter prefilter;
-    gint warmup;
-    gint ring_rows;
-    gdouble *rows;
-    gdouble *scratch;      /* the warm-up's coefficient row */
-    gint next_source;      /* first row not yet x-shifted and eliminated */
-} ColumnCoeffs;
-
 /* Where an output row takes its data from the coefficient rows, worked out
  * once per row; ready is the coefficient row whose making completes its
  * taps (-1: the row has no source). */
@@ -334,91 +316,6 @@ typedef struct {
     gdouble w[KERNEL_TAPS];
     gint ready;
 } OutputRow;
-
-static void
-column_coeffs_init(ColumnCoeffs *cc, RowResampler *resampler,
-                   GwyInterpolationType interpolation)
-{
-    gdouble centre = 0.0, side = 0.0;
-    gint xres = resampler->xres, yres = resampler->yres;
-
-    kernel_needs_prefilter(interpolation, &centre, &side);
-    spline_prefilter_init(&cc->prefilter, yres, centre, side);
-    cc->resampler = resampler;
-    cc->warmup = MAX(spline_prefilter_warmup(&cc->prefilter), 1);
-    /* Alive at once: three coefficient rows before a block (taps of output
-     * rows that straddle it), the block and its warm-up rows. */
-    cc->ring_rows = MIN(yres, 3 + COEFF_BLOCK + cc->warmup + 1);
-    cc->rows = g_new(gdouble, cc->ring_rows*(gsize)xres);
-    cc->scratch = g_new(gdouble, xres);
-    cc->next_source = 0;
-}
-
-static void
-column_coeffs_clear(ColumnCoeffs *cc)
-{
-    spline_prefilter_clear(&cc->prefilter);
-    g_free(cc->rows);
-    g_free(cc->scratch);
-}
-
-static inline gdouble*
-column_coeffs_row(const ColumnCoeffs *cc, gint i)
-{
-    return cc->rows + (i % cc->ring_rows)*(gsize)cc->resampler->xres;
-}
-
-/* x-shifts and eliminates source rows up to and including last. */
-static void
-column_coeffs_eliminate(ColumnCoeffs *cc, gint last)
-{
-    gint i;
-
-    for (i = cc->next_source; i <= last; i++) {
-        row_resampler_correct_row(cc->resampler, i,
-                          i ? column_coeffs_row(cc, i-1) : NULL,
-                          cc->prefilter.factor[i], column_coeffs_row(cc, i));
-    }
-    cc->next_source = MAX(cc->next_source, last + 1);
-}
-
-/* Eliminates down to the warm-up rows below the block ending at end and
- * runs the warm-up: the coefficient row below the block, or NULL at the
- * bottom of the image (where the substitution starts exactly). */
-static const gdouble*
-column_coeffs_warm_up(ColumnCoeffs *cc, gint end)
-{
-    const gdouble *inv_diag = cc->prefilter.inv_diag, *eliminated;
-    gint xres = cc->resampler->xres, yres = cc->resampler->yres, start, i, c;
-
-    start = MIN(end - 1 + cc->warmup, yres - 1);
-    column_coeffs_eliminate(cc, start);
-    if (start < end)
-        return NULL;
-    eliminated = column_coeffs_row(cc, start);
-    for (c = 0; c < xres; c++)
-        cc->scratch[c] = eliminated[c]*inv_diag[start];
-    for (i = start - 1; i >= end; i--) {
-        spline_substitute_row_over(cc->scratch, column_coeffs_row(cc, i),
-                            cc->prefilter.side, inv_diag[i], xres);
-    }
-    return cc->scratch;
-}
-
-/* Coefficient row i from its eliminated values and the row below. */
-static void
-column_coeffs_substitute(ColumnCoeffs *cc, gint i, const gdouble *below)
-{
-    gdouble *row = column_coeffs_row(cc, i), inv = cc->prefilter.inv_diag[i];
-    gint xres = cc->resampler->xres, c;
-
-    if (below) {
-        spline_substitute_row(row, below, cc->prefilter.side, inv, xres);
-        return;
-    }
-    for (c = 0; c < xres; c++)
-        row[c] *= inv;
-}
 
 /* Taps, weights and the coefficient row completing them, for every output
  * row.  Rows come in blocks top-down, bottom-up within a block, so taps
@@ -444,19 +341,19 @@ output_rows_plan(const ResamplePlan *plan, gint yres,
             highest = MAX(highest, out[r].taps[k]);
         }
         kernel_weights(interpolation, frac, out[r].w);
-        out[r].ready = MAX(lowest, highest - highest % COEFF_BLOCK);
+        out[r].ready = MAX(lowest, highest - highest % PREFILTER_ROWS_BLOCK);
     }
 }
 
 static void
-output_row_make(const ColumnCoeffs *cc, const OutputRow *out, gint r,
-                gdouble *result)
+output_row_make(const PrefilterRows *prefilter_rows, const OutputRow *out,
+                gint r, gdouble *result)
 {
     const gdouble *rows[KERNEL_TAPS];
-    gint xres = cc->resampler->xres, k;
+    gint xres = prefilter_rows->resampler->xres, k;
 
     for (k = 0; k < KERNEL_TAPS; k++)
-        rows[k] = column_coeffs_row(cc, out->taps[k]);
+        rows[k] = prefilter_rows_get(prefilter_rows, out->taps[k]);
     row_combine_streamed(rows, out->w, xres, result + r*(gsize)xres);
 }
 
@@ -473,31 +370,29 @@ rebuild_rows_prefiltered(RowResampler *resampler, const ResamplePlan *plan,
 {
     gint xres = resampler->xres, first, end, i, r, r_first, r_end = 0;
     OutputRow *out = g_new(OutputRow, yres);
-    const gdouble *below;
-    ColumnCoeffs cc;
+    PrefilterRows prefilter_rows;
 
     output_rows_plan(plan, yres, interpolation, out);
-    column_coeffs_init(&cc, resampler, interpolation);
-    for (first = 0; first < yres; first += COEFF_BLOCK) {
-        end = MIN(first + COEFF_BLOCK, yres);
+    prefilter_rows_init(&prefilter_rows, resampler, interpolation);
+    for (first = 0; first < yres; first += PREFILTER_ROWS_BLOCK) {
+        end = MIN(first + PREFILTER_ROWS_BLOCK, yres);
         /* The output rows completed in this block (ready is monotonic). */
         r_first = r_end;
         while (r_end < yres && out[r_end].ready < end)
             r_end++;
-        below = column_coeffs_warm_up(&cc, end);
+        prefilter_rows_begin_block(&prefilter_rows, end);
         r = r_end - 1;
         for (i = end - 1; i >= first; i--) {
-            column_coeffs_substitute(&cc, i, below);
-            below = column_coeffs_row(&cc, i);
+            prefilter_rows_make(&prefilter_rows, i);
             for (; r >= r_first && out[r].ready >= i; r--) {
-                output_row_make(&cc, out + r, r, result);
+                output_row_make(&prefilter_rows, out + r, r, result);
                 finish_row(plan, xres, yres, r, fill_value, result, mask);
             }
             for (; r >= r_first && out[r].ready < 0; r--)
                 finish_row(plan, xres, yres, r, fill_value, result, mask);
         }
     }
-    column_coeffs_clear(&cc);
+    prefilter_rows_clear(&prefilter_rows);
     g_free(out);
 }
 
