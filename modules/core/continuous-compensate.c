@@ -12,9 +12,7 @@
 #include "prefilter-rows.h"
 #include "row-combine.h"
 #include "row-resample.h"
-#include "spline-prefilter.h"
 #include "localscan-intl.h"
-#include "vector-loops.h"
 
 /*
  * The image is resampled in two separable passes.  First every scanned row
@@ -28,25 +26,30 @@
  * the whole row uses the drift at its centre pixel, ignoring the drift
  * during the half line time of one trace (|vy| L/4 px at most).
  *
- * The kernels are Gwyddion's (same weights, and the same mirror extension
- * with the border value repeated that gwy_interpolation_resolve_coeffs_1d()
- * assumes for B-spline and o-MOMS), written out here so that the weights
- * of a whole row are computed inline without per-pixel calls.
+ * This file is the orchestration: trajectory -> where each row takes its
+ * data from (ResamplePlan) -> x-corrected rows -> output rows and mask.
+ * The parts live in
+ *   interpolation-kernels.[ch]  Gwyddion's tap weights, computed inline;
+ *   row-resample.[ch]           x resampling of one scanned row;
+ *   spline-prefilter.[ch]       the B-spline/o-MOMS coefficient system;
+ *   prefilter-rows.[ch]         its y direction, through a ring of rows;
+ *   row-combine.[ch]            output rows written past the caches;
+ *   vector-loops.h              row chunks and the AVX2 clones.
  *
  * Speed (bench/bench-continuous, within a few times a memcpy of the image):
  * rows stream through small rings, never a full-size intermediate image.
  * The x prefilter runs eight rows side by side; the y prefilter is solved
- * in blocks of rows through a ring (ColumnCoeffs), and each output row is
- * made while its coefficient rows are still in cache.  Row loops run in
- * chunks of constant length, which GCC vectorises at -O2; the hot ones are
- * compiled for AVX2 too (VECTOR_CLONES); output rows bypass the caches.
+ * in blocks of rows through a ring, and each output row is made while its
+ * coefficient rows are still in cache.  Row loops run in chunks of constant
+ * length, which GCC vectorises at -O2; the hot ones are compiled for AVX2
+ * too; output rows bypass the caches.
  */
 
-enum {
-    /* Rows kept while rebuilding the output: four taps, mirrored at the
-     * image edges, always fall within four consecutive rows. */
-    RING_ROWS = 8,
-};
+/* x-corrected rows kept while rebuilding the output without a y
+ * prefilter: four taps, mirrored at the image edges, always fall within
+ * four consecutive rows, and rho grows with the output row, so each source
+ * row is x-corrected once. */
+enum { RING_ROWS = 8 };
 
 /* Where each output row and each source row takes its data from. */
 typedef struct {
@@ -56,6 +59,16 @@ typedef struct {
     gint *valid_last;
     gdouble *rho;       /* source row per output row; NaN = no source */
 } ResamplePlan;
+
+/* The output image being made and what its rows without a source get. */
+typedef struct {
+    const ResamplePlan *plan;
+    gint xres;
+    gint yres;
+    gdouble fill_value;
+    gdouble *result;
+    gdouble *mask;      /* may be NULL */
+} OutputImage;
 
 GQuark
 continuous_compensate_error_quark(void)
@@ -116,7 +129,7 @@ plan_columns(const DriftTrajectory *trajectory, const ScanTiming *timing,
         plan->x_step[i] = step;
         plan->x_start[i] = (dx - f1*xm)*step;
         row_resample_valid_range(plan->x_start[i], step, xres,
-                        plan->valid_first + i, plan->valid_last + i);
+                                 plan->valid_first + i, plan->valid_last + i);
     }
     return TRUE;
 }
@@ -182,39 +195,27 @@ plan_rows(const DriftTrajectory *trajectory, const ScanTiming *timing,
     return TRUE;
 }
 
-/* The last few x-corrected rows, by row index. */
-typedef struct {
-    gint xres;
-    gint tags[RING_ROWS];
-    gdouble *rows;
-} RowRing;
+static void
+resample_plan_init(ResamplePlan *plan, gint yres)
+{
+    plan->x_start = g_new(gdouble, 3*yres);
+    plan->x_step = plan->x_start + yres;
+    plan->rho = plan->x_step + yres;
+    plan->valid_first = g_new(gint, 2*yres);
+    plan->valid_last = plan->valid_first + yres;
+}
 
 static void
-row_ring_init(RowRing *ring, gint xres)
+resample_plan_clear(ResamplePlan *plan)
 {
-    gint k;
-
-    ring->xres = xres;
-    ring->rows = g_new(gdouble, RING_ROWS*(gsize)xres);
-    for (k = 0; k < RING_ROWS; k++)
-        ring->tags[k] = -1;
+    g_free(plan->x_start);
+    g_free(plan->valid_first);
 }
 
-/* x-corrected row i, computed unless still in the ring. */
-static const gdouble*
-row_ring_shifted(RowRing *ring, RowResampler *resampler, gint i)
-{
-    gdouble *row = ring->rows + (i % RING_ROWS)*(gsize)ring->xres;
-
-    if (ring->tags[i % RING_ROWS] != i) {
-        row_resampler_correct_row(resampler, i, NULL, 0.0, row);
-        ring->tags[i % RING_ROWS] = i;
-    }
-    return row;
-}
-
+/* With whole source rows only, the output rows are x-corrected rows as
+ * they are, and B-spline and o-MOMS need no coefficients along y. */
 static gboolean
-rows_need_interpolation(const ResamplePlan *plan, gint yres)
+any_source_row_fractional(const ResamplePlan *plan, gint yres)
 {
     gint r;
 
@@ -223,6 +224,12 @@ rows_need_interpolation(const ResamplePlan *plan, gint yres)
             return TRUE;
     }
     return FALSE;
+}
+
+static gdouble*
+output_row(const OutputImage *output, gint r)
+{
+    return output->result + r*(gsize)output->xres;
 }
 
 static void
@@ -244,19 +251,19 @@ fill_row(gdouble *dest, gdouble *mask_row, gint first, gint end,
  * mask is zero already (cleared in one go, which is several times faster
  * than row by row). */
 static void
-finish_row(const ResamplePlan *plan, gint xres, gint yres, gint r,
-           gdouble fill_value, gdouble *result, gdouble *mask)
+finish_row(const OutputImage *output, gint r)
 {
-    gdouble *dest = result + r*(gsize)xres;
-    gdouble *mask_row = mask ? mask + r*(gsize)xres : NULL;
-    gdouble rho = plan->rho[r];
-    gint nearest, first, last;
+    const ResamplePlan *plan = output->plan;
+    gint xres = output->xres, nearest, first, last;
+    gdouble *dest = output_row(output, r);
+    gdouble *mask_row = output->mask ? output->mask + r*(gsize)xres : NULL;
+    gdouble rho = plan->rho[r], fill_value = output->fill_value;
 
     if (isnan(rho)) {
         fill_row(dest, mask_row, 0, xres, fill_value);
         return;
     }
-    nearest = CLAMP((gint)floor(rho + 0.5), 0, yres-1);
+    nearest = CLAMP((gint)floor(rho + 0.5), 0, output->yres-1);
     first = plan->valid_first[nearest];
     last = plan->valid_last[nearest];
     if (first > last) {
@@ -267,43 +274,82 @@ finish_row(const ResamplePlan *plan, gint xres, gint yres, gint r,
     fill_row(dest, mask_row, last + 1, xres, fill_value);
 }
 
-/* Interpolating kernels: each output row from the x-corrected rows around
- * its source row, computed on demand into a small ring (rho grows with r,
- * so every source row is shifted once, and no full-size intermediate image
- * is written and read back). */
+/* The last few x-corrected rows, by row index. */
+typedef struct {
+    RowResampler *resampler;
+    gint tags[RING_ROWS];
+    gdouble *rows;
+} RowRing;
+
 static void
-rebuild_rows_streaming(RowResampler *resampler, const ResamplePlan *plan,
-                       gint yres,
-                       GwyInterpolationType interpolation,
-                       gdouble fill_value, gdouble *result, gdouble *mask)
+row_ring_init(RowRing *ring, RowResampler *resampler)
 {
-    gint xres = resampler->xres, r, i, k, tap;
+    gint k;
+
+    ring->resampler = resampler;
+    ring->rows = g_new(gdouble, RING_ROWS*(gsize)resampler->xres);
+    for (k = 0; k < RING_ROWS; k++)
+        ring->tags[k] = -1;
+}
+
+/* x-corrected row i, computed unless still in the ring. */
+static const gdouble*
+row_ring_corrected(RowRing *ring, gint i)
+{
+    gdouble *row = ring->rows + (i % RING_ROWS)*(gsize)ring->resampler->xres;
+
+    if (ring->tags[i % RING_ROWS] != i) {
+        row_resampler_correct_row(ring->resampler, i, NULL, 0.0, row);
+        ring->tags[i % RING_ROWS] = i;
+    }
+    return row;
+}
+
+/* Output row r (with a source row) from the x-corrected rows around its
+ * source row; the outer taps are not even x-corrected when their weights
+ * are zero. */
+static void
+make_row_from_ring(RowRing *ring, const OutputImage *output,
+                   GwyInterpolationType interpolation, gint r)
+{
     const gdouble *rows[KERNEL_TAPS];
     gdouble w[KERNEL_TAPS], frac;
+    gint xres = output->xres, i, k, tap;
     gboolean outer;
-    RowRing ring;
 
-    row_ring_init(&ring, xres);
-    for (r = 0; r < yres; r++) {
-        if (!isnan(plan->rho[r])) {
-            i = kernel_tap_below(plan->rho[r], &frac);
-            if (frac == 0.0) {
-                row_copy_streamed(row_ring_shifted(&ring, resampler, i), xres,
-                         result + r*(gsize)xres);
-            }
-            else {
-                kernel_weights(interpolation, frac, w);
-                outer = (w[0] != 0.0 || w[3] != 0.0);
-                for (k = 0; k < KERNEL_TAPS; k++) {
-                    tap = kernel_mirror_index(i - 1 + k, yres);
-                    rows[k] = ((k == 1 || k == 2 || outer)
-                               ? row_ring_shifted(&ring, resampler, tap)
-                               : NULL);
-                }
-                row_combine_streamed(rows, w, xres, result + r*(gsize)xres);
-            }
-        }
-        finish_row(plan, xres, yres, r, fill_value, result, mask);
+    i = kernel_tap_below(output->plan->rho[r], &frac);
+    if (frac == 0.0) {
+        row_copy_streamed(row_ring_corrected(ring, i), xres,
+                          output_row(output, r));
+        return;
+    }
+    kernel_weights(interpolation, frac, w);
+    outer = (w[0] != 0.0 || w[3] != 0.0);
+    for (k = 0; k < KERNEL_TAPS; k++) {
+        tap = kernel_mirror_index(i - 1 + k, output->yres);
+        rows[k] = ((k == 1 || k == 2 || outer)
+                   ? row_ring_corrected(ring, tap)
+                   : NULL);
+    }
+    row_combine_streamed(rows, w, xres, output_row(output, r));
+}
+
+/* Kernels interpolating the data directly, and B-spline and o-MOMS at
+ * whole source rows: each output row from the x-corrected rows around its
+ * source row, made on demand into a small ring (no full-size intermediate
+ * image is written and read back). */
+static void
+rebuild_rows_streaming(RowResampler *resampler, const OutputImage *output,
+                       GwyInterpolationType interpolation)
+{
+    RowRing ring;
+    gint r;
+
+    row_ring_init(&ring, resampler);
+    for (r = 0; r < output->yres; r++) {
+        if (!isnan(output->plan->rho[r]))
+            make_row_from_ring(&ring, output, interpolation, r);
+        finish_row(output, r);
     }
     g_free(ring.rows);
 }
@@ -346,33 +392,52 @@ output_rows_plan(const ResamplePlan *plan, gint yres,
 }
 
 static void
-output_row_make(const PrefilterRows *prefilter_rows, const OutputRow *out,
-                gint r, gdouble *result)
+make_row_from_coeffs(const PrefilterRows *prefilter_rows,
+                     const OutputImage *output, const OutputRow *out, gint r)
 {
     const gdouble *rows[KERNEL_TAPS];
-    gint xres = prefilter_rows->resampler->xres, k;
+    gint k;
 
     for (k = 0; k < KERNEL_TAPS; k++)
         rows[k] = prefilter_rows_get(prefilter_rows, out->taps[k]);
-    row_combine_streamed(rows, out->w, xres, result + r*(gsize)xres);
+    row_combine_streamed(rows, out->w, output->xres, output_row(output, r));
+}
+
+/* Makes the coefficient rows first .. end-1, bottom-up, and the output
+ * rows r_first .. r_end-1 (those completed in this block) as soon as
+ * their last tap is made, while their taps are still in cache. */
+static void
+rebuild_block(PrefilterRows *prefilter_rows, const OutputImage *output,
+              const OutputRow *out, gint first, gint end,
+              gint r_first, gint r_end)
+{
+    gint i, r = r_end - 1;
+
+    prefilter_rows_begin_block(prefilter_rows, end);
+    for (i = end - 1; i >= first; i--) {
+        prefilter_rows_make(prefilter_rows, i);
+        for (; r >= r_first && out[r].ready >= i; r--) {
+            make_row_from_coeffs(prefilter_rows, output, out + r, r);
+            finish_row(output, r);
+        }
+        for (; r >= r_first && out[r].ready < 0; r--)
+            finish_row(output, r);
+    }
 }
 
 /* B-spline and o-MOMS with fractional source rows need coefficients along
  * y, the solution of a tridiagonal system over each whole column.  They
- * are made block by block, bottom-up within a block, and each output row
- * is made as soon as its last tap is, while its taps are still in cache
- * (output rows are independent, so their order does not matter). */
+ * are made block by block (output rows are independent, so their order
+ * does not matter). */
 static void
-rebuild_rows_prefiltered(RowResampler *resampler, const ResamplePlan *plan,
-                         gint yres,
-                         GwyInterpolationType interpolation,
-                         gdouble fill_value, gdouble *result, gdouble *mask)
+rebuild_rows_prefiltered(RowResampler *resampler, const OutputImage *output,
+                         GwyInterpolationType interpolation)
 {
-    gint xres = resampler->xres, first, end, i, r, r_first, r_end = 0;
+    gint yres = output->yres, first, end, r_first, r_end = 0;
     OutputRow *out = g_new(OutputRow, yres);
     PrefilterRows prefilter_rows;
 
-    output_rows_plan(plan, yres, interpolation, out);
+    output_rows_plan(output->plan, yres, interpolation, out);
     prefilter_rows_init(&prefilter_rows, resampler, interpolation);
     for (first = 0; first < yres; first += PREFILTER_ROWS_BLOCK) {
         end = MIN(first + PREFILTER_ROWS_BLOCK, yres);
@@ -380,37 +445,46 @@ rebuild_rows_prefiltered(RowResampler *resampler, const ResamplePlan *plan,
         r_first = r_end;
         while (r_end < yres && out[r_end].ready < end)
             r_end++;
-        prefilter_rows_begin_block(&prefilter_rows, end);
-        r = r_end - 1;
-        for (i = end - 1; i >= first; i--) {
-            prefilter_rows_make(&prefilter_rows, i);
-            for (; r >= r_first && out[r].ready >= i; r--) {
-                output_row_make(&prefilter_rows, out + r, r, result);
-                finish_row(plan, xres, yres, r, fill_value, result, mask);
-            }
-            for (; r >= r_first && out[r].ready < 0; r--)
-                finish_row(plan, xres, yres, r, fill_value, result, mask);
-        }
+        rebuild_block(&prefilter_rows, output, out, first, end,
+                      r_first, r_end);
     }
     prefilter_rows_clear(&prefilter_rows);
     g_free(out);
 }
 
+/* The output image from the planned rows. */
 static void
-resample_plan_init(ResamplePlan *plan, gint yres)
+rebuild_image(const gdouble *a, const OutputImage *output,
+              GwyInterpolationType interpolation)
 {
-    plan->x_start = g_new(gdouble, 3*yres);
-    plan->x_step = plan->x_start + yres;
-    plan->rho = plan->x_step + yres;
-    plan->valid_first = g_new(gint, 2*yres);
-    plan->valid_last = plan->valid_first + yres;
+    const ResamplePlan *plan = output->plan;
+    gint xres = output->xres, yres = output->yres;
+    gdouble centre = 0.0, side = 0.0;
+    RowResampler resampler;
+
+    if (output->mask)
+        memset(output->mask, 0, xres*(gsize)yres*sizeof(gdouble));
+    row_resampler_init(&resampler, a, xres, yres,
+                       plan->x_start, plan->x_step, interpolation);
+    if (kernel_needs_prefilter(interpolation, &centre, &side)
+        && any_source_row_fractional(plan, yres))
+        rebuild_rows_prefiltered(&resampler, output, interpolation);
+    else
+        rebuild_rows_streaming(&resampler, output, interpolation);
+    row_stream_finish();
+    row_resampler_clear(&resampler);
 }
 
-static void
-resample_plan_clear(ResamplePlan *plan)
+/* NULL timing means frame start 0, 1 s per line, scanning down. */
+static const ScanTiming*
+timing_or_default(const ScanTiming *timing, gint xres, gint yres,
+                  ScanTiming *default_timing)
 {
-    g_free(plan->x_start);
-    g_free(plan->valid_first);
+    if (timing)
+        return timing;
+    scan_timing_init(default_timing, xres, yres, 0.0, 1.0,
+                     SCAN_DIRECTION_DOWN);
+    return default_timing;
 }
 
 gboolean
@@ -427,40 +501,20 @@ continuous_compensate_trajectory(const gdouble *a,
 {
     ScanTiming default_timing;
     ResamplePlan plan;
-    RowResampler resampler;
-    gdouble centre = 0.0, side = 0.0;
+    OutputImage output = { &plan, xres, yres, fill_value, result, mask };
     gboolean ok;
 
     g_return_val_if_fail(a && result && trajectory, FALSE);
     g_return_val_if_fail(xres >= 1 && yres >= 1, FALSE);
-    if (!timing) {
-        scan_timing_init(&default_timing, xres, yres, 0.0, 1.0,
-                         SCAN_DIRECTION_DOWN);
-        timing = &default_timing;
-    }
+    timing = timing_or_default(timing, xres, yres, &default_timing);
     if (!check_inputs(xres, yres, timing, interpolation, error))
         return FALSE;
 
     resample_plan_init(&plan, yres);
     ok = (plan_columns(trajectory, timing, &plan, error)
           && plan_rows(trajectory, timing, &plan, error));
-    if (ok) {
-        if (mask)
-            memset(mask, 0, xres*(gsize)yres*sizeof(gdouble));
-        row_resampler_init(&resampler, a, xres, yres,
-                           plan.x_start, plan.x_step, interpolation);
-        if (kernel_needs_prefilter(interpolation, &centre, &side)
-            && rows_need_interpolation(&plan, yres)) {
-            rebuild_rows_prefiltered(&resampler, &plan, yres, interpolation,
-                                     fill_value, result, mask);
-        }
-        else {
-            rebuild_rows_streaming(&resampler, &plan, yres, interpolation,
-                                   fill_value, result, mask);
-        }
-        row_stream_finish();
-        row_resampler_clear(&resampler);
-    }
+    if (ok)
+        rebuild_image(a, &output, interpolation);
     resample_plan_clear(&plan);
     return ok;
 }
@@ -485,11 +539,7 @@ continuous_compensate_table(const gdouble *a,
 
     g_return_val_if_fail(a && result && table, FALSE);
     g_return_val_if_fail(xres >= 1 && yres >= 1, FALSE);
-    if (!timing) {
-        scan_timing_init(&default_timing, xres, yres, 0.0, 1.0,
-                         SCAN_DIRECTION_DOWN);
-        timing = &default_timing;
-    }
+    timing = timing_or_default(timing, xres, yres, &default_timing);
     if (!check_inputs(xres, yres, timing, interpolation, error))
         return FALSE;
     trajectory = drift_trajectory_new_from_table(table, x_pixel_size,
