@@ -237,7 +237,8 @@ parse_reference(const gchar *arg, ReferenceSpec *spec, GError **error)
     gint id;
 
     if (!channel_spec_parse(arg, &file, &id, &err)) {
-        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE, "--reference %s", err->message);
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    "--reference %s", err->message);
         g_error_free(err);
         return FALSE;
     }
@@ -353,7 +354,8 @@ parse_seconds(const gchar *option, const gchar *arg, gdouble min, gdouble max, g
 
     if (end == arg || *end || !isfinite(v) || v < min || v > max) {
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
-                    _("%s must be a number of seconds from %g to %g, not '%s'"), option, min, max, arg);
+                    _("%s must be a number of seconds from %g to %g, not '%s'"),
+                    option, min, max, arg);
         return FALSE;
     }
     *value = v;
@@ -373,7 +375,8 @@ parse_timing_options(GError **error)
     }
     if (options.frame_start_arg) {
         if (!parse_seconds("--frame-start", options.frame_start_arg,
-                           LOCALSCAN_FRAME_START_MIN, LOCALSCAN_FRAME_START_MAX, &tf->frame_start, error))
+                           LOCALSCAN_FRAME_START_MIN, LOCALSCAN_FRAME_START_MAX,
+                           &tf->frame_start, error))
             return FALSE;
         tf->given |= LOCALSCAN_TIMING_FRAME_START;
     }
@@ -484,7 +487,8 @@ load_stored_table(GwyContainer *data, const gchar *filename, gint id, GError **e
     if ((table = localscan_channel_stored_table_of_file(data, id, filename, &err)))
         return table;
     if (g_error_matches(err, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_NO_TABLE))
-        g_set_error(error, err->domain, err->code, _("%s; give one with -d TABLE.csv"), err->message);
+        g_set_error(error, err->domain, err->code,
+                    _("%s; give one with -d TABLE.csv"), err->message);
     else
         g_propagate_error(error, g_error_copy(err));
     g_error_free(err);
@@ -558,7 +562,8 @@ measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
     image = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
     reference = gwy_container_get_object(refdata,
                                          gwy_app_get_data_key_for_id(refid));
-    if (localscan_reference_check(image, image_name, reference, reference_name, options.stripes, error)) {
+    if (localscan_reference_check(image, image_name, reference, reference_name,
+                                  options.stripes, error)) {
         table = register_stripes(image, image_name, reference, reference_name,
                                  options.stripes, mode, error);
     }
@@ -610,7 +615,8 @@ check_continuous(GwyContainer *data, gint id, const DriftTable *table, GwyDataFi
     GError *err = NULL;
     gboolean ok;
 
-    localscan_channel_scan_timing_fallback(data, id, tf->line_time, tf->direction, tf->frame_start, &timing);
+    localscan_channel_scan_timing_fallback(data, id, tf->line_time, tf->direction,
+                                           tf->frame_start, &timing);
     lo.mode = LOCALSCAN_MODE_CONTINUOUS;
     lo.fill = LOCALSCAN_FILL_MEAN;
     lo.interpolation = settings_interpolation();
@@ -731,10 +737,12 @@ warn_assumed_timing(GwyContainer *data, const gchar *filename, gint id, const Dr
     ScanTiming timing;
 
     if (mode->value != LOCALSCAN_MODE_CONTINUOUS
-        || (drift_table_find_column(table, "t_image") < 0 && drift_table_find_column(table, "t_local") < 0))
+        || (drift_table_find_column(table, "t_image") < 0
+            && drift_table_find_column(table, "t_local") < 0))
         return;
-    known = tf->given | localscan_channel_scan_timing_fallback(data, id, tf->line_time, tf->direction,
-                                                               tf->frame_start, &timing);
+    known = tf->given | localscan_channel_scan_timing_fallback(data, id, tf->line_time,
+                                                               tf->direction, tf->frame_start,
+                                                               &timing);
     if ((known & LOCALSCAN_TIMING_LINE_TIME) && (known & LOCALSCAN_TIMING_DIRECTION)
         && (known & LOCALSCAN_TIMING_FRAME_START))
         return;
@@ -744,13 +752,15 @@ warn_assumed_timing(GwyContainer *data, const gchar *filename, gint id, const Dr
     if (!(known & LOCALSCAN_TIMING_DIRECTION)) {
         g_string_append(parts, parts->len ? ", " : "");
         g_string_append(parts, timing.direction == SCAN_DIRECTION_UP
-                               ? _("slow scan up (--direction)") : _("slow scan down (--direction)"));
+                               ? _("slow scan up (--direction)")
+                               : _("slow scan down (--direction)"));
     }
     if (!(known & LOCALSCAN_TIMING_FRAME_START)) {
         g_string_append(parts, parts->len ? ", " : "");
         g_string_append_printf(parts, _("frame start %g s (--frame-start)"), timing.frame_start);
     }
-    fprintf(stderr, _("%s: warning: the table's t_image/t_local times are matched with an assumed %s: "
+    fprintf(stderr, _("%s: warning: the table's t_image/t_local times are matched with an "
+                      "assumed %s: "
                       "%s channel %d does not say\n"), PROGRAM_NAME, parts->str, filename, id);
     g_string_free(parts, TRUE);
 }

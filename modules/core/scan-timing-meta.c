@@ -79,7 +79,9 @@ meta_positive(GwyContainer *meta, const gchar *const *keys, const gchar *unit, g
 static gboolean
 meta_line_time(GwyContainer *meta, gint yres, gdouble *line_time)
 {
-    static const gchar *const line_time_keys[] = { "Line time (s)", "Line time", "Line Time", NULL };
+    static const gchar *const line_time_keys[] = {
+        "Line time (s)", "Line time", "Line Time", NULL
+    };
     static const gchar *const line_rate_keys[] = { "Scan rate", "Scan Rate", "ScanRate", NULL };
     static const gchar *const frame_time_keys[] = { "Frame time (s)", NULL };
     gdouble v;
