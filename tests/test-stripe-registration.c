@@ -127,9 +127,12 @@ START_TEST(test_non_square_images)
 }
 END_TEST
 
-/* The 3x3 quadratic refinement leaves a bias of a few hundredths of a pixel
- * on the asymmetric peak of a 16-row stripe, so the 0.05 px bound holds for
- * the rms over the stripes; single stripes stay within 0.1 px. */
+/* A whole-pixel shift is where a peak model fitted to the correlation map
+ * errs most on the lopsided peak of a 16-row stripe (a 3x3 quadratic put
+ * single stripes up to 0.1 px off, 0.023 px rms); the match on the
+ * interpolated reference is exact without noise.  With this noise (0.02) it
+ * gave at most 0.046 px per stripe and 0.018 px rms per pair over 300
+ * seeds. */
 START_TEST(test_integer_shift)
 {
     FramePairSpec spec;
@@ -146,7 +149,7 @@ START_TEST(test_integer_shift)
     pair = frame_pair_generate(&spec, test_seed);
     register_pair(pair, 16, shifts);
     for (s = 0; s < 16; s++) {
-        ck_assert_msg(fabs(shifts[s].dx - 3.0) <= 0.1 && fabs(shifts[s].dy + 2.0) <= 0.1,
+        ck_assert_msg(fabs(shifts[s].dx - 3.0) <= 0.06 && fabs(shifts[s].dy + 2.0) <= 0.06,
                       "stripe %d: (%g, %g) instead of (3, -2) (seed %u)", s, shifts[s].dx, shifts[s].dy,
                       test_seed);
         ck_assert(shifts[s].accepted);
@@ -154,7 +157,7 @@ START_TEST(test_integer_shift)
     }
     rms = sqrt(sum/16);
     printf("integer shift (3, -2): rms error %.4f px\n", rms);
-    ck_assert_msg(rms <= 0.05, "rms error %g px for an integer shift (seed %u)", rms, test_seed);
+    ck_assert_msg(rms <= 0.03, "rms error %g px for an integer shift (seed %u)", rms, test_seed);
     frame_pair_free(pair);
 }
 END_TEST
@@ -241,6 +244,43 @@ START_TEST(test_periodic_texture_lowers_score)
     ck_assert_msg(score < 0.1, "mean score %g on a pure lattice", score);
     ck_assert_msg(accepted <= 1, "%d lattice stripes accepted", accepted);
     frame_pair_free(pair);
+}
+END_TEST
+
+/* A shift of about half a stripe in y puts half the first or the last
+ * stripe off the reference: its peak lies on the edge of the shifts the
+ * search considers (half the rows on the reference), and is found there. */
+START_TEST(test_stripe_half_off_reference)
+{
+    enum { N = 16 };
+    FramePairSpec spec;
+    FramePair *pair;
+    StripeShift shifts[N];
+    GRand *rng = g_rand_new_with_seed(test_seed);
+    gdouble worst = 0.0, e;
+    gint s, edge;
+
+    frame_pair_spec_init(&spec);
+    spec.drift = FALSE;
+    spec.noise = 0.02;
+    /* 16-row stripes: 8 px leaves exactly half a stripe on the reference. */
+    spec.shift_y = g_rand_double_range(rng, 8.05, 8.95)*(g_rand_boolean(rng) ? 1.0 : -1.0);
+    spec.shift_x = g_rand_double_range(rng, -4.0, 4.0);
+    pair = frame_pair_generate(&spec, test_seed);
+    register_pair(pair, N, shifts);
+    edge = (spec.shift_y > 0.0) ? 0 : N-1;
+    for (s = 0; s < N; s++) {
+        e = hypot(shifts[s].dx - spec.shift_x, shifts[s].dy - spec.shift_y);
+        worst = MAX(worst, e);
+        ck_assert_msg(e <= 0.1, "stripe %d: (%g, %g) instead of (%g, %g) (seed %u)",
+                      s, shifts[s].dx, shifts[s].dy, spec.shift_x, spec.shift_y, test_seed);
+    }
+    printf("shift (%.2f, %.2f), edge stripe %d: score %.3f, max error %.4f px\n",
+           spec.shift_x, spec.shift_y, edge, shifts[edge].score, worst);
+    ck_assert_msg(shifts[edge].accepted, "edge stripe %d rejected (score %g, seed %u)",
+                  edge, shifts[edge].score, test_seed);
+    frame_pair_free(pair);
+    g_rand_free(rng);
 }
 END_TEST
 
@@ -416,6 +456,7 @@ registration_suite(void)
     tcase_add_test(tc, test_non_square_images);
     tcase_add_test(tc, test_integer_shift);
     tcase_add_test(tc, test_sign_convention);
+    tcase_add_test(tc, test_stripe_half_off_reference);
     tcase_add_test(tc, test_featureless_stripe_rejected);
     tcase_add_test(tc, test_periodic_texture_lowers_score);
     tcase_add_test(tc, test_search_around_prediction);

@@ -11,6 +11,7 @@
 #include "stripe-registration.h"
 #include "stripe-geometry.h"
 #include "fft-correlation.h"
+#include "stripe-subpixel.h"
 #include "localscan-intl.h"
 
 /*
@@ -33,7 +34,11 @@
  * correlations done once per frame and summed over rows by prefix sums, and
  * the template's sums over its overlap are prefix sums too.
  *
- * The best peak is refined by a quadratic fitted to its 3x3 neighbourhood.
+ * The best peak is located to a fraction of a pixel by a quadratic fitted to
+ * its 3x3 neighbourhood, which is enough to judge it and to predict the
+ * neighbours; the shift reported is then refined by matching the stripe
+ * against the reference interpolated at fractional shifts (stripe-subpixel.c
+ * says why the map alone cannot give it without bias).
  * Confidence comes from the peak height and from how far the best competing
  * peak stays below it, so periodic textures and featureless stripes score low.
  * Drift varies smoothly from stripe to stripe: a stripe whose best peak lies
@@ -61,6 +66,9 @@
 /* Correlation maps are kept for the consistency step up to this size;
  * above it they are computed again. */
 #define MAP_CACHE_BYTES (256*1024*1024)
+/* How far (px) the match may move a peak that lies on the edge of the
+ * shifts with enough overlap; a peak inside them moves at most 1 px. */
+#define EDGE_POLISH_REACH 2
 /* Marks shifts that are not considered. */
 #define NO_MATCH -2.0
 
@@ -70,6 +78,7 @@ typedef struct {
     gdouble value;        /* ZNCC at the peak */
     gdouble rival;        /* best competing local maximum, >= 0 */
     gboolean trusted;     /* found, inside the search area, refinable */
+    gboolean polished;    /* dy, dx refined by stripe_subpixel_refine() */
 } Peak;
 
 typedef struct {
@@ -95,6 +104,7 @@ typedef struct {
     gdouble *row_sq_prefix;
     FFTCorrelation *stripe_fc;
     gdouble *map;             /* span x span scratch */
+    StripeSubpixel *subpixel;
     gdouble **cached_maps;    /* n, NULL where not kept */
 } Registration;
 
@@ -385,13 +395,44 @@ refine_peak(const gdouble *map, gint span, gint iy, gint ix, gdouble *oy, gdoubl
     *oy = (denom < 0.0) ? CLAMP(0.5*(fm - fp)/denom, -0.5, 0.5) : 0.0;
 }
 
-/* The best shift within radius of map indices (cy, cx), and the best local
- * maximum that is not part of it.  A peak on the border of the searched area
- * may be the slope of a better one outside, so it is not trusted. */
-static void
-find_peak(const Registration *reg, const gdouble *map, gint cy, gint cx, gint radius, Peak *peak)
+static gboolean
+neighbourhood_matched(const gdouble *map, gint span, gint iy, gint ix)
 {
-    gint span = reg->span, i, j, k, l;
+    gint k, l;
+
+    for (k = -1; k <= 1; k++) {
+        for (l = -1; l <= 1; l++) {
+            if (map[(iy + k)*span + ix + l] <= NO_MATCH)
+                return FALSE;
+        }
+    }
+    return TRUE;
+}
+
+/* The shift of a trusted peak refined by matching the stripe against the
+ * interpolated reference, within reach px of the peak, once per peak; where
+ * the match fails to converge the quadratic's estimate stays.  TRUE if the
+ * peak is polished. */
+static gboolean
+polish_peak(Registration *reg, gint s, gint reach, Peak *peak)
+{
+    gint first = stripe_first_row(s, reg->n, reg->yres), end = stripe_end_row(s, reg->n, reg->yres);
+
+    if (peak->trusted && !peak->polished) {
+        peak->polished = stripe_subpixel_refine(reg->subpixel, first, end, peak->iy - reg->m,
+                                                peak->ix - reg->m, reach, &peak->dy, &peak->dx);
+    }
+    return peak->polished;
+}
+
+/* The best shift within radius of map indices (cy, cx) in the map of stripe
+ * s, and the best local maximum that is not part of it.  A peak on the
+ * border of the searched area may be the slope of a better one outside, so
+ * it is not trusted. */
+static void
+find_peak(Registration *reg, gint s, const gdouble *map, gint cy, gint cx, gint radius, Peak *peak)
+{
+    gint span = reg->span, i, j;
     gint ylo = MAX(0, cy - radius), yhi = MIN(span-1, cy + radius);
     gint xlo = MAX(0, cx - radius), xhi = MIN(span-1, cx + radius);
     gdouble best = NO_MATCH, rival = 0.0, oy, ox;
@@ -410,14 +451,9 @@ find_peak(const Registration *reg, const gdouble *map, gint cy, gint cx, gint ra
     peak->value = best;
     peak->dy = peak->iy - reg->m;
     peak->dx = peak->ix - reg->m;
+    peak->polished = FALSE;
     peak->trusted = (best > NO_MATCH
                      && peak->iy > ylo && peak->iy < yhi && peak->ix > xlo && peak->ix < xhi);
-    for (k = -1; k <= 1 && peak->trusted; k++) {
-        for (l = -1; l <= 1; l++) {
-            if (map[(peak->iy + k)*span + peak->ix + l] <= NO_MATCH)
-                peak->trusted = FALSE;
-        }
-    }
     for (i = ylo; i <= yhi; i++) {
         for (j = xlo; j <= xhi; j++) {
             if (ABS(i - peak->iy) < RIVAL_EXCLUSION && ABS(j - peak->ix) < RIVAL_EXCLUSION)
@@ -427,10 +463,21 @@ find_peak(const Registration *reg, const gdouble *map, gint cy, gint cx, gint ra
         }
     }
     peak->rival = rival;
-    if (peak->trusted) {
+    if (!peak->trusted)
+        return;
+    if (neighbourhood_matched(map, span, peak->iy, peak->ix)) {
         refine_peak(map, span, peak->iy, peak->ix, &oy, &ox);
         peak->dy += oy;
         peak->dx += ox;
+    }
+    else {
+        /* On the edge of the shifts that keep enough of the stripe on the
+         * reference the map cannot tell a peak from the slope of a better
+         * one beyond; the match can, and says where the peak lies.  The
+         * shifts left out next to it may be nearly as good as the last one
+         * kept (the overlap rule cuts at whole rows and, off dx = 0, at a
+         * slightly smaller weight), so the match may go a step further. */
+        peak->trusted = polish_peak(reg, s, EDGE_POLISH_REACH, peak);
     }
 }
 
@@ -526,11 +573,14 @@ choose_consistent_shifts(Registration *reg, const Peak *global, gdouble min_scor
         gboolean resolved;
 
         if (!predict_from_neighbours(global, reliable, n, s, &py, &px)) {
-            set_shift(shifts + s, global + s, peak_score(global + s), FALSE, min_score);
+            local = global[s];
+            polish_peak(reg, s, 1, &local);
+            set_shift(shifts + s, &local, peak_score(&local), FALSE, min_score);
             continue;
         }
-        find_peak(reg, stripe_map(reg, s), (gint)floor(py + 0.5) + reg->m, (gint)floor(px + 0.5) + reg->m,
+        find_peak(reg, s, stripe_map(reg, s), (gint)floor(py + 0.5) + reg->m, (gint)floor(px + 0.5) + reg->m,
                   CONSISTENCY_RADIUS, &local);
+        polish_peak(reg, s, 1, &local);
         resolved = (local.iy != global[s].iy || local.ix != global[s].ix);
         score = peak_score(&local);
         if (resolved && global[s].value > 0.0)
@@ -585,6 +635,7 @@ registration_setup(Registration *reg, const gdouble *image, const gdouble *refer
     cols = fft_correlation_nice_size(xres + 2*reg->m);
     reg->stripe_fc = fft_correlation_new(rows, cols);
     reg->map = g_new(gdouble, (gsize)reg->span*reg->span);
+    reg->subpixel = stripe_subpixel_new(image, reference, xres, yres, reg->window, reg->max_height);
     maps_bytes = (gsize)n*reg->span*reg->span*sizeof(gdouble);
     if (maps_bytes <= MAP_CACHE_BYTES)
         reg->cached_maps = g_new0(gdouble*, n);
@@ -601,6 +652,7 @@ registration_free(Registration *reg)
         g_free(reg->cached_maps);
     }
     fft_correlation_free(reg->stripe_fc);
+    stripe_subpixel_free(reg->subpixel);
     g_free(reg->map);
     g_free(reg->row_sq_prefix);
     g_free(reg->row_prefix);
@@ -676,9 +728,11 @@ register_stripes(Registration *reg, const gdouble *predicted_dx, const gdouble *
     for (s = 0; s < reg->n; s++) {
         cx = predicted_dx ? nearest_int(predicted_dx[s]) : 0;
         cy = predicted_dy ? nearest_int(predicted_dy[s]) : 0;
-        find_peak(reg, stripe_map(reg, s), cy + reg->m, cx + reg->m, radius, global + s);
-        if (predicted_dx)
+        find_peak(reg, s, stripe_map(reg, s), cy + reg->m, cx + reg->m, radius, global + s);
+        if (predicted_dx) {
+            polish_peak(reg, s, 1, global + s);
             set_shift(shifts + s, global + s, peak_score(global + s), FALSE, min_score);
+        }
     }
     if (!predicted_dx)
         choose_consistent_shifts(reg, global, min_score, shifts);

@@ -1,0 +1,44 @@
+/*
+ *  Sub-pixel shift of a stripe: Gauss-Newton matching of the stripe
+ *  against the reference interpolated at fractional shifts.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef LOCALSCAN_STRIPE_SUBPIXEL_H
+#define LOCALSCAN_STRIPE_SUBPIXEL_H
+
+#include <glib.h>
+
+G_BEGIN_DECLS
+
+typedef struct _StripeSubpixel StripeSubpixel;
+
+/* image and reference are yres x xres, row-major; window holds xres column
+ * weights.  All three must outlive the object.  Stripes up to max_height
+ * rows can be refined. */
+StripeSubpixel* stripe_subpixel_new   (const gdouble *image,
+                                       const gdouble *reference,
+                                       gint xres,
+                                       gint yres,
+                                       const gdouble *window,
+                                       gint max_height);
+void            stripe_subpixel_free  (StripeSubpixel *sp);
+
+/* Refines the shift (dy, dx) (table convention: reference content at (r, c)
+ * appears in the image at (r + dy, c + dx)) of image rows first .. end-1,
+ * starting from the given values, which must lie within reach px (per
+ * axis) of the whole-pixel shift (anchor_dy, anchor_dx).  Returns FALSE,
+ * leaving dy and dx unchanged, when the match does not converge within that
+ * square or too little of the stripe stays on the reference. */
+gboolean        stripe_subpixel_refine(StripeSubpixel *sp,
+                                       gint first,
+                                       gint end,
+                                       gint anchor_dy,
+                                       gint anchor_dx,
+                                       gint reach,
+                                       gdouble *dy,
+                                       gdouble *dx);
+
+G_END_DECLS
+
+#endif
