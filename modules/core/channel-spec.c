@@ -6,6 +6,7 @@
 #include "config.h"
 #include <string.h>
 #include "channel-spec.h"
+#include "localscan-intl.h"
 
 G_DEFINE_QUARK(channel-spec-error-quark, channel_spec_error)
 
@@ -34,7 +35,7 @@ channel_spec_parse(const gchar *text, gchar **filename, gint *id,
     if (!g_ascii_string_to_unsigned(colon + 1, 10, 0, G_MAXINT, &value,
                                     NULL)) {
         g_set_error(error, CHANNEL_SPEC_ERROR, CHANNEL_SPEC_ERROR_RANGE,
-                    "%s: channel id %s is out of range (0 to %d)",
+                    _("%s: channel id %s is out of range (0 to %d)"),
                     text, colon + 1, G_MAXINT);
         return FALSE;
     }

@@ -831,7 +831,7 @@ check_timing(const DriftTable *table, const ScanTiming *timing,
                     DRIFT_TRAJECTORY_ERROR_TIMING,
                     _("%s: scan timing is unusable (line time %g s, "
                     "%d x %d pixels)"),
-                    table->source_name ? table->source_name : "drift table",
+                    table->source_name ? table->source_name : _("drift table"),
                     timing->line_time, timing->xres, timing->yres);
         return FALSE;
     }
@@ -854,7 +854,7 @@ extra_or_default(const DriftTable *table, gint s, const gchar *name,
     }
     g_set_error(error, DRIFT_TRAJECTORY_ERROR, DRIFT_TRAJECTORY_ERROR_VALUE,
                 _("%s:%d: %s is not a finite number"),
-                table->source_name ? table->source_name : "drift table",
+                table->source_name ? table->source_name : _("drift table"),
                 table->rows[s].line, name);
     return FALSE;
 }
