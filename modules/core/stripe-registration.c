@@ -37,8 +37,9 @@
  * The best peak is located to a fraction of a pixel by a quadratic fitted to
  * its 3x3 neighbourhood, which is enough to judge it and to predict the
  * neighbours; the shift reported is then refined by matching the stripe
- * against the reference interpolated at fractional shifts (stripe-subpixel.c
- * says why the map alone cannot give it without bias).
+ * against the reference interpolated at fractional shifts, with the shift
+ * free to change linearly over the stripe's rows and taken at its centre row
+ * (stripe-subpixel.c says why the map alone cannot give it without bias).
  * Confidence comes from the peak height and from how far the best competing
  * peak stays below it, so periodic textures and featureless stripes score low.
  * Drift varies smoothly from stripe to stripe: a stripe whose best peak lies

@@ -20,29 +20,49 @@
  * against the reference at fractional shifts has no such bias: at the true
  * shift the moved reference equals the stripe up to noise.
  *
- * The model is: the reference, moved by d and sampled with Keys' cubic
- * kernel, equals gain*stripe + offset over the stripe's pixels, weighted by
- * the column window.  Linearised about the current d with the stripe's own
- * gradients, the unknowns gain, offset, gain*step_y and gain*step_x are a
- * linear least-squares problem whose matrix depends only on the stripe and
- * the rows that meet the reference, so each step costs one interpolation of
- * the reference and four dot products.  Because the stripe's gradients stand
- * in for the moved reference's, the steps converge to the exact match (the
+ * The drift also moves on while the stripe is scanned (by up to a couple of
+ * pixels in the first stripe, as the scanner settles).  A single shift then
+ * fits the rows with the most texture best, not the stripe's mean drift, so
+ * the model lets the shift change linearly over the rows and reports it at
+ * the stripe's centre row, which is the mean of a linear drift.
+ *
+ * The model is: the reference, sampled with Keys' cubic kernel at
+ * (r - dy - vy t, c - dx - vx t), t = r - centre, equals gain*stripe + offset
+ * over the stripe's pixels, weighted by the column window.  Linearised about
+ * the current shift with the stripe's own gradients, the unknowns gain,
+ * offset and gain times the steps of dy, dx, vy, vx are a linear
+ * least-squares problem whose matrix depends only on the stripe and the rows
+ * that meet the reference, so each step costs one interpolation of the
+ * reference and a few dot products.  Because the stripe's gradients stand in
+ * for the moved reference's, the steps converge to the exact match (the
  * residual then has no component along them) and only their length depends
  * on the approximation.
  */
 
-/* Unknowns: gain, offset, gain*step_y, gain*step_x. */
-enum { PARAMS = 4, NORMAL_TERMS = PARAMS*(PARAMS + 1)/2 };
+/* Unknowns: gain, offset, and gain times the steps of dy, dx, vy, vx. */
+enum {
+    ROW_REGRESSORS = 4,   /* stripe, 1, d/dy, d/dx; the last two times t too */
+    ROW_TERMS = ROW_REGRESSORS*(ROW_REGRESSORS + 1)/2,
+    MAX_PARAMS = 6,
+};
 
-#define MAX_ITERATIONS 8
+#define MAX_ITERATIONS 10
 /* Steps shorter than this (px, per axis) end the iteration. */
-#define CONVERGED_STEP 1e-3
+#define CONVERGED_STEP 5e-3
 /* Fewer of the stripe's rows than this on the reference is too little to
  * refine on. */
 #define MIN_ROWS_FRACTION 0.25
 /* Columns the match needs at least. */
 #define MIN_COLUMNS 8
+/* Stripes of fewer rows, or with less than this fraction of their rows on
+ * the reference, are matched with one shift for all rows: the change of the
+ * shift over the rows would be too uncertain, and for a stripe partly off
+ * the reference its value at the centre row an extrapolation. */
+#define MIN_ROWS_FOR_VELOCITY 6
+#define MIN_VELOCITY_FRACTION 0.5
+/* How far (px) the drift may move the stripe's first or last row away from
+ * its centre; a larger change within a stripe is not believed. */
+#define MAX_SPREAD 2.0
 
 struct _StripeSubpixel {
     const gdouble *image;
@@ -54,18 +74,24 @@ struct _StripeSubpixel {
     gdouble *weighted_value;  /* max_height x xres: window*stripe */
     gdouble *weighted_grad_y; /* window*d(stripe)/dy */
     gdouble *weighted_grad_x;
-    gdouble *row_normal;      /* max_height x NORMAL_TERMS: each row's part of
-                                 the normal matrix, upper triangle by rows */
-    gdouble *rows_x;          /* (max_height + 3) x xres: reference rows
-                                 interpolated along x */
+    gdouble *row_normal;      /* max_height x ROW_TERMS: each row's products
+                                 of the row regressors, upper triangle */
+    gdouble *column;          /* xres: reference interpolated along y */
 };
 
 typedef struct {
     gint first;               /* the stripe's image rows */
     gint height;
+    gdouble centre;           /* t = i - centre for row first + i */
+    gint nparams;             /* 4, or 6 with the velocity */
     gint col_lo;              /* columns matched, [col_lo, col_hi) */
     gint col_hi;
 } StripeSpan;
+
+typedef struct {
+    gdouble dy, dx;           /* at the centre row */
+    gdouble vy, vx;           /* px per row */
+} StripeMotion;
 
 StripeSubpixel*
 stripe_subpixel_new(const gdouble *image, const gdouble *reference, gint xres, gint yres,
@@ -87,8 +113,8 @@ stripe_subpixel_new(const gdouble *image, const gdouble *reference, gint xres, g
     sp->weighted_value = g_new(gdouble, plane);
     sp->weighted_grad_y = g_new(gdouble, plane);
     sp->weighted_grad_x = g_new(gdouble, plane);
-    sp->row_normal = g_new(gdouble, (gsize)max_height*NORMAL_TERMS);
-    sp->rows_x = g_new(gdouble, (gsize)(max_height + 3)*xres);
+    sp->row_normal = g_new(gdouble, (gsize)max_height*ROW_TERMS);
+    sp->column = g_new(gdouble, xres);
     return sp;
 }
 
@@ -101,172 +127,233 @@ stripe_subpixel_free(StripeSubpixel *sp)
     g_free(sp->weighted_grad_y);
     g_free(sp->weighted_grad_x);
     g_free(sp->row_normal);
-    g_free(sp->rows_x);
+    g_free(sp->column);
     g_free(sp);
 }
 
-/* The image row next to r on the given side, r itself at the frame's edge. */
+/* Index of the product of row regressors a <= b in a row's terms. */
+static gint
+row_term(gint a, gint b)
+{
+    return a*ROW_REGRESSORS - a*(a - 1)/2 + (b - a);
+}
+
+/* The image row r, or the edge row beyond the frame. */
 static const gdouble*
 image_row_clamped(const StripeSubpixel *sp, gint r)
 {
     return sp->image + (gsize)CLAMP(r, 0, sp->yres - 1)*sp->xres;
 }
 
+/* Row i's weighted stripe and gradients, and its products of the row
+ * regressors (stripe, 1, d/dy, d/dx), upper triangle by rows. */
 static void
-add_row_normal(gdouble *normal, const gdouble *u, gdouble w)
+prepare_row(StripeSubpixel *sp, const StripeSpan *span, gint i)
 {
-    gint a, b, k = 0;
+    gint xres = sp->xres, r = span->first + i, c;
+    const gdouble *row = sp->image + (gsize)r*xres;
+    const gdouble *above = image_row_clamped(sp, r - 1), *below = image_row_clamped(sp, r + 1);
+    gdouble *wv = sp->weighted_value + (gsize)i*xres;
+    gdouble *wgy = sp->weighted_grad_y + (gsize)i*xres;
+    gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
+    gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS;
+    gdouble inv_dist = 1.0/(MIN(r + 1, sp->yres - 1) - MAX(r - 1, 0));
+    gdouble vv = 0.0, v1 = 0.0, vy = 0.0, vx = 0.0, w1 = 0.0, y1 = 0.0, x1 = 0.0;
+    gdouble yy = 0.0, yx = 0.0, xx = 0.0, w, v, gy, gx;
 
-    for (a = 0; a < PARAMS; a++) {
-        for (b = a; b < PARAMS; b++)
-            normal[k++] += w*u[a]*u[b];
+    for (c = span->col_lo; c < span->col_hi; c++) {
+        w = sp->window[c];
+        v = row[c];
+        gy = (below[c] - above[c])*inv_dist;
+        gx = 0.5*(row[c+1] - row[c-1]);
+        wv[c] = w*v;
+        wgy[c] = w*gy;
+        wgx[c] = w*gx;
+        vv += wv[c]*v;
+        v1 += wv[c];
+        vy += wv[c]*gy;
+        vx += wv[c]*gx;
+        w1 += w;
+        y1 += wgy[c];
+        x1 += wgx[c];
+        yy += wgy[c]*gy;
+        yx += wgy[c]*gx;
+        xx += wgx[c]*gx;
     }
+    terms[row_term(0, 0)] = vv;
+    terms[row_term(0, 1)] = v1;
+    terms[row_term(0, 2)] = vy;
+    terms[row_term(0, 3)] = vx;
+    terms[row_term(1, 1)] = w1;
+    terms[row_term(1, 2)] = y1;
+    terms[row_term(1, 3)] = x1;
+    terms[row_term(2, 2)] = yy;
+    terms[row_term(2, 3)] = yx;
+    terms[row_term(3, 3)] = xx;
 }
 
-/* The weighted stripe, its weighted gradients, and each row's normal-matrix
- * terms for the regressors (stripe, 1, d/dy, d/dx). */
-static void
-prepare_stripe(StripeSubpixel *sp, const StripeSpan *span)
+/* The regressors beyond the row's own are its gradients times t. */
+static gint
+row_regressor_of(gint a, gint *t_power)
 {
-    gint xres = sp->xres, i, c, r;
+    *t_power = (a >= ROW_REGRESSORS);
+    return (a >= ROW_REGRESSORS) ? a - 2 : a;
+}
 
-    for (i = 0; i < span->height; i++) {
-        const gdouble *row, *above, *below;
-        gdouble *normal = sp->row_normal + (gsize)i*NORMAL_TERMS;
-        gdouble u[PARAMS], dist;
-        gsize k;
+/* Adds row i's share (at offset t from the centre) to the normal matrix. */
+static void
+add_row_normal(const StripeSubpixel *sp, gint nparams, gint i, gdouble t,
+               gdouble normal[MAX_PARAMS][MAX_PARAMS])
+{
+    const gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS;
+    gdouble power[3] = { 1.0, t, t*t };
+    gint a, b, ra, rb, pa, pb;
 
-        r = span->first + i;
-        row = sp->image + (gsize)r*xres;
-        above = image_row_clamped(sp, r - 1);
-        below = image_row_clamped(sp, r + 1);
-        dist = (gdouble)(MIN(r + 1, sp->yres - 1) - MAX(r - 1, 0));
-        memset(normal, 0, NORMAL_TERMS*sizeof(gdouble));
-        for (c = span->col_lo; c < span->col_hi; c++) {
-            gdouble w = sp->window[c];
-
-            u[0] = row[c];
-            u[1] = 1.0;
-            u[2] = (below[c] - above[c])/dist;
-            u[3] = 0.5*(row[c+1] - row[c-1]);
-            k = (gsize)i*xres + c;
-            sp->weighted_value[k] = w*u[0];
-            sp->weighted_grad_y[k] = w*u[2];
-            sp->weighted_grad_x[k] = w*u[3];
-            add_row_normal(normal, u, w);
+    for (a = 0; a < nparams; a++) {
+        ra = row_regressor_of(a, &pa);
+        for (b = a; b < nparams; b++) {
+            rb = row_regressor_of(b, &pb);
+            normal[a][b] += power[pa + pb]*terms[row_term(MIN(ra, rb), MAX(ra, rb))];
         }
     }
 }
 
-/* Solves the symmetric system given by its upper triangle (Gaussian
+/* Solves normal x = rhs, normal given by its upper triangle (Gaussian
  * elimination with partial pivoting); FALSE when it is singular. */
 static gboolean
-solve_normal(const gdouble *upper, const gdouble *rhs, gdouble *x)
+solve_normal(gdouble normal[MAX_PARAMS][MAX_PARAMS], const gdouble *rhs, gint n, gdouble *x)
 {
-    gdouble a[PARAMS][PARAMS + 1], f, scale = 0.0;
-    gint i, j, p, k = 0;
+    gdouble a[MAX_PARAMS][MAX_PARAMS + 1], f, scale = 0.0;
+    gint i, j, k, p;
 
-    for (i = 0; i < PARAMS; i++) {
-        for (j = i; j < PARAMS; j++) {
-            a[i][j] = a[j][i] = upper[k++];
-            scale = MAX(scale, fabs(a[i][j]));
+    for (i = 0; i < n; i++) {
+        for (j = i; j < n; j++) {
+            a[i][j] = a[j][i] = normal[i][j];
+            scale = MAX(scale, fabs(normal[i][j]));
         }
-        a[i][PARAMS] = rhs[i];
+        a[i][n] = rhs[i];
     }
-    for (i = 0; i < PARAMS; i++) {
+    for (i = 0; i < n; i++) {
         p = i;
-        for (j = i + 1; j < PARAMS; j++) {
+        for (j = i + 1; j < n; j++) {
             if (fabs(a[j][i]) > fabs(a[p][i]))
                 p = j;
         }
         if (!(fabs(a[p][i]) > 1e-12*scale))
             return FALSE;
-        for (j = 0; j <= PARAMS; j++) {
+        for (j = 0; j <= n; j++) {
             f = a[i][j];
             a[i][j] = a[p][j];
             a[p][j] = f;
         }
-        for (j = i + 1; j < PARAMS; j++) {
+        for (j = i + 1; j < n; j++) {
             f = a[j][i]/a[i][i];
-            for (k = i; k <= PARAMS; k++)
+            for (k = i; k <= n; k++)
                 a[j][k] -= f*a[i][k];
         }
     }
-    for (i = PARAMS - 1; i >= 0; i--) {
-        f = a[i][PARAMS];
-        for (j = i + 1; j < PARAMS; j++)
+    for (i = n - 1; i >= 0; i--) {
+        f = a[i][n];
+        for (j = i + 1; j < n; j++)
             f -= a[i][j]*x[j];
         x[i] = f/a[i][i];
     }
     return TRUE;
 }
 
-/* Reference rows ref_first .. ref_first + count - 1 interpolated along x at
- * columns c + kx + fx, for the matched columns. */
-static void
-interpolate_rows_x(StripeSubpixel *sp, const StripeSpan *span, gint ref_first, gint count, gint kx,
-                   const gdouble *wx)
+/* Dot products of row i's weighted regressors with the reference sampled
+ * at (r - shift_y, c - shift_x); FALSE if the taps leave the reference. */
+static gboolean
+match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, gdouble shift_x,
+          gdouble *dots)
 {
-    gint xres = sp->xres, k, c;
+    gint xres = sp->xres, ky = (gint)floor(-shift_y), kx = (gint)floor(-shift_x);
+    gint top = span->first + i + ky - 1, c;
+    const gdouble *r0, *r1, *r2, *r3;
+    const gdouble *wv = sp->weighted_value + (gsize)i*xres;
+    const gdouble *wgy = sp->weighted_grad_y + (gsize)i*xres;
+    const gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
+    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, v;
+    gdouble *col = sp->column;
 
-    for (k = 0; k < count; k++) {
-        const gdouble *src = sp->reference + (gsize)(ref_first + k)*xres + kx;
-        gdouble *dest = sp->rows_x + (gsize)k*xres;
-
-        for (c = span->col_lo; c < span->col_hi; c++)
-            dest[c] = wx[0]*src[c-1] + wx[1]*src[c] + wx[2]*src[c+1] + wx[3]*src[c+2];
+    if (top < 0 || top + 3 >= sp->yres)
+        return FALSE;
+    keys_weights(-shift_y - ky, 1.0 - (-shift_y - ky), wy);
+    keys_weights(-shift_x - kx, 1.0 - (-shift_x - kx), wx);
+    r0 = sp->reference + (gsize)top*xres;
+    r1 = r0 + xres;
+    r2 = r1 + xres;
+    r3 = r2 + xres;
+    /* Along y first, into reference columns c + kx - 1 .. c + kx + 2. */
+    for (c = span->col_lo + kx - 1; c < span->col_hi + kx + 2; c++)
+        col[c] = wy[0]*r0[c] + wy[1]*r1[c] + wy[2]*r2[c] + wy[3]*r3[c];
+    col += kx;
+    for (c = span->col_lo; c < span->col_hi; c++) {
+        v = wx[0]*col[c-1] + wx[1]*col[c] + wx[2]*col[c+1] + wx[3]*col[c+2];
+        s0 += wv[c]*v;
+        s1 += sp->window[c]*v;
+        s2 += wgy[c]*v;
+        s3 += wgx[c]*v;
     }
+    dots[0] = s0;
+    dots[1] = s1;
+    dots[2] = s2;
+    dots[3] = s3;
+    return TRUE;
 }
 
-/* One Gauss-Newton step from the shift (dy, dx): the reference sampled at
- * (r - dy, c - dx) regressed on the stripe and its gradients.  FALSE when
- * too few rows meet the reference or the fit has no positive gain. */
+/* One Gauss-Newton step from the motion m: the reference sampled along it
+ * regressed on the stripe and its gradients.  FALSE when too few rows meet
+ * the reference or the fit has no positive gain. */
 static gboolean
-match_step(StripeSubpixel *sp, const StripeSpan *span, gdouble dy, gdouble dx,
-           gdouble *step_y, gdouble *step_x)
+match_step(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, StripeMotion *step)
 {
-    gint xres = sp->xres, ky = (gint)floor(-dy), kx = (gint)floor(-dx);
-    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], normal[NORMAL_TERMS], rhs[PARAMS], p[PARAMS];
-    gint ilo, ihi, i, c, t;
-
-    keys_weights(-dy - ky, 1.0 - (-dy - ky), wy);
-    keys_weights(-dx - kx, 1.0 - (-dx - kx), wx);
-    /* Row i samples reference rows first + i + ky - 1 .. first + i + ky + 2. */
-    ilo = MAX(0, 1 - span->first - ky);
-    ihi = MIN(span->height, sp->yres - 2 - span->first - ky);
-    if (ihi - ilo < MAX(2, (gint)ceil(MIN_ROWS_FRACTION*span->height)))
-        return FALSE;
-    interpolate_rows_x(sp, span, span->first + ilo + ky - 1, ihi - ilo + 3, kx, wx);
+    gdouble normal[MAX_PARAMS][MAX_PARAMS], rhs[MAX_PARAMS], p[MAX_PARAMS], dots[ROW_REGRESSORS], t;
+    gint n = span->nparams, i, a, ra, pa, used = 0;
 
     memset(normal, 0, sizeof(normal));
     memset(rhs, 0, sizeof(rhs));
-    for (i = ilo; i < ihi; i++) {
-        const gdouble *r0 = sp->rows_x + (gsize)(i - ilo)*xres;
-        const gdouble *r1 = r0 + xres, *r2 = r1 + xres, *r3 = r2 + xres;
-        const gdouble *wv = sp->weighted_value + (gsize)i*xres;
-        const gdouble *wgy = sp->weighted_grad_y + (gsize)i*xres;
-        const gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
-        gdouble s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, v;
-
-        for (c = span->col_lo; c < span->col_hi; c++) {
-            v = wy[0]*r0[c] + wy[1]*r1[c] + wy[2]*r2[c] + wy[3]*r3[c];
-            s0 += wv[c]*v;
-            s1 += sp->window[c]*v;
-            s2 += wgy[c]*v;
-            s3 += wgx[c]*v;
+    for (i = 0; i < span->height; i++) {
+        t = i - span->centre;
+        if (!match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, dots))
+            continue;
+        used++;
+        for (a = 0; a < n; a++) {
+            ra = row_regressor_of(a, &pa);
+            rhs[a] += (pa ? t : 1.0)*dots[ra];
         }
-        rhs[0] += s0;
-        rhs[1] += s1;
-        rhs[2] += s2;
-        rhs[3] += s3;
-        for (t = 0; t < NORMAL_TERMS; t++)
-            normal[t] += sp->row_normal[(gsize)i*NORMAL_TERMS + t];
+        add_row_normal(sp, n, i, t, normal);
     }
-    if (!solve_normal(normal, rhs, p) || !(p[0] > 0.0))
+    if (used < MAX(2, (gint)ceil(MIN_ROWS_FRACTION*span->height)))
         return FALSE;
-    *step_y = p[2]/p[0];
-    *step_x = p[3]/p[0];
+    if (!solve_normal(normal, rhs, n, p) || !(p[0] > 0.0))
+        return FALSE;
+    step->dy = p[2]/p[0];
+    step->dx = p[3]/p[0];
+    step->vy = (n > 4) ? p[4]/p[0] : 0.0;
+    step->vx = (n > 4) ? p[5]/p[0] : 0.0;
     return TRUE;
+}
+
+/* How many of the stripe's rows have all their taps on the reference at the
+ * shift dy. */
+static gint
+rows_on_reference(const StripeSubpixel *sp, const StripeSpan *span, gdouble dy)
+{
+    gint top = span->first + (gint)floor(-dy) - 1;
+
+    return MAX(0, MIN(span->height, sp->yres - 3 - top) - MAX(0, -top));
+}
+
+/* Whether m keeps every row's taps on the columns prepared. */
+static gboolean
+motion_within_reach(const StripeSpan *span, const StripeMotion *m, gint anchor_dy, gint anchor_dx,
+                    gint reach)
+{
+    gdouble half = 0.5*(span->height - 1);
+
+    return (fabs(m->dy - anchor_dy) <= reach && fabs(m->dx - anchor_dx) <= reach
+            && fabs(m->vy)*half <= MAX_SPREAD && fabs(m->vx)*half <= MAX_SPREAD);
 }
 
 gboolean
@@ -274,35 +361,47 @@ stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy,
                        gdouble *dy, gdouble *dx)
 {
     StripeSpan span;
-    gdouble y = *dy, x = *dx, step_y, step_x;
-    gint iter;
+    StripeMotion m, step;
+    gint iter, margin, i;
 
     g_return_val_if_fail(sp && first >= 0 && end <= sp->yres, FALSE);
     g_return_val_if_fail(end - first >= 1 && end - first <= sp->max_height, FALSE);
     g_return_val_if_fail(reach >= 0, FALSE);
     span.first = first;
     span.height = end - first;
-    /* Columns whose taps stay on the reference for every dx within reach of
-     * the anchor, and whose x gradient is central. */
-    span.col_lo = MAX(1, anchor_dx + reach + 1);
-    span.col_hi = MIN(sp->xres - 1, sp->xres - 2 - reach + anchor_dx);
+    span.centre = 0.5*(span.height - 1);
+    /* Columns whose taps stay on the reference for every row's dx within
+     * reach of the anchor plus the spread, and whose x gradient is central. */
+    margin = reach + (gint)ceil(MAX_SPREAD) + 1;
+    span.col_lo = MAX(1, anchor_dx + margin);
+    span.col_hi = MIN(sp->xres - 1, sp->xres - 1 - margin + anchor_dx);
     if (span.col_hi - span.col_lo < MIN_COLUMNS)
         return FALSE;
-    prepare_stripe(sp, &span);
+    for (i = 0; i < span.height; i++)
+        prepare_row(sp, &span, i);
 
+    m.dy = *dy;
+    m.dx = *dx;
+    m.vy = m.vx = 0.0;
+    span.nparams = 4;
+    if (span.height >= MIN_ROWS_FOR_VELOCITY
+        && rows_on_reference(sp, &span, m.dy) >= MIN_VELOCITY_FRACTION*span.height)
+        span.nparams = MAX_PARAMS;
     for (iter = 0; iter < MAX_ITERATIONS; iter++) {
-        if (fabs(y - anchor_dy) > reach || fabs(x - anchor_dx) > reach)
+        if (!motion_within_reach(&span, &m, anchor_dy, anchor_dx, reach)
+            || !match_step(sp, &span, &m, &step))
             return FALSE;
-        if (!match_step(sp, &span, y, x, &step_y, &step_x))
-            return FALSE;
-        y += step_y;
-        x += step_x;
-        if (fabs(step_y) < CONVERGED_STEP && fabs(step_x) < CONVERGED_STEP)
+        m.dy += step.dy;
+        m.dx += step.dx;
+        m.vy += step.vy;
+        m.vx += step.vx;
+        if (fabs(step.dy) < CONVERGED_STEP && fabs(step.dx) < CONVERGED_STEP
+            && fabs(step.vy)*span.centre < CONVERGED_STEP && fabs(step.vx)*span.centre < CONVERGED_STEP)
             break;
     }
-    if (iter == MAX_ITERATIONS || fabs(y - anchor_dy) > reach || fabs(x - anchor_dx) > reach)
+    if (iter == MAX_ITERATIONS || !motion_within_reach(&span, &m, anchor_dy, anchor_dx, reach))
         return FALSE;
-    *dy = y;
-    *dx = x;
+    *dy = m.dy;
+    *dx = m.dx;
     return TRUE;
 }
