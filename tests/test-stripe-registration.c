@@ -184,10 +184,12 @@ START_TEST(test_sign_convention)
     }
     ck_assert(stripe_registration_measure(image, pair->reference, RES, RES, N, 0.0,
                                           STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, shifts, &error));
-    /* The sign is what is checked here; the refinement's bias of up to about
-     * 0.1 px is bounded by test_integer_shift's rms. */
+    /* Stripe 0 holds the repeated edge rows.  The others are the reference
+     * itself moved by whole pixels, which the match on the interpolated
+     * reference finds exactly but for the repeated edge columns (at most
+     * 0.0006 px off over 300 seeds). */
     for (s = 1; s < N; s++) {
-        ck_assert_msg(fabs(shifts[s].dx - DX) <= 0.2 && fabs(shifts[s].dy - DY) <= 0.2,
+        ck_assert_msg(fabs(shifts[s].dx - DX) <= 0.01 && fabs(shifts[s].dy - DY) <= 0.01,
                       "stripe %d: (%g, %g) instead of (%d, %d)", s, shifts[s].dx, shifts[s].dy, DX, DY);
     }
     frame_pair_free(pair);

@@ -68,8 +68,10 @@
  * above it they are computed again. */
 #define MAP_CACHE_BYTES (256*1024*1024)
 /* How far (px) the match may move a peak that lies on the edge of the
- * shifts with enough overlap; a peak inside them moves at most 1 px. */
-#define EDGE_POLISH_REACH 2
+ * shifts with enough overlap; a peak inside them moves at most 1 px.  On
+ * the edge row itself only dx = 0 may be kept (off it the window loses a
+ * little weight), so the true peak may lie a few px along x. */
+#define EDGE_POLISH_REACH 3
 /* Marks shifts that are not considered. */
 #define NO_MATCH -2.0
 
@@ -474,10 +476,7 @@ find_peak(Registration *reg, gint s, const gdouble *map, gint cy, gint cx, gint 
     else {
         /* On the edge of the shifts that keep enough of the stripe on the
          * reference the map cannot tell a peak from the slope of a better
-         * one beyond; the match can, and says where the peak lies.  The
-         * shifts left out next to it may be nearly as good as the last one
-         * kept (the overlap rule cuts at whole rows and, off dx = 0, at a
-         * slightly smaller weight), so the match may go a step further. */
+         * one beyond; the match can, and says where the peak lies. */
         peak->trusted = polish_peak(reg, s, EDGE_POLISH_REACH, peak);
     }
 }
@@ -579,8 +578,8 @@ choose_consistent_shifts(Registration *reg, const Peak *global, gdouble min_scor
             set_shift(shifts + s, &local, peak_score(&local), FALSE, min_score);
             continue;
         }
-        find_peak(reg, s, stripe_map(reg, s), (gint)floor(py + 0.5) + reg->m, (gint)floor(px + 0.5) + reg->m,
-                  CONSISTENCY_RADIUS, &local);
+        find_peak(reg, s, stripe_map(reg, s), (gint)floor(py + 0.5) + reg->m,
+                  (gint)floor(px + 0.5) + reg->m, CONSISTENCY_RADIUS, &local);
         polish_peak(reg, s, 1, &local);
         resolved = (local.iy != global[s].iy || local.ix != global[s].ix);
         score = peak_score(&local);

@@ -46,7 +46,7 @@ enum {
     MAX_PARAMS = 6,
 };
 
-#define MAX_ITERATIONS 10
+#define MAX_ITERATIONS 16
 /* Steps shorter than this (px, per axis) end the iteration. */
 #define CONVERGED_STEP 5e-3
 /* Fewer of the stripe's rows than this on the reference is too little to
@@ -60,6 +60,10 @@ enum {
  * the reference its value at the centre row an extrapolation. */
 #define MIN_ROWS_FOR_VELOCITY 6
 #define MIN_VELOCITY_FRACTION 0.5
+/* Longest step (px, per axis, and of the shift at the first or last row
+ * by the rates): a start far from the match, such as a whole-pixel peak on
+ * the edge of the overlap, overshoots with the full Gauss-Newton step. */
+#define MAX_STEP 0.5
 /* How far (px) the drift may move the stripe's first or last row away from
  * its centre; a larger change within a stripe is not believed. */
 #define MAX_SPREAD 2.0
@@ -335,6 +339,20 @@ match_step(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, St
     return TRUE;
 }
 
+static void
+limit_step(StripeMotion *step, gdouble half)
+{
+    gdouble longest = MAX(fabs(step->dy), fabs(step->dx));
+
+    longest = MAX(longest, half*MAX(fabs(step->vy), fabs(step->vx)));
+    if (longest > MAX_STEP) {
+        step->dy *= MAX_STEP/longest;
+        step->dx *= MAX_STEP/longest;
+        step->vy *= MAX_STEP/longest;
+        step->vx *= MAX_STEP/longest;
+    }
+}
+
 /* How many of the stripe's rows have all their taps on the reference at the
  * shift dy. */
 static gint
@@ -357,8 +375,8 @@ motion_within_reach(const StripeSpan *span, const StripeMotion *m, gint anchor_d
 }
 
 gboolean
-stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy, gint anchor_dx, gint reach,
-                       gdouble *dy, gdouble *dx)
+stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy, gint anchor_dx,
+                       gint reach, gdouble *dy, gdouble *dx)
 {
     StripeSpan span;
     StripeMotion m, step;
@@ -383,20 +401,26 @@ stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy,
     m.dy = *dy;
     m.dx = *dx;
     m.vy = m.vx = 0.0;
-    span.nparams = 4;
-    if (span.height >= MIN_ROWS_FOR_VELOCITY
-        && rows_on_reference(sp, &span, m.dy) >= MIN_VELOCITY_FRACTION*span.height)
-        span.nparams = MAX_PARAMS;
+    span.nparams = (span.height >= MIN_ROWS_FOR_VELOCITY) ? MAX_PARAMS : 4;
     for (iter = 0; iter < MAX_ITERATIONS; iter++) {
+        /* Once the match moves the stripe half off the reference, it keeps
+         * one shift for good (no switching back and forth). */
+        if (span.nparams > 4
+            && rows_on_reference(sp, &span, m.dy) < MIN_VELOCITY_FRACTION*span.height) {
+            span.nparams = 4;
+            m.vy = m.vx = 0.0;
+        }
         if (!motion_within_reach(&span, &m, anchor_dy, anchor_dx, reach)
             || !match_step(sp, &span, &m, &step))
             return FALSE;
+        limit_step(&step, span.centre);
         m.dy += step.dy;
         m.dx += step.dx;
         m.vy += step.vy;
         m.vx += step.vx;
         if (fabs(step.dy) < CONVERGED_STEP && fabs(step.dx) < CONVERGED_STEP
-            && fabs(step.vy)*span.centre < CONVERGED_STEP && fabs(step.vx)*span.centre < CONVERGED_STEP)
+            && fabs(step.vy)*span.centre < CONVERGED_STEP
+            && fabs(step.vx)*span.centre < CONVERGED_STEP)
             break;
     }
     if (iter == MAX_ITERATIONS || !motion_within_reach(&span, &m, anchor_dy, anchor_dx, reach))
