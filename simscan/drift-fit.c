@@ -24,6 +24,8 @@ typedef struct {
     gdouble t_max;         /* latest time */
     gdouble t_resolution;  /* typical spacing of distinct times */
     gdouble longest_gap;   /* longest stretch without a measured time */
+    gboolean periods_given; /* the observable periods are period_range, */
+    gdouble period_range[2]; /* those of the whole series (a training fold) */
 } Prepared;
 
 /* What is fitted: a DriftModelType, or a creep form after them. */
@@ -164,6 +166,7 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
     pm->d[1] = g_new(gdouble, n);
     pm->w = g_new(gdouble, n);
     pm->n_used = 0;
+    pm->periods_given = FALSE;
     pm->t_min = G_MAXDOUBLE;
     pm->t_max = 0.0;
     for (i = 0; i < n; i++) {
@@ -321,6 +324,11 @@ observable_periods(const Prepared *pm, const DriftFitOptions *options,
 {
     gdouble cycles = (options->min_cycles > 0.0) ? options->min_cycles : 1.5;
 
+    if (pm->periods_given) {
+        *shortest = pm->period_range[0];
+        *longest = pm->period_range[1];
+        return pm->n_used >= 3 && *shortest < *longest;
+    }
     *shortest = MAX(MAX(2.0*pm->t_resolution, options->min_period),
                     2.0*pm->longest_gap);
     *longest = (pm->t_max - pm->t_min)/cycles;
@@ -440,6 +448,65 @@ refine_golden(const Prepared *pm, FitKind kind, gdouble lo, gdouble hi,
     return best_rss;
 }
 
+/* Refines the grid value i between its neighbours; the refined value
+ * must stay visible for an oscillation, else the grid value is kept. */
+static gdouble
+refine_grid_value(const Prepared *pm, FitKind kind, const gdouble *grid,
+                  const gdouble *rss, gint m, gint i, gdouble *theta)
+{
+    gdouble best;
+
+    *theta = grid[i];
+    if (kind == DRIFT_MODEL_JUMP || m <= 2)
+        return rss[i];
+    best = refine_golden(pm, kind, grid[MAX(i - 1, 0)], grid[MIN(i + 1, m - 1)],
+                         grid[i], rss[i], theta);
+    if (kind == DRIFT_MODEL_OSCILLATION
+        && oscillation_visibility(pm, *theta) < MIN_VISIBILITY) {
+        *theta = grid[i];
+        return rss[i];
+    }
+    return best;
+}
+
+/* The best nonlinear parameter (theta) and the index of the grid value it
+ * was refined from.  An oscillation's residual has many narrow minima in
+ * period (period and phase trade off over the long time span, and aliases
+ * across the frame interval), so every local minimum of the grid is
+ * refined, not just the lowest: a narrow true minimum can fall between grid
+ * values and look worse there than a broad wrong one. */
+static gint
+search_grid(const Prepared *pm, FitKind kind, const gdouble *grid, gint m,
+            gdouble *theta)
+{
+    gdouble coef[2][MAX_BASIS], *rss = g_new(gdouble, m), best, value, t;
+    gint i, k, ibest = 0;
+
+    for (i = 0; i < m; i++) {
+        rss[i] = solve_fixed(pm, kind, grid[i], coef, &k);
+        if (!isfinite(rss[i]))
+            rss[i] = G_MAXDOUBLE;
+        if (rss[i] < rss[ibest])
+            ibest = i;
+    }
+    best = refine_grid_value(pm, kind, grid, rss, m, ibest, theta);
+    if (kind == DRIFT_MODEL_OSCILLATION) {
+        for (i = 0; i < m; i++) {
+            if (i == ibest || (i > 0 && rss[i-1] < rss[i])
+                || (i+1 < m && rss[i+1] < rss[i]))
+                continue;
+            value = refine_grid_value(pm, kind, grid, rss, m, i, &t);
+            if (value < best) {
+                best = value;
+                *theta = t;
+                ibest = i;
+            }
+        }
+    }
+    g_free(rss);
+    return ibest;
+}
+
 /* Every coefficient and the nonlinear parameter finite. */
 static gboolean
 fit_is_finite(const DriftFit *fit, gdouble rss)
@@ -461,8 +528,8 @@ static gboolean
 fit_prepared(const Prepared *pm, FitKind kind,
              const DriftFitOptions *options, DriftFit *fit)
 {
-    gdouble coef[2][MAX_BASIS], *grid = NULL, theta = 0.0, rss, best;
-    gint i, m, k, ibest = 0, nn;
+    gdouble coef[2][MAX_BASIS], *grid = NULL, theta = 0.0, rss;
+    gint m, k, ibest, nn;
 
     memset(fit, 0, sizeof(DriftFit));
     if (kind >= DRIFT_MODEL_NTYPES) {
@@ -481,23 +548,9 @@ fit_prepared(const Prepared *pm, FitKind kind,
             return FALSE;
         fit->range[0] = MIN(grid[0], grid[m-1]);
         fit->range[1] = MAX(grid[0], grid[m-1]);
-        best = G_MAXDOUBLE;
-        for (i = 0; i < m; i++) {
-            rss = solve_fixed(pm, kind, grid[i], coef, &k);
-            if (rss < best) {
-                best = rss;
-                ibest = i;
-            }
-        }
-        theta = grid[ibest];
-        fit->at_limit = (theta == fit->range[1]) ? 1 : (theta == fit->range[0]) ? -1 : 0;
-        if (kind != DRIFT_MODEL_JUMP && m > 2)
-            best = refine_golden(pm, kind, grid[MAX(ibest - 1, 0)],
-                                 grid[MIN(ibest + 1, m - 1)],
-                                 theta, best, &theta);
-        if (kind == DRIFT_MODEL_OSCILLATION
-            && oscillation_visibility(pm, theta) < MIN_VISIBILITY)
-            theta = grid[ibest];
+        ibest = search_grid(pm, kind, grid, m, &theta);
+        fit->at_limit = (grid[ibest] == fit->range[1]) ? 1
+                        : (grid[ibest] == fit->range[0]) ? -1 : 0;
         g_free(grid);
     }
     rss = solve_fixed(pm, kind, theta, coef, &k);
@@ -568,10 +621,18 @@ cross_validate_masked(const DriftMeasurement *meas, gint n,
 {
     gint folds = MAX(options->n_folds, 2), f, i, count = 0;
     gboolean *train = g_new(gboolean, n);
-    gdouble sum = 0.0, wsum = 0.0;
+    gdouble sum = 0.0, wsum = 0.0, periods[2];
+    gboolean have_periods;
     DriftFit fit;
     Prepared pm;
 
+    /* The periods searched are those the whole series can show.  A held-out
+     * fold leaves gaps in the training times whose alias limit (twice the
+     * longest gap) would shut out periods the series shows well, and the
+     * held-out groups would then be predicted by a wrong period. */
+    prepare(meas, n, mask, &pm);
+    have_periods = observable_periods(&pm, options, periods, periods + 1);
+    prepared_free(&pm);
     for (f = 0; f < folds; f++) {
         gboolean any = FALSE;
 
@@ -583,6 +644,9 @@ cross_validate_masked(const DriftMeasurement *meas, gint n,
         if (!any)
             continue;
         prepare(meas, n, train, &pm);
+        pm.periods_given = TRUE;
+        pm.period_range[0] = have_periods ? periods[0] : 1.0;
+        pm.period_range[1] = have_periods ? periods[1] : 0.0;
         if (fit_prepared(&pm, kind, options, &fit)) {
             for (i = 0; i < n; i++) {
                 gdouble dx, dy, rx, ry;

@@ -120,8 +120,9 @@ gboolean       drift_fit_observable_periods(const DriftMeasurement *meas,
 
 /* Cross-validated RMS prediction error (nm): groups split into folds
  * (group modulo n_folds), each fold predicted by the model fitted to the
- * others, its nonlinear parameter searched again; NaN when no fold could be
- * fitted.  drift_fit_select fills DriftFit.cv_rms_nm the same way over the
+ * others, its nonlinear parameter searched again (an oscillation's over the
+ * periods the whole series can show: a held-out fold's gaps would shut out
+ * short periods); NaN when no fold could be fitted.  drift_fit_select fills DriftFit.cv_rms_nm the same way over the
  * measurements it kept. */
 gdouble        drift_fit_cross_validate(const DriftMeasurement *meas,
                                         gint n,
