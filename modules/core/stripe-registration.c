@@ -476,8 +476,15 @@ find_peak(Registration *reg, gint s, const gdouble *map, gint cy, gint cx, gint 
     else {
         /* On the edge of the shifts that keep enough of the stripe on the
          * reference the map cannot tell a peak from the slope of a better
-         * one beyond; the match can, and says where the peak lies. */
-        peak->trusted = polish_peak(reg, s, EDGE_POLISH_REACH, peak);
+         * one beyond; the match can, and says where the peak lies, which
+         * must still be within the searched area. */
+        peak->trusted = (polish_peak(reg, s, EDGE_POLISH_REACH, peak)
+                         && peak->dy >= ylo - reg->m && peak->dy <= yhi - reg->m
+                         && peak->dx >= xlo - reg->m && peak->dx <= xhi - reg->m);
+        if (!peak->trusted) {
+            peak->dy = peak->iy - reg->m;
+            peak->dx = peak->ix - reg->m;
+        }
     }
 }
 
