@@ -28,7 +28,9 @@ typedef enum {
 
 typedef struct {
     gdouble dx;        /* px: content of the reference at (r, c) appears in */
-    gdouble dy;        /* the image at (r + dy, c + dx), the table convention */
+    gdouble dy;        /* the image at (r + dy, c + dx), the table convention;
+                          at the stripe's centre row (the stripe's mean for a
+                          drift changing linearly over its rows) */
     gdouble score;     /* confidence in [0, 1] */
     gboolean accepted; /* score >= min_score and consistent */
     /* Diagnostics. */
