@@ -44,6 +44,7 @@ typedef struct {
     gint lines;                /* lines scanned, also when not found */
     gdouble x_disp, y_disp;    /* displayed centre, px */
     gdouble x_act, y_act;      /* actual centre at the local scan, px */
+    gdouble y_line;            /* row of the line along x that found it, px */
     gdouble dx, dy;            /* displayed - actual, px */
     gdouble t_image;           /* when the displayed centre was scanned, s */
     gdouble t_local;           /* middle of the particle's local scan, s */

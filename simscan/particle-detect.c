@@ -26,6 +26,11 @@
  * radius sqrt(1 - (2 TOP_FRACTION - 1)^2) R. */
 #define TOP_FRACTION 0.75
 #define TOP_CUT_RADIUS 0.8660254037844386
+/* The refined centre weighs the pixels within this many equivalent radii
+ * of the grain (the radius of a disc of its area) ... */
+#define WINDOW_RADII 2.0
+/* ... moving the window to the new centre this many times. */
+#define WINDOW_ITERATIONS 5
 
 typedef struct {
     gdouble sw, swx, swy;
@@ -207,6 +212,64 @@ count_top_areas(GwyDataField *work, const gint *grains, gdouble base,
     }
 }
 
+/* One step of the window centroid: pixels within r px of (*x, *y), weighted
+ * by their height over the substrate base.  FALSE when nothing there stands
+ * above it. */
+static gboolean
+window_centroid_step(GwyDataField *work, const gint *grains, gint g,
+                     gdouble base, gdouble r, gdouble *x, gdouble *y)
+{
+    gint xres = gwy_data_field_get_xres(work);
+    gint yres = gwy_data_field_get_yres(work);
+    const gdouble *d = gwy_data_field_get_data_const(work);
+    gint i, j, imin, imax, jmin, jmax;
+    gdouble sw = 0.0, swx = 0.0, swy = 0.0;
+
+    imin = MAX((gint)floor(*y - r), 0);
+    imax = MIN((gint)ceil(*y + r), yres-1);
+    jmin = MAX((gint)floor(*x - r), 0);
+    jmax = MIN((gint)ceil(*x + r), xres-1);
+    for (i = imin; i <= imax; i++) {
+        for (j = jmin; j <= jmax; j++) {
+            gdouble w;
+
+            if ((i - *y)*(i - *y) + (j - *x)*(j - *x) > r*r
+                || (grains[i*xres + j] && grains[i*xres + j] != g))
+                continue;
+            w = fmax(d[i*xres + j] - base, 0.0);
+            sw += w;
+            swx += w*j;
+            swy += w*i;
+        }
+    }
+    if (!(sw > 0.0))
+        return FALSE;
+    *x = swx/sw;
+    *y = swy/sw;
+    return TRUE;
+}
+
+/* The thresholded centroid sees only the few pixels of a small particle's
+ * top, so it snaps towards pixel centres (0.12 px RMS on simscan's paper
+ * scenario).  A window of fixed size around the particle, weighted by the
+ * height over the substrate, takes in its flanks as well, whose pixels
+ * balance each other as the particle moves across the grid. */
+static void
+refine_centre(GwyDataField *work, const gint *grains, gint g, gdouble base,
+              const GrainSums *sums, DetectedParticle *p)
+{
+    gdouble r = WINDOW_RADII*sqrt(sums->area/G_PI);
+    gdouble x = p->x, y = p->y;
+    gint k;
+
+    for (k = 0; k < WINDOW_ITERATIONS; k++) {
+        if (!window_centroid_step(work, grains, g, base, r, &x, &y))
+            return;
+    }
+    p->x = x;
+    p->y = y;
+}
+
 GArray*
 particle_detect(GwyDataField *field, const ParticleDetectParams *params,
                 gdouble *substrate, gdouble *threshold)
@@ -251,6 +314,7 @@ particle_detect(GwyDataField *field, const ParticleDetectParams *params,
             continue;
         p.x = sums[g].swx/sums[g].sw;
         p.y = sums[g].swy/sums[g].sw;
+        refine_centre(work, grains, g, work_base, sums + g, &p);
         p.area = sums[g].area;
         p.peak = sums[g].peak;
         p.on_edge = sums[g].on_edge;

@@ -62,9 +62,11 @@ gdouble     particle_detect_auto_height  (GwyDataField *field,
 gdouble     particle_detect_substrate    (GwyDataField *field);
 
 /* Returns a GArray of DetectedParticle, in grain-number order (top to
- * bottom, left to right).  The centre is the centroid of the grain's pixels
- * weighted by their height above the threshold, which is far less sensitive
- * to the pixel grid than the plain centroid of a small grain.  With
+ * bottom, left to right).  The centre: starting from the centroid of the
+ * grain's pixels weighted by their height above the threshold, the centroid
+ * of the pixels within two equivalent radii (sqrt(area/pi)) of it, weighted
+ * by their height above the substrate, with the window moved to it five
+ * times.  The thresholded centroid alone snaps towards pixel centres.  With
  * params->level the grains are found on particle_detect_level()'s copy;
  * substrate, threshold and each peak are in field's own z values all the
  * same (the levelled substrate put at field's median). */
