@@ -39,14 +39,19 @@ simscan_preset_apply(SimscanConfig *config, SimscanPreset preset)
         config->local.tip_speed = 4e-6;
     }
     else if (preset == SIMSCAN_PRESET_FIGURE6) {
-        /* Shifts up to 16 px (312 nm): neighbours farther apart than twice
-         * that, so the local scan cannot take a neighbour for the particle,
-         * and lines long enough to reach it. */
+        /* Shifts up to (16, 3) px (318 nm), so r_max must exceed that; a
+         * neighbour, 700 nm or more from the particle, is at least 382 nm
+         * from its displayed centre, so r_max below that keeps it out of
+         * reach (400 nm did not).  Half way between, 30 nm to spare either
+         * side.  The lines, 2 (R + r_max) = 750 nm long, keep the default
+         * lines' 4 nm sample spacing with 192 points: with 64 (12 nm) a
+         * grazing chord of the search is off by up to half a pixel. */
         config->figure6 = TRUE;
         config->n_stripes = 16;
         config->particles.min_spacing = 700e-9;
         config->particles.count = 60;
-        config->local.r_max = 400e-9;
+        config->local.r_max = 350e-9;
+        config->local.points = 192;
         /* The paper's particle choice, as the figure was made: a stripe
          * measured on a grain cut by a stripe boundary is part of the honest
          * result (simscan marks such stripes with a star). */
