@@ -77,8 +77,13 @@ gdouble      local_scan_particle      (GwyDataField *field,
                                        LocalScanParticle *result);
 
 /* The whole procedure over n stripes: choose a particle per stripe
- * (particle_choose_for_stripes_by with params->choice), scan them in stripe order starting at
- * t_start, and return the px drift table: dx, dy rounded to whole pixels
+ * (particle_choose_for_stripes_by with params->choice), scan them in stripe
+ * order starting at t_start, and return the px drift table.  When the
+ * particle radius spans at least 1.5 px, the displayed centre is measured
+ * in the image (bicubic) by the same chords as the actual one, along the
+ * row where the instrument's line cut the particle, so that a non-spherical
+ * particle's chord bias cancels; otherwise it is the detected centre.  The
+ * table: dx, dy rounded to whole pixels
  * (blank for a stripe without a particle or whose particle was not found),
  * extra columns dx_exact, dy_exact, t_image, t_local, x, y, lines.
  * results (may be NULL) gets n entries; a stripe without a particle has
