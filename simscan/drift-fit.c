@@ -24,6 +24,8 @@ typedef struct {
     gdouble t_max;         /* latest time */
     gdouble t_resolution;  /* typical spacing of distinct times */
     gdouble longest_gap;   /* longest stretch without a measured time */
+    gdouble longest_run;   /* longest stretch with no step above half the
+                              longest gap */
     gboolean periods_given; /* the observable periods are period_range, */
     gdouble period_range[2]; /* those of the whole series (a training fold) */
 } Prepared;
@@ -141,6 +143,23 @@ distinct_times(const Prepared *pm, gdouble **times)
     return k;
 }
 
+/* The longest stretch of the sorted distinct times with no step longer
+ * than max_step. */
+static gdouble
+longest_run(const gdouble *times, gint nt, gdouble max_step)
+{
+    gdouble run = 0.0;
+    gint i, start = 0;
+
+    for (i = 1; i <= nt; i++) {
+        if (i == nt || times[i] - times[i-1] > max_step) {
+            run = MAX(run, times[i-1] - times[start]);
+            start = i;
+        }
+    }
+    return run;
+}
+
 static void
 prepared_free(Prepared *pm)
 {
@@ -208,6 +227,7 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
         pm->longest_gap = gaps[nt - 2];
         g_free(gaps);
     }
+    pm->longest_run = longest_run(times, nt, 0.5*pm->longest_gap);
     g_free(times);
 }
 
@@ -314,10 +334,13 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
  * least min_cycles cycles must fit into the measured time span, or no
  * periodicity is seen: the fit merely bends the trajectory.  And a period
  * shorter than twice the longest stretch of time without measurements
- * aliases: the phase is free across the gap, so a whole comb of periods fits
+ * aliases when the measurements are bursts shorter than the gaps between
+ * them: the phase is free across the gap, so a whole comb of periods fits
  * alike (a frame series scanned in short bursts far apart cannot tell a fast
- * oscillation from a distortion repeated in every frame).  FALSE when no
- * period is left. */
+ * oscillation from a distortion repeated in every frame).  A gap shorter
+ * than the measured stretches around it (blocks without particles in
+ * contiguous frames) does not: the stretches follow the phase across it.
+ * FALSE when no period is left. */
 static gboolean
 observable_periods(const Prepared *pm, const DriftFitOptions *options,
                    gdouble *shortest, gdouble *longest)
@@ -329,8 +352,9 @@ observable_periods(const Prepared *pm, const DriftFitOptions *options,
         *longest = pm->period_range[1];
         return pm->n_used >= 3 && *shortest < *longest;
     }
-    *shortest = MAX(MAX(2.0*pm->t_resolution, options->min_period),
-                    2.0*pm->longest_gap);
+    *shortest = MAX(2.0*pm->t_resolution, options->min_period);
+    if (pm->longest_gap > pm->longest_run)
+        *shortest = MAX(*shortest, 2.0*pm->longest_gap);
     *longest = (pm->t_max - pm->t_min)/cycles;
     return pm->n_used >= 3 && *shortest < *longest;
 }
