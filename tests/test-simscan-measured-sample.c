@@ -305,8 +305,11 @@ print_run(const gchar *what, const SimscanConfig *config, const SampleRun *r)
 }
 
 /* Stripes: 11 or 12 of the 16 hold a particle clear of the border, and the
- * local scans find every one; a real particle is no sphere, so its chords'
- * midpoints miss its centre by up to 0.7 px.  Centres: whole-pixel shifts
+ * local scans find every one.  A real particle is no sphere: its chords'
+ * midpoints miss its detected centre by up to 0.7 px, which the displayed
+ * centre measured by the same chords in the image cancels; the rest, 0.04
+ * px with the default drift and up to 0.51 px over random drifts (seeds
+ * 1-300), comes from the drift distorting the particle in the image.  Centres: whole-pixel shifts
  * leave up to half a pixel on each axis (0.41 px RMS if uniform), more
  * where the drift changes within a stripe or a stripe without a particle
  * takes its neighbour's. */
@@ -316,7 +319,8 @@ check_run(const SampleRun *r, gdouble min_before_px, gdouble max_ratio,
 {
     ck_assert_int_ge(r->with_particle, 10);
     ck_assert_int_eq(r->found, r->with_particle);
-    ck_assert(r->worst_dx < 0.8);
+    ck_assert_msg(r->worst_dx < 0.6, "worst drift error %.3f px",
+                  r->worst_dx);
     ck_assert_int_ge(r->before.n_matched, r->before.n_expected - 1);
     ck_assert_int_ge(r->after.n_matched, r->after.n_expected - 1);
     ck_assert_int_ge(r->after.n_expected, 14);
