@@ -641,15 +641,19 @@ max_linear_interpolation_error(const DriftMeasurement *meas, gint n,
  * stripe centre and 0.1 px over the whole frame (the top half stripe is
  * extrapolated where the curvature is largest), several times closer than
  * straight lines between the stripes; the local-scan velocity is the
- * frame's end velocity. */
+ * frame's end velocity.  Exact data are interpolated, not smoothed: the
+ * result is the interpolating spline's (over the whole range drawn at most
+ * 0.012 and 0.094 px, at tau = 37.5 s and 15 px; smoothing them had
+ * reached 0.020 and 0.127 px in 2000 draws). */
 START_TEST(test_settling_accuracy)
 {
     GRand *rng = test_rand(5);
     ScanTiming timing;
     DriftMeasurement meas[16];
-    DriftTrajectory *trajectory;
+    DriftTrajectory *trajectory, *interpolating;
     Motion motion = { { 0, 0 }, { 0, 0 }, { 0, 0 }, 0.0 };
     gdouble frame = 256*LINE_TIME, excess, err, end_err, lin_err, vx, vy;
+    gdouble d[2], di[2], t, from_interpolating = 0.0;
     gint k;
 
     scan_timing_init(&timing, 256, 256, 0.0, LINE_TIME, SCAN_DIRECTION_DOWN);
@@ -679,6 +683,18 @@ START_TEST(test_settling_accuracy)
                   end_err);
     ck_assert_msg(err < 0.25*lin_err, "spline %g px, linear %g px",
                   err, lin_err);
+    interpolating = drift_trajectory_new_interpolating(meas, 16, NULL);
+    for (k = -64; k <= 320; k++) {
+        t = k*LINE_TIME;
+        drift_trajectory_eval(trajectory, t, d, d + 1);
+        drift_trajectory_eval(interpolating, t, di, di + 1);
+        from_interpolating = fmax(from_interpolating,
+                                  fmax(fabs(d[0] - di[0]), fabs(d[1] - di[1])));
+    }
+    ck_assert_msg(from_interpolating < 1e-9, "exact settling smoothed: %g px "
+                  "from the interpolating spline", from_interpolating);
+    ck_assert_int_eq(drift_trajectory_n_downweighted(trajectory), 0);
+    drift_trajectory_free(interpolating);
     drift_trajectory_free(trajectory);
     g_rand_free(rng);
 }

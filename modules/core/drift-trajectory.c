@@ -56,9 +56,13 @@
  * by 0.05-0.1 px/s and moves the last half stripe by a pixel.  Instead the
  * noise variance is estimated by robust leave-one-out cross-validation and
  * the weight minimises a robust Mallows' C_p that prices each degree of
- * freedom at 1.4 times its expected cost.  Exact data have zero estimated
- * noise and keep their values (constant velocity exactly, settling within
- * 0.01 px); noisy data are smoothed as far as their scatter asks for.  In a
+ * freedom at 1.4 times its expected cost.  Noisy data are smoothed as far
+ * as their scatter asks for.  Exact data keep their values: constant
+ * velocity (zero estimated noise) exactly, and curved drift sampled densely
+ * enough, such as settling on 16 stripes, is interpolated, since there the
+ * estimated noise is the smoothing's own bias (interpolate_if_exact()).
+ * Exact data too sparse or irregular for that check to tell from noise of
+ * a hundredth of a pixel are smoothed like such noise.  In a
  * fit's loss a rejected measurement costs a fixed amount, so rejecting
  * good data never pays.  A genuine sudden change at the first or last
  * stripe cannot be told from a gross error there and is treated as one.
