@@ -363,9 +363,15 @@ START_TEST(test_accuracy_against_paper_mode)
 END_TEST
 
 /* Three random stripes without a particle, on settling drift: they are
- * interpolated over.  Loop 0: isolated inner stripes (neighbours measured),
- * the result stays as good as with all stripes.  Loop 1: anywhere, also
- * the first two stripes, which leaves the top of the frame, where settling
+ * interpolated over.  Loop 0: isolated inner stripes (neighbours measured):
+ * an order of magnitude better than paper mode, particles within the
+ * issue's 0.15 px.  The bound is relative to paper mode, whose error
+ * depends on how the stripes' rounding happens to fall (it varies by a
+ * factor of three between draws) while the error of bridging a blank
+ * stripe does not: over 300 seeds the ratio had p99 0.044 and max 0.055,
+ * the particle error max 0.107 px, so 0.05 and 0.1 failed about one seed
+ * in a hundred without anything being wrong.  Loop 1: anywhere, also the
+ * first two stripes, which leaves the top of the frame, where settling
  * bends most, to extrapolation: still far better than paper mode. */
 START_TEST(test_accuracy_blank_stripes)
 {
@@ -391,10 +397,10 @@ START_TEST(test_accuracy_blank_stripes)
     printf("\n");
     random_motion(&motion, TRUE, rng);
     measure_accuracy(&motion, SCAN_DIRECTION_DOWN, 10, blank, 32 + _i, &acc);
-    ck_assert_msg(acc.rms_continuous < (_i ? 0.25 : 0.05)*acc.rms_paper,
+    ck_assert_msg(acc.rms_continuous < (_i ? 0.25 : 0.1)*acc.rms_paper,
                   "RMS continuous %g, paper %g",
                   acc.rms_continuous, acc.rms_paper);
-    ck_assert_msg(acc.particle_continuous < (_i ? 0.4 : 0.1),
+    ck_assert_msg(acc.particle_continuous < (_i ? 0.4 : 0.15),
                   "particle centre error %g px", acc.particle_continuous);
     g_rand_free(rng);
 }
