@@ -346,7 +346,10 @@ is_local_maximum(const gdouble *map, gint span, gint iy, gint ix)
         return FALSE;
     for (i = MAX(0, iy-1); i <= MIN(span-1, iy+1); i++) {
         for (j = MAX(0, ix-1); j <= MIN(span-1, ix+1); j++) {
-            if (map[i*span + j] > v)
+            /* Next to the shifts left out for too little overlap, a maximum
+             * is as likely the cut slope of the main peak beyond them (as
+             * for a stripe half off the reference) as a peak of its own. */
+            if (map[i*span + j] > v || map[i*span + j] <= NO_MATCH)
                 return FALSE;
         }
     }

@@ -81,6 +81,7 @@ struct _StripeSubpixel {
     gdouble *row_normal;      /* max_height x ROW_TERMS: each row's products
                                  of the row regressors, upper triangle */
     gdouble *column;          /* xres: reference interpolated along y */
+    gboolean *row_dropped;    /* max_height: rows that left the reference */
 };
 
 typedef struct {
@@ -119,6 +120,7 @@ stripe_subpixel_new(const gdouble *image, const gdouble *reference, gint xres, g
     sp->weighted_grad_x = g_new(gdouble, plane);
     sp->row_normal = g_new(gdouble, (gsize)max_height*ROW_TERMS);
     sp->column = g_new(gdouble, xres);
+    sp->row_dropped = g_new(gboolean, max_height);
     return sp;
 }
 
@@ -132,6 +134,7 @@ stripe_subpixel_free(StripeSubpixel *sp)
     g_free(sp->weighted_grad_x);
     g_free(sp->row_normal);
     g_free(sp->column);
+    g_free(sp->row_dropped);
     g_free(sp);
 }
 
@@ -319,8 +322,15 @@ match_step(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, St
     memset(rhs, 0, sizeof(rhs));
     for (i = 0; i < span->height; i++) {
         t = i - span->centre;
-        if (!match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, dots))
+        /* A row whose taps leave the reference stays out for good: a set of
+         * rows changing with the shift can make the steps oscillate between
+         * the two sets' matches. */
+        if (sp->row_dropped[i])
             continue;
+        if (!match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, dots)) {
+            sp->row_dropped[i] = TRUE;
+            continue;
+        }
         used++;
         for (a = 0; a < n; a++) {
             ra = row_regressor_of(a, &pa);
@@ -395,8 +405,10 @@ stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy,
     span.col_hi = MIN(sp->xres - 1, sp->xres - 1 - margin + anchor_dx);
     if (span.col_hi - span.col_lo < MIN_COLUMNS)
         return FALSE;
-    for (i = 0; i < span.height; i++)
+    for (i = 0; i < span.height; i++) {
         prepare_row(sp, &span, i);
+        sp->row_dropped[i] = FALSE;
+    }
 
     m.dy = *dy;
     m.dx = *dx;
