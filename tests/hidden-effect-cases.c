@@ -29,7 +29,8 @@
  *   velocity:    |v| <= 0.1 nm/s, any direction
  *   settling:    tau 20..60 s, |u| tau 30..60 nm
  *   oscillation: period 20..60 s, |a| 15..30 nm, any direction and phase;
- *                not within 0.15 cycles per frame of a whole number
+ *                not within 0.15 cycles per frame of a whole number, and
+ *                |a| 2 pi/period at most 2.5 px per 4 s block (see below)
  *   jump:        t_s 30..230 s, |step| 25..50 nm
  * All inside what `simscan fit` can observe in 4 contiguous frames of 64 s
  * (drift_fit_observable_periods): periods from 3 blocks (12 s) up to 1.5
@@ -40,6 +41,21 @@
  * t_s within 8 s (two blocks) and the step within 30 % + 4 nm; with no
  * effect, "none" and v within 0.02 nm/s.
  */
+/* Block registration measures where a block of lines sat on average: when
+ * the drift sweeps more than a few pixels during one block (4 s), the block
+ * is smeared and its shift is no measurement of the trajectory (seed 235
+ * case 14: 30 nm at 25.7 s sweeps 3.7 px per block and was missed).  So an
+ * oscillation's peak speed is kept to 2.5 px per block, which still leaves
+ * 15 nm (2 px) at the shortest period. */
+static gdouble
+oscillation_max_amplitude(gdouble period)
+{
+    gdouble block_time = FRAME_TIME/16.0, pixel = FIELD/RES;
+    gdouble max_speed = 2.5*pixel/block_time;
+
+    return MIN(30e-9, max_speed*period/(2.0*G_PI));
+}
+
 static gdouble
 uniform(SimRandom *rng, gdouble lo, gdouble hi)
 {
@@ -80,7 +96,8 @@ hidden_case_draw(guint32 base_seed, gint i, DriftModel *model)
             cycles = FRAME_TIME/model->period;
         } while (fabs(cycles - floor(cycles + 0.5)) < 0.15);
         model->phase = uniform(&rng, 0.0, 2.0*G_PI);
-        random_vector(&rng, uniform(&rng, 15e-9, 30e-9), model->a);
+        random_vector(&rng, uniform(&rng, 15e-9, oscillation_max_amplitude(model->period)),
+                      model->a);
         break;
 
         case DRIFT_MODEL_JUMP:
