@@ -78,7 +78,8 @@ print_table(const Tally *t, gint n, guint32 seed, gboolean markdown)
     printf("%s%d draws, seed %u (128 x 128 frames, 4 frames of 64 s; "
            "drawn: |v| <= 0.1 nm/s; settling tau 20..60 s; oscillation "
            "period 20..60 s, 4 to 12 cycles over the series, inside the "
-           "observable 12..167 s; jump t_s 30..230 s; details in "
+           "observable 12..167 s, amplitude 15..30 nm sweeping at most "
+           "2.5 px per 4 s block; jump t_s 30..230 s; details in "
            "tests/hidden-effect-cases.c)\n\n", markdown ? "" : "# ",
            n, seed);
     printf("| hidden \\ named | none | settling | oscillation | jump | failed |"
