@@ -292,6 +292,8 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
     memset(ata, 0, sizeof(ata));
     memset(atb, 0, sizeof(atb));
     memset(coef, 0, 2*MAX_BASIS*sizeof(gdouble));
+    /* Callers read the basis size even when the fit is refused below. */
+    *n_basis = k;
     for (i = 0; i < pm->n; i++) {
         if (pm->w[i] <= 0.0)
             continue;
