@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <check.h>
+#include "test-seed.h"
 #include <glib.h>
 #include <libprocess/interpolation.h>
 #include "continuous-compensate.h"
@@ -881,17 +882,6 @@ continuous_compensate_suite(void)
 int
 main(void)
 {
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    SRunner *runner;
-    gint failed;
-
-    test_seed = env ? (guint32)strtoul(env, NULL, 10) : (guint32)g_random_int();
-    printf("test-continuous-compensate: seed %u (set LOCALSCAN_TEST_SEED to "
-           "repeat)\n", test_seed);
-    fflush(stdout);
-    runner = srunner_create(continuous_compensate_suite());
-    srunner_run_all(runner, CK_NORMAL);
-    failed = srunner_ntests_failed(runner);
-    srunner_free(runner);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    test_seed = test_seed_from_env("test-continuous-compensate");
+    return test_run_suite(continuous_compensate_suite());
 }
