@@ -15,7 +15,8 @@
 #include <libprocess/gwyprocess.h>
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
-#include "fit-command.h"
+#include "fit-report.h"
+#include "frame-series-load.h"
 #include "sample.h"
 #include "scanner.h"
 

@@ -83,61 +83,13 @@ scan_line(LineScanner *scanner, gdouble xc, gdouble yc, gboolean along_x)
     scanner->lines++;
 }
 
-/* The chords of the last line: end points where the height crosses the
- * threshold, interpolated linearly between samples; their midpoints
- * (position along the line, relative to its centre) go into mids.  Runs cut
- * by the line's ends are incomplete chords and never used. */
+/* The chords of the last line scanned (local-scan-analysis.h). */
 static void
-find_chord_midpoints(const LineScanner *scanner, GArray *mids)
+find_line_chords(const LineScanner *scanner, GArray *mids)
 {
-    const gdouble *h = scanner->heights;
-    gdouble thr = scanner->threshold;
-    gint n = scanner->params->points, i = 0, first, last;
-    gdouble length = local_scan_line_length(scanner->params);
-    gdouble step = length/(n - 1);
-
-    g_array_set_size(mids, 0);
-    while (i < n) {
-        gdouble left, right, m;
-
-        if (h[i] <= thr) {
-            i++;
-            continue;
-        }
-        first = i;
-        while (i < n && h[i] > thr)
-            i++;
-        last = i - 1;
-        if (first == 0 || last == n-1)
-            continue;
-        left = (first - 1) + (thr - h[first-1])/(h[first] - h[first-1]);
-        right = last + (h[last] - thr)/(h[last] - h[last+1]);
-        m = -0.5*length + 0.5*(left + right)*step;
-        g_array_append_val(mids, m);
-    }
-}
-
-/* The chord of the last line nearest to `expect`, skipping those already
- * tried (marked NAN in mids) and those farther than limit from 0. */
-static gboolean
-take_nearest_chord(GArray *mids, gdouble expect, gdouble limit, gdouble *mid)
-{
-    gdouble best = G_MAXDOUBLE;
-    guint i, best_i = 0;
-
-    for (i = 0; i < mids->len; i++) {
-        gdouble m = g_array_index(mids, gdouble, i);
-
-        if (!isnan(m) && fabs(m) <= limit && fabs(m - expect) < best) {
-            best = fabs(m - expect);
-            best_i = i;
-        }
-    }
-    if (best == G_MAXDOUBLE)
-        return FALSE;
-    *mid = g_array_index(mids, gdouble, best_i);
-    g_array_index(mids, gdouble, best_i) = NAN;
-    return TRUE;
+    local_scan_chord_midpoints(scanner->heights, scanner->params->points,
+                               local_scan_line_length(scanner->params),
+                               scanner->threshold, mids);
 }
 
 /* The line V along y through a horizontal chord's midpoint x_mid, offset
@@ -150,8 +102,9 @@ measure_vertical(LineScanner *scanner, gdouble x_mid, gdouble y0,
     gboolean found;
 
     scan_line(scanner, x_mid, y0, FALSE);
-    find_chord_midpoints(scanner, mids);
-    found = take_nearest_chord(mids, y_line - y0, G_MAXDOUBLE, y_mid);
+    find_line_chords(scanner, mids);
+    found = local_scan_take_nearest_chord(mids, y_line - y0, G_MAXDOUBLE,
+                                          y_mid);
     g_array_free(mids, TRUE);
     return found;
 }
@@ -182,8 +135,9 @@ search_particle(LineScanner *scanner, gdouble x0, gdouble y0,
         gdouble mid, y_mid;
 
         scan_line(scanner, x0, y0 + offset, TRUE);
-        find_chord_midpoints(scanner, mids);
-        while (!found && take_nearest_chord(mids, 0.0, limit, &mid)) {
+        find_line_chords(scanner, mids);
+        while (!found
+               && local_scan_take_nearest_chord(mids, 0.0, limit, &mid)) {
             if (measure_vertical(scanner, x0 + mid, y0, y0 + offset, &y_mid)
                 && hypot(mid, y_mid) <= limit) {
                 *x_centre = x0 + mid;
@@ -320,8 +274,8 @@ remeasure_displayed_centre(GwyDataField *field, const LocalScanParams *params,
     scanner.lines = 0;
     scanner.heights = g_new(gdouble, params->points);
     scan_line(&scanner, x0, y_row, TRUE);
-    find_chord_midpoints(&scanner, mids);
-    if (take_nearest_chord(mids, 0.0, 0.5*params->radius, &mid)
+    find_line_chords(&scanner, mids);
+    if (local_scan_take_nearest_chord(mids, 0.0, 0.5*params->radius, &mid)
         && measure_vertical(&scanner, x0 + mid, y0, y_row, &y_mid)
         && fabs(y_mid) <= 0.5*params->radius) {
         r->x_disp += mid/dx;
@@ -331,28 +285,6 @@ remeasure_displayed_centre(GwyDataField *field, const LocalScanParams *params,
     }
     g_array_free(mids, TRUE);
     g_free(scanner.heights);
-}
-
-static void
-set_table_row(DriftTable *table, gint s, const LocalScanParticle *r)
-{
-    gboolean scanned = (r && r->lines > 0);
-    gboolean found = (scanned && r->found);
-
-    table->rows[s].stripe = s;
-    table->rows[s].has_drift = found;
-    /* + 0.0 turns round()'s -0 into 0, which the table writes as "0". */
-    table->rows[s].dx = found ? round(r->dx) + 0.0 : 0.0;
-    table->rows[s].dy = found ? round(r->dy) + 0.0 : 0.0;
-    /* Every stripe sets every column, so the columns always come in this
-     * order and blank stripes get blank cells. */
-    drift_table_set_extra(table, s, "dx_exact", found ? r->dx : NAN);
-    drift_table_set_extra(table, s, "dy_exact", found ? r->dy : NAN);
-    drift_table_set_extra(table, s, "t_image", scanned ? r->t_image : NAN);
-    drift_table_set_extra(table, s, "t_local", found ? r->t_local : NAN);
-    drift_table_set_extra(table, s, "x", scanned ? r->x_disp : NAN);
-    drift_table_set_extra(table, s, "y", scanned ? r->y_disp : NAN);
-    drift_table_set_extra(table, s, "lines", scanned ? r->lines : NAN);
 }
 
 DriftTable*
@@ -382,7 +314,7 @@ local_scan_run(GwyDataField *field, const ScanTiming *timing,
 
         if (chosen[s] < 0) {
             memset(res + s, 0, sizeof(LocalScanParticle));
-            set_table_row(table, s, NULL);
+            local_scan_table_set_row(table, s, NULL);
             continue;
         }
         p = &g_array_index(particles, DetectedParticle, chosen[s]);
@@ -395,7 +327,7 @@ local_scan_run(GwyDataField *field, const ScanTiming *timing,
         if (res[s].found && uses_image_chords(field, params))
             remeasure_displayed_centre(field, params, threshold, res + s);
         res[s].t_image = scan_timing_pixel_time(timing, p->y, p->x);
-        set_table_row(table, s, res + s);
+        local_scan_table_set_row(table, s, res + s);
     }
     if (res != results)
         g_free(res);

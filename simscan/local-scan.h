@@ -3,7 +3,9 @@
  *  tip scans short lines over one particle per stripe to find where the
  *  particle actually is now; displayed minus actual centre is the stripe's
  *  drift.  The instrument is any probe function, so the procedure runs on
- *  the simulator (sim_probe_height) or on an ideal test sample alike.
+ *  the simulator (sim_probe_height) or on an ideal test sample alike.  What
+ *  the lines tell (chords, centres, the drift table) is the core's
+ *  local-scan-analysis.h.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -15,6 +17,7 @@
 #include "drift-table.h"
 #include "scan-timing.h"
 #include "particle-detect.h"
+#include "local-scan-analysis.h"
 
 G_BEGIN_DECLS
 
@@ -38,18 +41,7 @@ typedef struct {
                                   (PARTICLE_CHOICE_CLOSEST, the paper's) */
 } LocalScanParams;
 
-/* One particle's local scan.  Pixel coordinates as in particle-detect.h. */
-typedef struct {
-    gboolean found;
-    gint lines;                /* lines scanned, also when not found */
-    gdouble x_disp, y_disp;    /* displayed centre, px */
-    gdouble x_act, y_act;      /* actual centre at the local scan, px */
-    gdouble y_line;            /* row of the line along x that found it, px */
-    gdouble dx, dy;            /* displayed - actual, px */
-    gdouble t_image;           /* when the displayed centre was scanned, s */
-    gdouble t_local;           /* middle of the particle's local scan, s */
-    gdouble t_start, t_end;    /* its first line's start, last line's end */
-} LocalScanParticle;
+/* LocalScanParticle, one particle's result: local-scan-analysis.h. */
 
 void         local_scan_params_init   (LocalScanParams *params);
 

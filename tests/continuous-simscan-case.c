@@ -188,9 +188,9 @@ exact_trajectory(const SimscanScene *scene, gdouble t_ref)
 
     drift_model_eval(&scene->drift, t_ref, &rx, &ry);
     for (k = 0; k < n; k++) {
-        meas[k].t_image = t0 + (t_end - t0)*k/(n - 1.0);
-        meas[k].t_local = t_ref;
-        drift_model_eval(&scene->drift, meas[k].t_image, &px, &py);
+        meas[k].t_a = t0 + (t_end - t0)*k/(n - 1.0);
+        meas[k].t_b = t_ref;
+        drift_model_eval(&scene->drift, meas[k].t_a, &px, &py);
         meas[k].dx = (px - rx)*sx;
         meas[k].dy = (py - ry)*sy;
     }

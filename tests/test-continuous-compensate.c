@@ -585,9 +585,9 @@ START_TEST(test_sheared_rows_match_gwyddion)
         vx = -vx;
     scan_timing_init(&timing, xres, yres, 0.0, 1.0, SCAN_DIRECTION_DOWN);
     for (k = 0; k < 3; k++) {
-        meas[k].t_image = 2.0*k + 0.5;
-        meas[k].t_local = 25.0;
-        meas[k].dx = vx*(meas[k].t_image - 2.5);
+        meas[k].t_a = 2.0*k + 0.5;
+        meas[k].t_b = 25.0;
+        meas[k].dx = vx*(meas[k].t_a - 2.5);
         meas[k].dy = 0.0;
     }
     trajectory = drift_trajectory_new(meas, 3, NULL);
@@ -684,9 +684,9 @@ START_TEST(test_mask_sheared)
     /* The trajectory sampled every 4 lines (as a fitted model would be). */
     motion_eval(&motion, 50.0, pref);
     for (k = 0; k < 13; k++) {
-        meas[k].t_image = 4.0*k;
-        meas[k].t_local = 50.0;
-        motion_eval(&motion, meas[k].t_image, p);
+        meas[k].t_a = 4.0*k;
+        meas[k].t_b = 50.0;
+        motion_eval(&motion, meas[k].t_a, p);
         meas[k].dx = p[0] - pref[0];
         meas[k].dy = p[1] - pref[1];
     }

@@ -57,12 +57,12 @@ measure_stripes(const Motion *motion, const ScanTiming *timing, gint n,
     gint s;
 
     for (s = 0; s < n; s++) {
-        meas[s].t_image = scan_timing_rows_time(timing,
+        meas[s].t_a = scan_timing_rows_time(timing,
                                                 stripe_first_row(s, n, timing->yres),
                                                 stripe_end_row(s, n, timing->yres));
-        meas[s].t_local = scan_timing_frame_end(timing) + gap + s*step;
-        motion_eval(motion, meas[s].t_image, pi);
-        motion_eval(motion, meas[s].t_local, pl);
+        meas[s].t_b = scan_timing_frame_end(timing) + gap + s*step;
+        motion_eval(motion, meas[s].t_a, pi);
+        motion_eval(motion, meas[s].t_b, pl);
         meas[s].dx = pi[0] - pl[0];
         meas[s].dy = pi[1] - pl[1];
     }
@@ -142,14 +142,14 @@ START_TEST(test_knots_interpolated)
     /* Given in shuffled time order. */
     for (s = 0; s < 9; s++) {
         t += g_rand_double_range(rng, 1.0, 20.0);
-        meas[(s*4) % 9].t_image = t;
-        meas[(s*4) % 9].t_local = 400.0;
+        meas[(s*4) % 9].t_a = t;
+        meas[(s*4) % 9].t_b = 400.0;
         meas[(s*4) % 9].dx = g_rand_double_range(rng, -10.0, 10.0);
         meas[(s*4) % 9].dy = g_rand_double_range(rng, -10.0, 10.0);
     }
     trajectory = drift_trajectory_new_interpolating(meas, 9, NULL);
     for (s = 0; s < 9; s++) {
-        drift_trajectory_eval(trajectory, meas[s].t_image, &dx, &dy);
+        drift_trajectory_eval(trajectory, meas[s].t_a, &dx, &dy);
         ck_assert_double_eq_tol(dx, meas[s].dx, 1e-12);
         ck_assert_double_eq_tol(dy, meas[s].dy, 1e-12);
     }
@@ -177,15 +177,15 @@ START_TEST(test_cubic_reproduced)
     t = 0.0;
     for (s = 0; s < 7; s++) {
         t += g_rand_double_range(rng, 2.0, 15.0);
-        meas[s].t_image = t;
-        meas[s].t_local = t_local;
+        meas[s].t_a = t;
+        meas[s].t_b = t_local;
         meas[s].dx = c[0] + t*(c[1] + t*(c[2] + t*c[3])) - pl;
         meas[s].dy = -meas[s].dx;
         range = fmax(range, fabs(meas[s].dx - meas[0].dx));
     }
     trajectory = drift_trajectory_new_interpolating(meas, 7, NULL);
     for (k = 0; k <= 200; k++) {
-        t = meas[0].t_image + (meas[6].t_image - meas[0].t_image)*k/200.0;
+        t = meas[0].t_a + (meas[6].t_a - meas[0].t_a)*k/200.0;
         expected = c[0] + t*(c[1] + t*(c[2] + t*c[3])) - pl;
         drift_trajectory_eval(trajectory, t, &dx, &dy);
         ck_assert_double_eq_tol(dx, expected, 1e-9*(1.0 + fabs(expected)));
@@ -194,7 +194,7 @@ START_TEST(test_cubic_reproduced)
     drift_trajectory_free(trajectory);
     trajectory = drift_trajectory_new(meas, 7, NULL);
     for (k = 0; k <= 200; k++) {
-        t = meas[0].t_image + (meas[6].t_image - meas[0].t_image)*k/200.0;
+        t = meas[0].t_a + (meas[6].t_a - meas[0].t_a)*k/200.0;
         expected = c[0] + t*(c[1] + t*(c[2] + t*c[3])) - pl;
         drift_trajectory_eval(trajectory, t, &dx, &dy);
         ck_assert_double_eq_tol(dx, expected, 0.05*range);
@@ -229,11 +229,11 @@ noisy_measurements(DriftMeasurement *meas, gdouble *v, GRand *rng)
     v[0] = g_rand_double_range(rng, -0.02, 0.02);
     v[1] = g_rand_double_range(rng, -0.02, 0.02);
     for (s = 0; s < 16; s++) {
-        meas[s].t_image = line*(16*s + g_rand_double_range(rng, 0.0, 16.0));
-        meas[s].t_local = 301.0 + 0.1*s;
-        meas[s].dx = (v[0]*(meas[s].t_image - meas[s].t_local)
+        meas[s].t_a = line*(16*s + g_rand_double_range(rng, 0.0, 16.0));
+        meas[s].t_b = 301.0 + 0.1*s;
+        meas[s].dx = (v[0]*(meas[s].t_a - meas[s].t_b)
                       + gaussian(rng, 0.1));
-        meas[s].dy = (v[1]*(meas[s].t_image - meas[s].t_local)
+        meas[s].dy = (v[1]*(meas[s].t_a - meas[s].t_b)
                       + gaussian(rng, 0.1));
     }
 }
@@ -302,10 +302,10 @@ random_paper_measurements(const Motion *motion, gdouble noise, GRand *rng,
     gint s;
 
     for (s = 0; s < 16; s++) {
-        meas[s].t_image = LINE_TIME*(16*s + g_rand_double_range(rng, 0.0, 16.0));
-        meas[s].t_local = 256*LINE_TIME + 1.0 + 0.1*s;
-        motion_eval(motion, meas[s].t_image, pi);
-        motion_eval(motion, meas[s].t_local, pl);
+        meas[s].t_a = LINE_TIME*(16*s + g_rand_double_range(rng, 0.0, 16.0));
+        meas[s].t_b = 256*LINE_TIME + 1.0 + 0.1*s;
+        motion_eval(motion, meas[s].t_a, pi);
+        motion_eval(motion, meas[s].t_b, pl);
         meas[s].dx = pi[0] - pl[0] + (noise ? gaussian(rng, noise) : 0.0);
         meas[s].dy = pi[1] - pl[1] + (noise ? gaussian(rng, noise) : 0.0);
     }
@@ -482,14 +482,14 @@ START_TEST(test_close_image_times)
         for (s = 0; s + 1 < 16; s += 2) {
             if (g_rand_boolean(rng))
                 continue;
-            meas[s].t_image = LINE_TIME*(16*s + 15.5);
-            meas[s+1].t_image = LINE_TIME*(16*(s + 1) + 0.5);
+            meas[s].t_a = LINE_TIME*(16*s + 15.5);
+            meas[s+1].t_a = LINE_TIME*(16*(s + 1) + 0.5);
         }
         for (s = 0; s < 16; s++) {
             gdouble pi[2], pl[2];
 
-            motion_eval(&motion, meas[s].t_image, pi);
-            motion_eval(&motion, meas[s].t_local, pl);
+            motion_eval(&motion, meas[s].t_a, pi);
+            motion_eval(&motion, meas[s].t_b, pl);
             meas[s].dx = pi[0] - pl[0] + gaussian(rng, 0.1);
             meas[s].dy = pi[1] - pl[1] + gaussian(rng, 0.1);
         }
@@ -578,14 +578,14 @@ START_TEST(test_end_continuation)
     gint s, side, k;
 
     for (s = 0; s < 6; s++) {
-        meas[s].t_image = 10.0*s + g_rand_double_range(rng, 0.0, 5.0);
-        meas[s].t_local = 100.0;
+        meas[s].t_a = 10.0*s + g_rand_double_range(rng, 0.0, 5.0);
+        meas[s].t_b = 100.0;
         meas[s].dx = g_rand_double_range(rng, -3.0, 3.0);
         meas[s].dy = g_rand_double_range(rng, -3.0, 3.0);
     }
     trajectory = drift_trajectory_new(meas, 6, NULL);
-    t_lin[0] = meas[0].t_image - 0.5*(meas[1].t_image - meas[0].t_image);
-    t_lin[1] = meas[5].t_image + 0.5*(meas[5].t_image - meas[4].t_image);
+    t_lin[0] = meas[0].t_a - 0.5*(meas[1].t_a - meas[0].t_a);
+    t_lin[1] = meas[5].t_a + 0.5*(meas[5].t_a - meas[4].t_a);
     for (side = 0; side < 2; side++) {
         drift_trajectory_eval(trajectory, t_lin[side], d0, d0 + 1);
         drift_trajectory_velocity(trajectory, t_lin[side], v0, v0 + 1);
@@ -607,7 +607,7 @@ START_TEST(test_end_continuation)
     }
     /* Between the end knot and that point the curve still bends (the data
      * are random, so the end cubic is not a line). */
-    drift_trajectory_velocity(trajectory, meas[5].t_image, v, v + 1);
+    drift_trajectory_velocity(trajectory, meas[5].t_a, v, v + 1);
     drift_trajectory_velocity(trajectory, t_lin[1], v0, v0 + 1);
     ck_assert(fabs(v[0] - v0[0]) > 1e-6);
     drift_trajectory_free(trajectory);
@@ -627,7 +627,7 @@ max_linear_interpolation_error(const DriftMeasurement *meas, gint n,
     for (s = 0; s + 1 < n; s++) {
         for (k = 0; k <= 50; k++) {
             w = k/50.0;
-            t = (1.0 - w)*meas[s].t_image + w*meas[s+1].t_image;
+            t = (1.0 - w)*meas[s].t_a + w*meas[s+1].t_a;
             motion_eval(motion, t, p);
             d = (1.0 - w)*meas[s].dx + w*meas[s+1].dx;
             err = MAX(err, fabs(d - (p[0] - pref[0])));
@@ -668,8 +668,8 @@ START_TEST(test_settling_accuracy)
     }
     measure_stripes(&motion, &timing, 16, 1.0, 0.1, meas);
     trajectory = drift_trajectory_new(meas, 16, NULL);
-    err = max_trajectory_error_between(trajectory, &motion, meas[0].t_image,
-                                       meas[15].t_image);
+    err = max_trajectory_error_between(trajectory, &motion, meas[0].t_a,
+                                       meas[15].t_a);
     end_err = max_trajectory_error(trajectory, &motion, &timing);
     lin_err = max_linear_interpolation_error(meas, 16, &motion,
                                              drift_trajectory_reference_time(trajectory));
@@ -755,8 +755,8 @@ START_TEST(test_zero_and_constant_exact)
     gint s, k;
 
     for (s = 0; s < 5; s++) {
-        meas[s].t_image = 3.0*s + 0.1*s*s;
-        meas[s].t_local = 40.0 + 0.3*s;
+        meas[s].t_a = 3.0*s + 0.1*s*s;
+        meas[s].t_b = 40.0 + 0.3*s;
         meas[s].dx = meas[s].dy = 0.0;
     }
     trajectory = drift_trajectory_new(meas, 5, NULL);
@@ -825,14 +825,14 @@ START_TEST(test_table_defaults)
     ck_assert_msg(n == 3, "%d measurements (%s)", n,
                   error ? error->message : "");
     /* Stripes 0, 3, 4 of 23 rows: rows 0-3, 13-17, 18-22. */
-    ck_assert_double_eq_tol(meas[0].t_image,
+    ck_assert_double_eq_tol(meas[0].t_a,
                             scan_timing_pixel_time(&timing, 1.5, 19.5), 1e-12);
-    ck_assert_double_eq_tol(meas[1].t_image,
+    ck_assert_double_eq_tol(meas[1].t_a,
                             scan_timing_pixel_time(&timing, 15.0, 19.5), 1e-12);
-    ck_assert_double_eq_tol(meas[2].t_image,
+    ck_assert_double_eq_tol(meas[2].t_a,
                             scan_timing_pixel_time(&timing, 20.0, 19.5), 1e-12);
     for (s = 0; s < 3; s++)
-        ck_assert_double_eq_tol(meas[s].t_local, 2.0 + 23*0.5, 1e-12);
+        ck_assert_double_eq_tol(meas[s].t_b, 2.0 + 23*0.5, 1e-12);
     ck_assert_double_eq_tol(meas[1].dx, 6.0, 1e-12);
     ck_assert_double_eq_tol(meas[1].dy, -3.0, 1e-12);
     ck_assert_double_eq_tol(meas[2].dx, 7.25, 1e-12);

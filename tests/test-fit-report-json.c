@@ -10,7 +10,7 @@
 #include <math.h>
 #include <check.h>
 #include <json-glib/json-glib.h>
-#include "fit-command.h"
+#include "fit-report.h"
 
 /* Three fitted models, every number of the first one not finite. */
 static void

@@ -15,7 +15,7 @@
 #include <libgwyddion/gwyddion.h>
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
-#include "frame-series.h"
+#include "frame-series-load.h"
 
 static const gchar *measured;
 

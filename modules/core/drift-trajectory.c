@@ -768,9 +768,9 @@ compare_by_image_time(gconstpointer pa, gconstpointer pb, gpointer user_data)
     const DriftMeasurement *a = meas + *(const gint*)pa;
     const DriftMeasurement *b = meas + *(const gint*)pb;
 
-    if (a->t_image < b->t_image)
+    if (a->t_a < b->t_a)
         return -1;
-    return a->t_image > b->t_image;
+    return a->t_a > b->t_a;
 }
 
 /* Slope of the not-a-knot spline through (t, y) where its linear
@@ -793,11 +793,11 @@ spline_end_slope(gint n, const gdouble *t, const gdouble *y)
     return slope;
 }
 
-/* The positions at the image times are p(t_image) - p(t_ref)
- * = m + p(t_local) - p(t_ref), so the drift during the local scans is
+/* The positions at the image times are p(t_a) - p(t_ref)
+ * = m + p(t_b) - p(t_ref), so the drift during the local scans is
  * needed.  The local scans come after the frame, where the trajectory
  * continues linearly with its end slope; so the local-scan velocity v is
- * the end slope of the spline through m + v tau, tau = t_local - t_ref,
+ * the end slope of the spline through m + v tau, tau = t_b - t_ref,
  * which is linear in v: v = m'/(1 - tau').  When the local scans advance
  * nearly as fast as the stripes were imaged, their drift cancels from the
  * measurements, cannot be estimated, and is taken as zero. */
@@ -828,7 +828,7 @@ check_measurements(const DriftMeasurement *meas, gint n, GError **error)
         return FALSE;
     }
     for (i = 0; i < n; i++) {
-        if (!isfinite(meas[i].t_image) || !isfinite(meas[i].t_local)
+        if (!isfinite(meas[i].t_a) || !isfinite(meas[i].t_b)
             || !isfinite(meas[i].dx) || !isfinite(meas[i].dy)) {
             g_set_error(error, DRIFT_TRAJECTORY_ERROR,
                         DRIFT_TRAJECTORY_ERROR_VALUE,
@@ -893,9 +893,9 @@ trajectory_new(const DriftMeasurement *meas, gint n, gboolean smooth,
     g_qsort_with_data(order, n, sizeof(gint), compare_by_image_time,
                       (gpointer)meas);
     trajectory = g_new0(DriftTrajectory, 1);
-    trajectory->t_ref = meas[0].t_local;
+    trajectory->t_ref = meas[0].t_b;
     for (i = 1; i < n; i++)
-        trajectory->t_ref = MIN(trajectory->t_ref, meas[i].t_local);
+        trajectory->t_ref = MIN(trajectory->t_ref, meas[i].t_b);
 
     trajectory->t = g_new(gdouble, 5*n);
     trajectory->value[0] = trajectory->t + n;
@@ -913,13 +913,13 @@ trajectory_new(const DriftMeasurement *meas, gint n, gboolean smooth,
 
         sum[0] = sum[1] = sum[2] = 0.0;
         j = trajectory->n++;
-        for (k = i; k < n && meas[order[k]].t_image == first->t_image; k++) {
+        for (k = i; k < n && meas[order[k]].t_a == first->t_a; k++) {
             sum[0] += meas[order[k]].dx;
             sum[1] += meas[order[k]].dy;
-            sum[2] += meas[order[k]].t_local - trajectory->t_ref;
+            sum[2] += meas[order[k]].t_b - trajectory->t_ref;
             knot_of[order[k]] = j;
         }
-        trajectory->t[j] = first->t_image;
+        trajectory->t[j] = first->t_a;
         trajectory->value[0][j] = sum[0]/(k - i);
         trajectory->value[1][j] = sum[1]/(k - i);
         tau[j] = sum[2]/(k - i);
@@ -1032,9 +1032,9 @@ drift_trajectory_measurements_from_table(const DriftTable *table,
                                          stripe_first_row(s, n, yres),
                                          stripe_end_row(s, n, yres));
         ok = (extra_or_default(table, s, "t_image", t_centre,
-                               &meas[count].t_image, error)
+                               &meas[count].t_a, error)
               && extra_or_default(table, s, "t_local", t_end,
-                                  &meas[count].t_local, error)
+                                  &meas[count].t_b, error)
               && extra_or_default(table, s, "dx_exact", dx_px[s],
                                   &dx_exact, error)
               && extra_or_default(table, s, "dy_exact", dy_px[s],
@@ -1058,7 +1058,7 @@ drift_trajectory_new_from_table(const DriftTable *table,
     DriftTrajectory *trajectory = NULL;
     gint n, s, i;
 
-    meas = g_new(DriftMeasurement, MAX(table->n_stripes, 1));
+    meas = g_new0(DriftMeasurement, MAX(table->n_stripes, 1));
     n = drift_trajectory_measurements_from_table(table, x_pixel_size,
                                                  y_pixel_size, timing,
                                                  meas, error);

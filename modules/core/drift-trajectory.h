@@ -10,6 +10,7 @@
 #include <glib.h>
 #include "drift-table.h"
 #include "scan-timing.h"
+#include "drift-measurement.h"
 
 G_BEGIN_DECLS
 
@@ -21,21 +22,16 @@ typedef enum {
     DRIFT_TRAJECTORY_ERROR_TIMING,    /* timing unusable or not the image's */
 } DriftTrajectoryError;
 
-/* One local-scan measurement: the particle imaged at t_image (in the big
- * frame) is found by the local scan at t_local displaced by (dx, dy) px, so
- *     (dx, dy) = p(t_image) - p(t_local). */
-typedef struct {
-    gdouble t_image;
-    gdouble t_local;
-    gdouble dx;
-    gdouble dy;
-} DriftMeasurement;
+/* A local-scan measurement (drift-measurement.h), in px: the particle
+ * imaged at t_a (in the big frame) is found by the local scan at t_b
+ * displaced by (dx, dy), so (dx, dy) = p(t_a) - p(t_b).  weight and group
+ * are not used here. */
 
 typedef struct _DriftTrajectory DriftTrajectory;
 
 GQuark            drift_trajectory_error_quark  (void);
 
-/* Builds the displacement D(t) = p(t) - p(t_ref), t_ref the earliest t_local
+/* Builds the displacement D(t) = p(t) - p(t_ref), t_ref the earliest t_b
  * of the measurements, from n measurements in any order.  With six or more
  * distinct image times the measured values are smoothed first, robustly
  * (penalised least squares on third differences, iteratively reweighted

@@ -4,8 +4,8 @@
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
-#ifndef SIMSCAN_SIM_RANDOM_H
-#define SIMSCAN_SIM_RANDOM_H
+#ifndef LOCALSCAN_SIM_RANDOM_H
+#define LOCALSCAN_SIM_RANDOM_H
 
 #include <glib.h>
 

@@ -6,8 +6,8 @@
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
-#ifndef SIMSCAN_PARTICLE_DETECT_H
-#define SIMSCAN_PARTICLE_DETECT_H
+#ifndef LOCALSCAN_PARTICLE_DETECT_H
+#define LOCALSCAN_PARTICLE_DETECT_H
 
 #include <glib.h>
 #include <libprocess/datafield.h>

@@ -1,14 +1,17 @@
 /*
- *  A time series of frames of one area: loaded from several files or from
- *  the channels of one file, with each frame's scan timing (interfaces.md
- *  section 4) taken from the file metadata or from options.
+ *  A time series of frames of one area: from several files or from the
+ *  channels of one file, with each frame's scan timing (interfaces.md
+ *  section 4) taken from the file metadata or from options.  Loading the
+ *  files needs Gwyddion's file modules, outside this GTK-free core:
+ *  tools/frame-series-load.h does it and calls frame_series_from_files.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
-#ifndef SIMSCAN_FRAME_SERIES_H
-#define SIMSCAN_FRAME_SERIES_H
+#ifndef LOCALSCAN_FRAME_SERIES_H
+#define LOCALSCAN_FRAME_SERIES_H
 
 #include <glib.h>
+#include <libgwyddion/gwycontainer.h>
 #include <libprocess/datafield.h>
 #include "scan-timing.h"
 
@@ -55,7 +58,8 @@ typedef struct {
     gint n_frame_times;
     gint direction;               /* -1: metadata (else down), or ScanDirection */
     const gchar *channel;         /* title (exact, or prefix followed by a space
-                                     and digits); NULL: see frame_series_load */
+                                     and digits); NULL: see
+                                     frame_series_from_files */
     gint first_id, last_id;       /* channel id range in a one-file series;
                                      -1: no limit */
     gboolean keep_duplicates;     /* keep frames with bit-identical data */
@@ -64,9 +68,10 @@ typedef struct {
 GQuark        frame_series_error_quark  (void);
 void          frame_series_options_init (FrameSeriesOptions *options);
 
-/* Loads the frames.  With several files, each file gives one frame: the
- * channel named by options->channel, else its first channel.  With one file,
- * its channels are the frames: those named by options->channel (titles equal
+/* The frames of n_files loaded files (datas[k] loaded from filenames[k],
+ * which label the frames and errors).  With several files, each file gives
+ * one frame: the channel named by options->channel, else its first channel.
+ * With one file, its channels are the frames: those named by options->channel (titles equal
  * to it or to it followed by " <number>") within the id range, else every
  * channel with the same size, pixel size and value unit as the first.  Frames
  * with bit-identical data are dropped (a note says which).  Timing comes from
@@ -74,7 +79,8 @@ void          frame_series_options_init (FrameSeriesOptions *options);
  * Nanoscope, HS-AFM, Anasys, Asylum) unless options give it.
  * Refuses series of fewer than two frames, frames of different size and
  * series whose timing stays unknown. */
-FrameSeries*  frame_series_load         (gchar **filenames,
+FrameSeries*  frame_series_from_files   (GwyContainer **datas,
+                                         gchar **filenames,
                                          gint n_files,
                                          const FrameSeriesOptions *options,
                                          GError **error);

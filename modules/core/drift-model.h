@@ -5,8 +5,8 @@
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
-#ifndef SIMSCAN_DRIFT_MODEL_H
-#define SIMSCAN_DRIFT_MODEL_H
+#ifndef LOCALSCAN_DRIFT_MODEL_H
+#define LOCALSCAN_DRIFT_MODEL_H
 
 #include <glib.h>
 

@@ -10,13 +10,9 @@
 #include <math.h>
 #include <libgwyddion/gwyddion.h>
 #include <libprocess/gwyprocess.h>
-#include <libgwymodule/gwymodule.h>
-#include <app/gwyapp.h>
 #include "frame-series.h"
 #include "scan-timing-meta.h"
-
-#undef _
-#define _(s) dgettext(GETTEXT_PACKAGE, s)
+#include "localscan-intl.h"
 
 /* Timing facts read from one channel's metadata; NaN/-1 when absent. */
 typedef struct {
@@ -165,7 +161,45 @@ channel_meta(GwyContainer *data, gint id)
 static GwyDataField*
 channel_field(GwyContainer *data, gint id)
 {
-    return gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
+    gchar key[40];
+
+    g_snprintf(key, sizeof(key), "/%d/data", id);
+    return gwy_container_get_object_by_name(data, key);
+}
+
+/* Adds the id of an item "/ID/data" holding a data field. */
+static void
+collect_channel_id(gpointer hkey, gpointer hvalue, gpointer user_data)
+{
+    const gchar *name = g_quark_to_string(GPOINTER_TO_UINT(hkey));
+    GValue *value = (GValue*)hvalue;
+    GArray *ids = (GArray*)user_data;
+    gchar *end;
+    glong id;
+    gint value_id;
+
+    if (name[0] != '/' || !g_ascii_isdigit(name[1]))
+        return;
+    id = strtol(name + 1, &end, 10);
+    if (strcmp(end, "/data") != 0 || id > G_MAXINT
+        || !G_VALUE_HOLDS_OBJECT(value)
+        || !GWY_IS_DATA_FIELD(g_value_get_object(value)))
+        return;
+    value_id = (gint)id;
+    g_array_append_val(ids, value_id);
+}
+
+/* The channel ids of data, in no particular order, terminated by -1 (what
+ * Gwyddion's data browser lists, without needing the GUI library). */
+static gint*
+channel_ids(GwyContainer *data)
+{
+    GArray *ids = g_array_new(FALSE, FALSE, sizeof(gint));
+    gint end = -1;
+
+    gwy_container_foreach(data, NULL, collect_channel_id, ids);
+    g_array_append_val(ids, end);
+    return (gint*)g_array_free(ids, FALSE);
 }
 
 static gboolean
@@ -215,7 +249,7 @@ append_channel(FrameSeries *series, GwyContainer *data, gint id,
 static gint
 first_channel_id(GwyContainer *data, const gchar *wanted)
 {
-    gint *ids = gwy_app_data_browser_get_data_ids(data);
+    gint *ids = channel_ids(data);
     gint i, found = -1;
 
     for (i = 0; ids[i] >= 0; i++) {
@@ -239,7 +273,7 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
                           const FrameSeriesOptions *options,
                           MetaTiming **mts, GError **error)
 {
-    gint *ids = gwy_app_data_browser_get_data_ids(data);
+    gint *ids = channel_ids(data);
     GwyDataField *first = NULL;
     gint i, n;
 
@@ -445,29 +479,15 @@ assign_start_times(FrameSeries *series, const MetaTiming *mts,
     return TRUE;
 }
 
-static void
-free_datas(GwyContainer **datas, gint n)
-{
-    gint k;
-
-    for (k = 0; k < n; k++) {
-        if (datas[k])
-            g_object_unref(datas[k]);
-    }
-    g_free(datas);
-}
-
 FrameSeries*
-frame_series_load(gchar **filenames, gint n_files,
-                  const FrameSeriesOptions *options, GError **error)
+frame_series_from_files(GwyContainer **datas, gchar **filenames,
+                        gint n_files, const FrameSeriesOptions *options,
+                        GError **error)
 {
     FrameSeriesOptions defaults;
     FrameSeries *series = frame_series_new();
-    GwyContainer **datas = g_new0(GwyContainer*, MAX(n_files, 1));
     MetaTiming *mts = NULL;
-    GError *err = NULL;
     gboolean ok;
-    gint k;
 
     if (!options) {
         frame_series_options_init(&defaults);
@@ -477,16 +497,6 @@ frame_series_load(gchar **filenames, gint n_files,
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("no frames given"));
         goto fail;
-    }
-    for (k = 0; k < n_files; k++) {
-        if (!(datas[k] = gwy_file_load(filenames[k], GWY_RUN_NONINTERACTIVE,
-                                       &err))) {
-            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_LOAD,
-                        _("%s: cannot load: %s"), filenames[k],
-                        err ? err->message : _("unknown format"));
-            g_clear_error(&err);
-            goto fail;
-        }
     }
     if (n_files == 1)
         ok = load_channels_of_one_file(series, datas[0], filenames[0],
@@ -501,20 +511,17 @@ frame_series_load(gchar **filenames, gint n_files,
     if (series->n_frames < 2) {
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("%s: a series needs at least two distinct frames, "
-                      "found %d"), n_files ? filenames[0] : "",
-                    series->n_frames);
+                      "found %d"), filenames[0], series->n_frames);
         goto fail;
     }
     if (!assign_line_times(series, mts, options, error)
         || !assign_start_times(series, mts, options, error))
         goto fail;
     g_free(mts);
-    free_datas(datas, n_files);
     return series;
 
 fail:
     g_free(mts);
-    free_datas(datas, n_files);
     frame_series_free(series);
     return NULL;
 }

@@ -5,8 +5,8 @@
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
-#ifndef SIMSCAN_DISPLACEMENT_MEASURE_H
-#define SIMSCAN_DISPLACEMENT_MEASURE_H
+#ifndef LOCALSCAN_DISPLACEMENT_MEASURE_H
+#define LOCALSCAN_DISPLACEMENT_MEASURE_H
 
 #include <glib.h>
 #include "frame-series.h"

@@ -5,29 +5,18 @@
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
-#ifndef SIMSCAN_DRIFT_FIT_H
-#define SIMSCAN_DRIFT_FIT_H
+#ifndef LOCALSCAN_DRIFT_FIT_H
+#define LOCALSCAN_DRIFT_FIT_H
 
 #include <glib.h>
 #include "drift-model.h"
+#include "drift-measurement.h"
 
 G_BEGIN_DECLS
 
-/*
- * One measurement: content scanned at time t_b (earlier frame) was seen
- * displaced by (dx, dy) when scanned again at time t_a, so
- *     (dx, dy) = p(t_a) - p(t_b)
- * for the trajectory p of interfaces.md section 4.  The constant p0 cancels.
- * A measurement with t_a not later than t_b (frames overlapping in time) is
- * not used.
- */
-typedef struct {
-    gdouble t_a, t_b;      /* s */
-    gdouble dx, dy;        /* m */
-    gdouble weight;        /* >= 0, relative confidence (0 = ignore) */
-    gint group;            /* unit held out together in cross-validation */
-    gint frame_a, frame_b; /* frames the times belong to (informative) */
-} DriftMeasurement;
+/* DriftMeasurement (drift-measurement.h): (dx, dy) = p(t_a) - p(t_b) in
+ * metres.  A measurement with t_a not later than t_b (frames overlapping in
+ * time) is not used. */
 
 /* Slow-creep forms fitted beside the drift models so that a study can
  * compare them on measured data (docs/validation-study.c).  They are no

@@ -1,0 +1,224 @@
+/*
+ *  The drift fit of a frame series: its displacements measured, every
+ *  drift model fitted, one chosen, and the JSON report of it all.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <math.h>
+#include <json-glib/json-glib.h>
+#include "fit-report.h"
+
+gboolean
+fit_report_compute(const FrameSeries *series,
+                   const DisplacementOptions *doptions,
+                   const DriftFitOptions *foptions, FitReport *report)
+{
+    gboolean *kept;
+    gint i;
+
+    memset(report, 0, sizeof(FitReport));
+    if (foptions)
+        report->fit_options = *foptions;
+    else
+        drift_fit_options_init(&report->fit_options);
+    report->meas = displacement_measure_series(series, doptions,
+                                               &report->n_meas);
+    drift_fit_candidates(&report->n_fits);
+    kept = g_new(gboolean, MAX(report->n_meas, 1));
+    report->chosen = drift_fit_select_kept(report->meas, report->n_meas,
+                                           &report->fit_options, report->fits,
+                                           kept);
+    /* Gross outliers (failed registrations) count as unused from here on. */
+    for (i = 0; i < report->n_meas; i++) {
+        if (!kept[i])
+            report->meas[i].weight = 0.0;
+    }
+    g_free(kept);
+    return report->chosen >= 0;
+}
+
+void
+fit_report_clear(FitReport *report)
+{
+    g_free(report->meas);
+    report->meas = NULL;
+    report->n_meas = 0;
+}
+
+/* JSON has no NaN or infinity: a number not known is null. */
+static void
+add_number_value(JsonBuilder *b, gdouble v)
+{
+    if (isfinite(v))
+        json_builder_add_double_value(b, v);
+    else
+        json_builder_add_null_value(b);
+}
+
+static void
+add_pair_value(JsonBuilder *b, const gdouble *v)
+{
+    json_builder_begin_array(b);
+    add_number_value(b, v[0]);
+    add_number_value(b, v[1]);
+    json_builder_end_array(b);
+}
+
+static void
+add_pair(JsonBuilder *b, const gchar *name, const gdouble *v)
+{
+    json_builder_set_member_name(b, name);
+    add_pair_value(b, v);
+}
+
+static void
+add_double(JsonBuilder *b, const gchar *name, gdouble v)
+{
+    json_builder_set_member_name(b, name);
+    add_number_value(b, v);
+}
+
+static void
+add_parameters(JsonBuilder *b, const DriftFit *fit)
+{
+    DriftFitParameters p;
+
+    drift_fit_parameters(fit, &p);
+    json_builder_set_member_name(b, "parameters");
+    json_builder_begin_object(b);
+    switch (fit->type) {
+        case DRIFT_MODEL_SETTLING:
+        add_double(b, "tau_s", p.tau_s);
+        add_pair(b, "u_nm_per_s", p.u_nm_per_s);
+        break;
+
+        case DRIFT_MODEL_OSCILLATION:
+        add_double(b, "period_s", p.period_s);
+        add_pair(b, "amplitude_nm", p.amplitude_nm);
+        add_double(b, "phase_rad", p.phase_rad);
+        break;
+
+        case DRIFT_MODEL_JUMP:
+        add_double(b, "t_s", p.t_s);
+        add_pair(b, "step_nm", p.step_nm);
+        break;
+
+        default:
+        break;
+    }
+    json_builder_end_object(b);
+    add_pair(b, "velocity_nm_per_s", p.velocity_nm_per_s);
+}
+
+/* The periods the series can show an oscillation with; none (null) when
+ * the series is too short for its gaps. */
+static void
+add_period_range(JsonBuilder *b, const FitReport *report)
+{
+    gdouble range[2];
+
+    json_builder_set_member_name(b, "observable_period_s");
+    if (drift_fit_observable_periods(report->meas, report->n_meas,
+                                     &report->fit_options,
+                                     range, range + 1))
+        add_pair_value(b, range);
+    else
+        json_builder_add_null_value(b);
+}
+
+static void
+add_models(JsonBuilder *b, const FitReport *report)
+{
+    gint i;
+
+    json_builder_set_member_name(b, "models");
+    json_builder_begin_array(b);
+    for (i = 0; i < report->n_fits; i++) {
+        const DriftFit *fit = report->fits + i;
+
+        json_builder_begin_object(b);
+        json_builder_set_member_name(b, "name");
+        json_builder_add_string_value(b, drift_model_type_name(fit->type));
+        json_builder_set_member_name(b, "fitted");
+        json_builder_add_boolean_value(b, fit->ok);
+        if (fit->type == DRIFT_MODEL_OSCILLATION)
+            add_period_range(b, report);
+        add_double(b, "rms_nm", fit->rms_nm);
+        /* The score is the Bayesian information criterion: lower is
+         * better, and each parameter costs log(n). */
+        add_double(b, "score", fit->bic);
+        add_double(b, "cv_rms_nm", fit->cv_rms_nm);
+        json_builder_set_member_name(b, "n_params");
+        json_builder_add_int_value(b, fit->n_params);
+        add_parameters(b, fit);
+        json_builder_end_object(b);
+    }
+    json_builder_end_array(b);
+}
+
+static void
+add_frames(JsonBuilder *b, const FrameSeries *series)
+{
+    gint i;
+
+    json_builder_set_member_name(b, "frames");
+    json_builder_begin_array(b);
+    for (i = 0; i < series->n_frames; i++) {
+        const SeriesFrame *f = series->frames + i;
+
+        json_builder_begin_object(b);
+        json_builder_set_member_name(b, "label");
+        json_builder_add_string_value(b, f->label);
+        add_double(b, "start_s", f->timing.frame_start);
+        add_double(b, "line_time_s", f->timing.line_time);
+        json_builder_set_member_name(b, "direction");
+        json_builder_add_string_value(b, f->timing.direction
+                                         == SCAN_DIRECTION_UP ? "up" : "down");
+        json_builder_end_object(b);
+    }
+    json_builder_end_array(b);
+    json_builder_set_member_name(b, "notes");
+    json_builder_begin_array(b);
+    for (i = 0; i < (gint)series->notes->len; i++)
+        json_builder_add_string_value(b, g_ptr_array_index(series->notes, i));
+    json_builder_end_array(b);
+}
+
+gchar*
+fit_report_to_json(const FitReport *report, const FrameSeries *series)
+{
+    JsonBuilder *b = json_builder_new();
+    JsonGenerator *gen = json_generator_new();
+    JsonNode *root;
+    gchar *text;
+    gint i, used = 0;
+
+    json_builder_begin_object(b);
+    json_builder_set_member_name(b, "effect");
+    json_builder_add_string_value(b, report->chosen >= 0
+                                  ? drift_model_type_name(report->fits[report->chosen].type)
+                                  : "none");
+    if (report->chosen >= 0)
+        add_parameters(b, report->fits + report->chosen);
+    add_models(b, report);
+    for (i = 0; i < report->n_meas; i++)
+        used += (report->meas[i].weight > 0.0);
+    json_builder_set_member_name(b, "n_measurements");
+    json_builder_add_int_value(b, report->n_meas);
+    json_builder_set_member_name(b, "n_measurements_used");
+    json_builder_add_int_value(b, used);
+    if (series)
+        add_frames(b, series);
+    json_builder_end_object(b);
+
+    root = json_builder_get_root(b);
+    json_generator_set_root(gen, root);
+    json_generator_set_pretty(gen, TRUE);
+    text = json_generator_to_data(gen, NULL);
+    json_node_unref(root);
+    g_object_unref(gen);
+    g_object_unref(b);
+    return text;
+}

@@ -1,0 +1,42 @@
+/*
+ *  The drift fit of a frame series: the displacements between its frames
+ *  measured (displacement-measure.h), every drift model fitted and one
+ *  chosen (drift-fit.h), and the report as the JSON `simscan fit` writes.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef LOCALSCAN_FIT_REPORT_H
+#define LOCALSCAN_FIT_REPORT_H
+
+#include <glib.h>
+#include "frame-series.h"
+#include "displacement-measure.h"
+#include "drift-fit.h"
+
+G_BEGIN_DECLS
+
+#define FIT_REPORT_MAX_MODELS 8
+
+/* Everything one fit of a series produced. */
+typedef struct {
+    DriftMeasurement *meas;
+    gint n_meas;
+    gint n_fits;
+    DriftFit fits[FIT_REPORT_MAX_MODELS];
+    gint chosen;              /* index into fits, -1 when nothing fitted */
+    DriftFitOptions fit_options;  /* the options the fits were made with */
+} FitReport;
+
+/* Measures the displacements of the series and fits every model. */
+gboolean  fit_report_compute  (const FrameSeries *series,
+                               const DisplacementOptions *doptions,
+                               const DriftFitOptions *foptions,
+                               FitReport *report);
+void      fit_report_clear    (FitReport *report);
+/* The interfaces.md JSON (plus frames, notes and measurement counts). */
+gchar*    fit_report_to_json  (const FitReport *report,
+                               const FrameSeries *series);
+
+G_END_DECLS
+
+#endif
