@@ -249,66 +249,6 @@ parse_reference(const gchar *arg, ReferenceSpec *spec, GError **error)
     return TRUE;
 }
 
-/* A file as the file system knows it: its inode when it exists, else the
- * absolute path it would get (its folder resolved, so that "out/../x" and
- * "x" or a symlinked folder name one file). */
-typedef struct {
-    gboolean exists;
-    dev_t dev;
-    ino_t ino;
-    gchar *path;
-} FileIdentity;
-
-static gchar*
-resolved_path(const gchar *filename)
-{
-    gchar *absolute = g_canonicalize_filename(filename, NULL);
-    gchar *dir = g_path_get_dirname(absolute), *base = g_path_get_basename(absolute);
-    gchar *realdir = realpath(dir, NULL), *path;
-
-    path = realdir ? g_build_filename(realdir, base, NULL) : g_strdup(absolute);
-    free(realdir);
-    g_free(base);
-    g_free(dir);
-    g_free(absolute);
-    return path;
-}
-
-static void
-file_identity_init(FileIdentity *identity, const gchar *filename)
-{
-    GStatBuf st;
-
-    identity->exists = (g_stat(filename, &st) == 0);
-    identity->dev = identity->exists ? st.st_dev : 0;
-    identity->ino = identity->exists ? st.st_ino : 0;
-    identity->path = resolved_path(filename);
-}
-
-static gboolean
-file_identity_equal(const FileIdentity *a, const FileIdentity *b)
-{
-    if (a->exists && b->exists)
-        return a->dev == b->dev && a->ino == b->ino;
-    if (a->exists != b->exists)
-        return FALSE;
-    return gwy_strequal(a->path, b->path);
-}
-
-static gboolean
-is_same_file(const gchar *a, const gchar *b)
-{
-    FileIdentity ia, ib;
-    gboolean same;
-
-    file_identity_init(&ia, a);
-    file_identity_init(&ib, b);
-    same = file_identity_equal(&ia, &ib);
-    g_free(ia.path);
-    g_free(ib.path);
-    return same;
-}
-
 /* An output may be none of the files read, nor the other output: each is
  * written by renaming a finished temporary over it, so an input would be
  * replaced (and the tool promises never to modify one). */
@@ -329,14 +269,14 @@ check_outputs_distinct(GError **error)
 
     for (i = 0; ok && i < G_N_ELEMENTS(outputs); i++) {
         for (j = 0; ok && outputs[i] && j < G_N_ELEMENTS(inputs); j++) {
-            if (inputs[j] && is_same_file(outputs[i], inputs[j])) {
+            if (inputs[j] && output_files_same(outputs[i], inputs[j])) {
                 g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
                             _(refusals[j]), inputs[j], output_options[i]);
                 ok = FALSE;
             }
         }
     }
-    if (ok && options.write_drift && is_same_file(options.output, options.write_drift)) {
+    if (ok && options.write_drift && output_files_same(options.output, options.write_drift)) {
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
                     _("-o and --write-drift name the same file %s"), options.write_drift);
         ok = FALSE;
@@ -543,7 +483,7 @@ measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
     gboolean same_file;
     gint refid;
 
-    same_file = (!spec.file || is_same_file(spec.file, filename));
+    same_file = (!spec.file || output_files_same(spec.file, filename));
     reffile = spec.file ? spec.file : filename;
     refdata = (same_file ? g_object_ref(data)
                : headless_run_load(reffile, error));
@@ -706,22 +646,18 @@ compensate_with_measured(GwyContainer *data, gint id, const DriftTable *table,
 static gboolean
 save_results(GwyContainer *data, const DriftTable *table, GError **error)
 {
-    const gchar *finals[2] = { options.output, options.write_drift };
-    gchar *temps[2] = { NULL, NULL }, *text;
-    guint n = options.write_drift ? 2 : 1;
+    OutputFiles *files = output_files_new();
+    gchar *text;
     gboolean ok;
 
-    temps[0] = headless_run_save_gwy_temp(data, options.output, error);
-    if (temps[0] && options.write_drift) {
+    ok = headless_run_add_gwy(files, data, options.output, error);
+    if (ok && options.write_drift) {
         text = drift_table_to_string(table);
-        temps[1] = headless_run_write_text_temp(text, options.write_drift, error);
+        ok = headless_run_add_text(files, text, options.write_drift, error);
         g_free(text);
     }
-    ok = (temps[0] && temps[n-1] && headless_run_commit(temps, finals, n, error));
-    if (!ok && temps[0] && n == 2 && !temps[1])
-        g_unlink(temps[0]);
-    g_free(temps[0]);
-    g_free(temps[1]);
+    ok = ok && output_files_commit(files, error);
+    output_files_free(files);
     return ok;
 }
 

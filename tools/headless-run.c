@@ -6,11 +6,8 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
-#include <errno.h>
 #include <stdlib.h>
-#include <unistd.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <glib/gstdio.h>
 #include <libgwyddion/gwymacros.h>
 #include <libgwymodule/gwymodule.h>
@@ -217,16 +214,6 @@ headless_run_process(GwyContainer *data, gint id, const gchar *funcname,
     return newid;
 }
 
-/* mkstemp() creates 0600 files; the result should get the usual mode. */
-static void
-give_default_permissions(const gchar *filename)
-{
-    mode_t mask = umask(0);
-
-    umask(mask);
-    g_chmod(filename, 0666 & ~mask);
-}
-
 static void
 set_save_error(GError **error, const gchar *filename, const gchar *reason)
 {
@@ -234,139 +221,52 @@ set_save_error(GError **error, const gchar *filename, const gchar *reason)
                 _("cannot write %s: %s"), filename, reason);
 }
 
-/* An empty temporary file beside filename (same folder, so a rename puts it
- * in place atomically), with the usual permissions; NULL on failure. */
-static gchar*
-make_temp_beside(const gchar *filename, GError **error)
-{
-    gchar *dir = g_path_get_dirname(filename), *base = g_path_get_basename(filename);
-    gchar *tmpl = g_strconcat(".", base, ".XXXXXX.tmp", NULL);
-    gchar *tmpname = g_build_filename(dir, tmpl, NULL);
-    gint fd = g_mkstemp(tmpname);
-
-    if (fd < 0) {
-        set_save_error(error, filename, g_strerror(errno));
-        g_free(tmpname);
-        tmpname = NULL;
-    }
-    else {
-        close(fd);
-        give_default_permissions(tmpname);
-    }
-    g_free(tmpl);
-    g_free(base);
-    g_free(dir);
-    return tmpname;
-}
-
-gchar*
-headless_run_save_gwy_temp(GwyContainer *data, const gchar *filename, GError **error)
+gboolean
+headless_run_add_gwy(OutputFiles *files, GwyContainer *data,
+                     const gchar *filename, GError **error)
 {
     GError *err = NULL;
-    gchar *tmpname;
+    const gchar *tmpname;
 
-    if (!(tmpname = make_temp_beside(filename, error)))
-        return NULL;
-    if (!gwy_file_func_run_save(GWY_NATIVE_SAVER, data, tmpname, GWY_RUN_NONINTERACTIVE, &err)) {
-        set_save_error(error, filename, err ? err->message : _("the .gwy writer failed"));
+    if (!(tmpname = output_files_reserve(files, filename, error)))
+        return FALSE;
+    if (!gwy_file_func_run_save(GWY_NATIVE_SAVER, data, tmpname,
+                                GWY_RUN_NONINTERACTIVE, &err)) {
+        set_save_error(error, filename,
+                       err ? err->message : _("the .gwy writer failed"));
         g_clear_error(&err);
-        g_unlink(tmpname);
-        g_free(tmpname);
-        return NULL;
+        return FALSE;
     }
-    return tmpname;
-}
-
-gchar*
-headless_run_write_text_temp(const gchar *text, const gchar *filename, GError **error)
-{
-    GError *err = NULL;
-    gchar *tmpname;
-
-    if (!(tmpname = make_temp_beside(filename, error)))
-        return NULL;
-    if (!g_file_set_contents(tmpname, text, -1, &err)) {
-        set_save_error(error, filename, err->message);
-        g_clear_error(&err);
-        g_unlink(tmpname);
-        g_free(tmpname);
-        return NULL;
-    }
-    /* g_file_set_contents() replaced the file with a private one. */
-    give_default_permissions(tmpname);
-    return tmpname;
-}
-
-/* A second name for an existing file, so it can be put back; NULL when
- * there is no file (or no hard links on this file system). */
-static gchar*
-keep_old_file(const gchar *filename)
-{
-    gchar *backup;
-
-    if (!g_file_test(filename, G_FILE_TEST_EXISTS))
-        return NULL;
-    if (!(backup = make_temp_beside(filename, NULL)))
-        return NULL;
-    g_unlink(backup);
-    if (link(filename, backup) != 0) {
-        g_free(backup);
-        return NULL;
-    }
-    return backup;
-}
-
-/* Undoes the first n renames of a commit: the older file back, or none. */
-static void
-restore_old_files(const gchar *const *finals, gchar **backups, guint n)
-{
-    guint i;
-
-    for (i = 0; i < n; i++) {
-        if (backups[i])
-            g_rename(backups[i], finals[i]);
-        else
-            g_unlink(finals[i]);
-    }
+    return TRUE;
 }
 
 gboolean
-headless_run_commit(gchar **temps, const gchar *const *finals, guint n, GError **error)
+headless_run_add_text(OutputFiles *files, const gchar *text,
+                      const gchar *filename, GError **error)
 {
-    gchar **backups = g_new0(gchar*, n);
-    gboolean ok = TRUE;
-    guint i, done;
+    GError *err = NULL;
+    const gchar *tmpname;
 
-    for (i = 0; i < n; i++)
-        backups[i] = keep_old_file(finals[i]);
-    for (done = 0; done < n; done++) {
-        if (g_rename(temps[done], finals[done]) != 0) {
-            set_save_error(error, finals[done], g_strerror(errno));
-            restore_old_files(finals, backups, done);
-            ok = FALSE;
-            break;
-        }
+    if (!(tmpname = output_files_reserve(files, filename, error)))
+        return FALSE;
+    /* In place: the set renames the temporary file when all are written. */
+    if (!g_file_set_contents_full(tmpname, text, -1,
+                                  G_FILE_SET_CONTENTS_NONE, 0666, &err)) {
+        set_save_error(error, filename, err->message);
+        g_clear_error(&err);
+        return FALSE;
     }
-    for (i = 0; i < n; i++) {
-        if (!ok && i >= done)
-            g_unlink(temps[i]);
-        if (ok && backups[i])
-            g_unlink(backups[i]);
-        g_free(backups[i]);
-    }
-    g_free(backups);
-    return ok;
+    return TRUE;
 }
 
 gboolean
 headless_run_save_gwy(GwyContainer *data, const gchar *filename, GError **error)
 {
-    gchar *tmpname = headless_run_save_gwy_temp(data, filename, error);
+    OutputFiles *files = output_files_new();
     gboolean ok;
 
-    if (!tmpname)
-        return FALSE;
-    ok = headless_run_commit(&tmpname, &filename, 1, error);
-    g_free(tmpname);
+    ok = (headless_run_add_gwy(files, data, filename, error)
+          && output_files_commit(files, error));
+    output_files_free(files);
     return ok;
 }

@@ -10,6 +10,7 @@
 
 #include <glib.h>
 #include <libgwyddion/gwycontainer.h>
+#include "output-files.h"
 
 G_BEGIN_DECLS
 
@@ -61,22 +62,17 @@ gboolean      headless_run_save_gwy        (GwyContainer *data,
                                             const gchar *filename,
                                             GError **error);
 
-/* Several output files that appear together or not at all: each is
- * written to a temporary file beside its final name (returned, NULL with
- * error set on failure; unlink it if it is not committed), then
- * headless_run_commit() renames all n temporaries into place.  Should a
- * rename fail, the files already renamed are put back as they were (an
- * older file at the name restored, else removed) and the remaining
- * temporaries removed. */
-gchar*        headless_run_save_gwy_temp   (GwyContainer *data,
+/* Several output files that appear together or not at all: each is added
+ * to a set of output-files.h, written to a temporary file beside its final
+ * name, and output_files_commit() renames them all into place (should one
+ * rename fail, those done are put back as they were). */
+gboolean      headless_run_add_gwy         (OutputFiles *files,
+                                            GwyContainer *data,
                                             const gchar *filename,
                                             GError **error);
-gchar*        headless_run_write_text_temp (const gchar *text,
+gboolean      headless_run_add_text        (OutputFiles *files,
+                                            const gchar *text,
                                             const gchar *filename,
-                                            GError **error);
-gboolean      headless_run_commit          (gchar **temps,
-                                            const gchar *const *finals,
-                                            guint n,
                                             GError **error);
 
 G_END_DECLS

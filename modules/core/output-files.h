@@ -1,13 +1,13 @@
 /*
- *  simscan's output files: written to temporary files beside their targets
- *  and renamed only when all are written, all or nothing, and never over
- *  an input or over each other.  The one file writer of simscan and its
- *  subcommands.
+ *  Output files: written to temporary files beside their targets and
+ *  renamed only when all are written, all or nothing, and never over an
+ *  input or over each other.  The one file writer of simscan, its
+ *  subcommands and gwy-localscan.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
-#ifndef SIMSCAN_OUTPUT_FILES_H
-#define SIMSCAN_OUTPUT_FILES_H
+#ifndef LOCALSCAN_OUTPUT_FILES_H
+#define LOCALSCAN_OUTPUT_FILES_H
 
 #include <glib.h>
 
@@ -43,6 +43,16 @@ gboolean      output_files_add          (OutputFiles *files,
                                          const gchar *filename,
                                          const guchar *data,
                                          gsize length,
+                                         GError **error);
+
+/* For a writer that wants a file name (Gwyddion's file savers): an empty
+ * temporary file beside filename, with the usual permissions, for the
+ * caller to fill before output_files_commit(); owned by the set.  The
+ * target is not checked up front like output_files_add() does: the commit
+ * refuses one that is not a regular file (the rename's own error).  NULL
+ * with error set on failure. */
+const gchar*  output_files_reserve      (OutputFiles *files,
+                                         const gchar *filename,
                                          GError **error);
 
 /* Renames every temporary file over its target.  When one rename fails,

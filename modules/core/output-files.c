@@ -1,5 +1,5 @@
 /*
- *  simscan's output files, all or nothing.
+ *  Output files, all or nothing.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -11,7 +11,7 @@
 #include <sys/stat.h>
 #include <glib/gstdio.h>
 #include "output-files.h"
-#include "simscan-i18n.h"
+#include "localscan-intl.h"
 
 typedef struct {
     gchar *filename;
@@ -33,23 +33,23 @@ set_errno_error(GError **error, gint saved_errno, const gchar *filename)
                 _("cannot write %s: %s"), filename, g_strerror(saved_errno));
 }
 
-/* The folder resolved (symbolic links, .., .) and the name: a file that
- * does not exist yet has no inode to compare. */
+/* The absolute path a file has or would get, its folder resolved (symbolic
+ * links, .., .): a file that does not exist yet has no inode to compare,
+ * and "out/../x" and "x" or a symlinked folder's name are one file. */
 static gchar*
 canonical_path(const gchar *filename)
 {
-    gchar *dir = g_path_get_dirname(filename);
-    gchar *base = g_path_get_basename(filename);
+    gchar *absolute = g_canonicalize_filename(filename, NULL);
+    gchar *dir = g_path_get_dirname(absolute);
+    gchar *base = g_path_get_basename(absolute);
     gchar *real = realpath(dir, NULL);
     gchar *path;
 
-    if (real)
-        path = g_build_filename(real, base, NULL);
-    else
-        path = g_canonicalize_filename(filename, NULL);
+    path = real ? g_build_filename(real, base, NULL) : g_strdup(absolute);
     free(real);
     g_free(dir);
     g_free(base);
+    g_free(absolute);
     return path;
 }
 
@@ -161,20 +161,12 @@ write_all(gint fd, const guchar *data, gsize length)
     return TRUE;
 }
 
+/* Same target twice in one set: refused, whatever the target is. */
 static gboolean
-check_target(OutputFiles *files, const gchar *filename, GError **error)
+check_new_target(OutputFiles *files, const gchar *filename, GError **error)
 {
-    GStatBuf st;
     guint i;
 
-    if (g_stat(filename, &st) == 0 && !S_ISREG(st.st_mode)) {
-        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_ISDIR,
-                    S_ISDIR(st.st_mode)
-                    ? _("cannot write %s: it is a folder")
-                    : _("cannot write %s: it is not a regular file"),
-                    filename);
-        return FALSE;
-    }
     for (i = 0; i < files->pending->len; i++) {
         const gchar *other = g_array_index(files->pending, PendingOutput,
                                            i).filename;
@@ -188,22 +180,65 @@ check_target(OutputFiles *files, const gchar *filename, GError **error)
     return TRUE;
 }
 
+static gboolean
+check_target(OutputFiles *files, const gchar *filename, GError **error)
+{
+    GStatBuf st;
+
+    if (g_stat(filename, &st) == 0 && !S_ISREG(st.st_mode)) {
+        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_ISDIR,
+                    S_ISDIR(st.st_mode)
+                    ? _("cannot write %s: it is a folder")
+                    : _("cannot write %s: it is not a regular file"),
+                    filename);
+        return FALSE;
+    }
+    return check_new_target(files, filename, error);
+}
+
+/* Adds filename to the set with a new temporary file beside it, open as
+ * *fd; NULL with error set on failure. */
+static PendingOutput*
+add_pending(OutputFiles *files, const gchar *filename, gint *fd,
+            GError **error)
+{
+    PendingOutput p;
+
+    memset(&p, 0, sizeof(p));
+    if (!(p.tmpname = make_temp_beside(filename, "", fd))) {
+        set_errno_error(error, errno, filename);
+        return NULL;
+    }
+    p.filename = g_strdup(filename);
+    g_array_append_val(files->pending, p);
+    return &g_array_index(files->pending, PendingOutput,
+                          files->pending->len - 1);
+}
+
+/* Drops the last pending output, removing its temporary file. */
+static void
+drop_last_pending(OutputFiles *files)
+{
+    PendingOutput *p = &g_array_index(files->pending, PendingOutput,
+                                      files->pending->len - 1);
+
+    g_unlink(p->tmpname);
+    g_free(p->tmpname);
+    g_free(p->filename);
+    g_array_set_size(files->pending, files->pending->len - 1);
+}
+
 gboolean
 output_files_add(OutputFiles *files, const gchar *filename,
                  const guchar *data, gsize length, GError **error)
 {
-    PendingOutput p;
     gint fd, saved_errno;
     gboolean ok;
 
     g_return_val_if_fail(!files->committed, FALSE);
-    if (!check_target(files, filename, error))
+    if (!check_target(files, filename, error)
+        || !add_pending(files, filename, &fd, error))
         return FALSE;
-    memset(&p, 0, sizeof(p));
-    if (!(p.tmpname = make_temp_beside(filename, "", &fd))) {
-        set_errno_error(error, errno, filename);
-        return FALSE;
-    }
     ok = write_all(fd, data, length);
     saved_errno = errno;
     if (close(fd) != 0 && ok) {
@@ -212,13 +247,32 @@ output_files_add(OutputFiles *files, const gchar *filename,
     }
     if (!ok) {
         set_errno_error(error, saved_errno, filename);
-        g_unlink(p.tmpname);
-        g_free(p.tmpname);
+        drop_last_pending(files);
         return FALSE;
     }
-    p.filename = g_strdup(filename);
-    g_array_append_val(files->pending, p);
     return TRUE;
+}
+
+const gchar*
+output_files_reserve(OutputFiles *files, const gchar *filename,
+                     GError **error)
+{
+    PendingOutput *p;
+    gint fd;
+    gboolean ok;
+
+    g_return_val_if_fail(!files->committed, NULL);
+    if (!check_new_target(files, filename, error)
+        || !(p = add_pending(files, filename, &fd, error)))
+        return NULL;
+    /* Nothing written: only the usual permissions given. */
+    ok = write_all(fd, NULL, 0);
+    if (close(fd) != 0 || !ok) {
+        set_errno_error(error, errno, filename);
+        drop_last_pending(files);
+        return NULL;
+    }
+    return p->tmpname;
 }
 
 /* Keeps the target's old contents under p->backup: a second link when the
