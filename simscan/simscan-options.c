@@ -6,6 +6,7 @@
 #include "config.h"
 #include <string.h>
 #include <math.h>
+#include <stdarg.h>
 #include "channel-spec.h"
 #include "simscan-presets.h"
 #include "simscan-sample-file.h"
@@ -216,6 +217,22 @@ bad_value(GError **error, const gchar *option, const gchar *what)
     return option_value_refuse(option, what, error);
 }
 
+/* bad_value() with the reason formatted. */
+static gboolean G_GNUC_PRINTF(3, 4)
+bad_value_printf(GError **error, const gchar *option, const gchar *format,
+                 ...)
+{
+    va_list ap;
+    gchar *what;
+
+    va_start(ap, format);
+    what = g_strdup_vprintf(format, ap);
+    va_end(ap);
+    bad_value(error, option, what);
+    g_free(what);
+    return FALSE;
+}
+
 /* "A" or "A,B" (single: both the same when allow_single). */
 static gboolean
 parse_pair(const gchar *text, const gchar *option, gboolean allow_single,
@@ -251,42 +268,50 @@ check_range(gdouble value, gdouble min, gdouble max, gboolean min_open,
     return option_value_check_range(value, min, max, min_open, option, error);
 }
 
+/* Each number within its range, checked in this order. */
 static gboolean
 check_numbers(const RawOptions *raw, GError **error)
 {
-    return (check_range(raw->radius, 0, 1e6, TRUE, "radius", error)
-            && check_range(raw->radius_spread, 0, 1, FALSE, "radius-spread",
-                           error)
-            && check_range(raw->count, 0, MAX_PARTICLES, FALSE, "count",
-                           error)
-            && check_range(raw->density, 0, 1e6, TRUE, "density", error)
-            && check_range(raw->spacing, 0, 1e9, FALSE, "spacing", error)
-            && check_range(raw->roughness, 0, 1e6, FALSE, "roughness", error)
-            && check_range(raw->correlation, 0, 1e9, TRUE, "correlation",
-                           error)
-            && check_range(raw->xres, MIN_RES, MAX_RES, FALSE, "xres", error)
-            && check_range(raw->yres, MIN_RES, MAX_RES, FALSE, "yres", error)
-            && check_range(raw->line_time, 0, 1e6, TRUE, "line-time", error)
-            && check_range(raw->noise, 0, 1e6, FALSE, "noise", error)
-            && check_range(raw->tip_radius, 0, 1e6, FALSE, "tip-radius", error)
-            && check_range(raw->tau, 0, 1e9, TRUE, "tau", error)
-            && check_range(raw->period, 0, 1e9, TRUE, "period", error)
-            && check_range(raw->phase, -1e6, 1e6, FALSE, "phase", error)
-            && check_range(raw->jump_time, -1e9, 1e9, FALSE, "jump-time",
-                           error)
-            && check_range(raw->walk_sigma, 0, 1e6, FALSE, "walk-sigma", error)
-            && check_range(raw->walk_dt, 1e-6, 1e6, FALSE, "walk-dt", error)
-            && check_range(raw->stripes, 1, raw->yres, FALSE, "stripes", error)
-            && check_range(raw->ls_points, 3, 1000000, FALSE, "ls-points",
-                           error)
-            && check_range(raw->ls_speed, 0, 1e6, TRUE, "ls-speed", error)
-            && check_range(raw->ls_rmax, 0, 1e9, FALSE, "ls-rmax", error)
-            && check_range(raw->ls_overhead, 0, 1e6, FALSE, "ls-overhead",
-                           error)
-            && check_range(raw->ls_delay, 0, 1e9, FALSE, "ls-delay", error)
-            && check_range(raw->ls_threshold, 0, 1, TRUE, "ls-threshold",
-                           error)
-            && check_range(raw->seed, 0, G_MAXUINT32, FALSE, "seed", error));
+    const struct {
+        gdouble value, min, max;
+        gboolean min_open;
+        const gchar *option;
+    } ranges[] = {
+        { raw->radius, 0, 1e6, TRUE, "radius" },
+        { raw->radius_spread, 0, 1, FALSE, "radius-spread" },
+        { raw->count, 0, MAX_PARTICLES, FALSE, "count" },
+        { raw->density, 0, 1e6, TRUE, "density" },
+        { raw->spacing, 0, 1e9, FALSE, "spacing" },
+        { raw->roughness, 0, 1e6, FALSE, "roughness" },
+        { raw->correlation, 0, 1e9, TRUE, "correlation" },
+        { raw->xres, MIN_RES, MAX_RES, FALSE, "xres" },
+        { raw->yres, MIN_RES, MAX_RES, FALSE, "yres" },
+        { raw->line_time, 0, 1e6, TRUE, "line-time" },
+        { raw->noise, 0, 1e6, FALSE, "noise" },
+        { raw->tip_radius, 0, 1e6, FALSE, "tip-radius" },
+        { raw->tau, 0, 1e9, TRUE, "tau" },
+        { raw->period, 0, 1e9, TRUE, "period" },
+        { raw->phase, -1e6, 1e6, FALSE, "phase" },
+        { raw->jump_time, -1e9, 1e9, FALSE, "jump-time" },
+        { raw->walk_sigma, 0, 1e6, FALSE, "walk-sigma" },
+        { raw->walk_dt, 1e-6, 1e6, FALSE, "walk-dt" },
+        { raw->stripes, 1, raw->yres, FALSE, "stripes" },
+        { raw->ls_points, 3, 1000000, FALSE, "ls-points" },
+        { raw->ls_speed, 0, 1e6, TRUE, "ls-speed" },
+        { raw->ls_rmax, 0, 1e9, FALSE, "ls-rmax" },
+        { raw->ls_overhead, 0, 1e6, FALSE, "ls-overhead" },
+        { raw->ls_delay, 0, 1e9, FALSE, "ls-delay" },
+        { raw->ls_threshold, 0, 1, TRUE, "ls-threshold" },
+        { raw->seed, 0, G_MAXUINT32, FALSE, "seed" },
+    };
+    guint i;
+
+    for (i = 0; i < G_N_ELEMENTS(ranges); i++) {
+        if (!check_range(ranges[i].value, ranges[i].min, ranges[i].max,
+                         ranges[i].min_open, ranges[i].option, error))
+            return FALSE;
+    }
+    return TRUE;
 }
 
 static gboolean
@@ -311,7 +336,17 @@ parse_drift(const RawOptions *raw, SimscanConfig *config, GError **error)
 {
     DriftModel *m = &config->drift;
     DriftModelType type = m->type;
-    gdouble pair[2];
+    const struct {
+        const gchar *text, *option;
+        gdouble *value;
+    } pairs[] = {
+        { raw->velocity, "velocity", m->v },
+        { raw->offset, "offset", m->p0 },
+        { raw->settle_velocity, "settle-velocity", m->u },
+        { raw->amplitude, "amplitude", m->a },
+        { raw->jump_step, "jump-step", m->step },
+    };
+    guint i;
 
     if (raw->drift) {
         config->figure6 = g_str_equal(raw->drift, "figure6");
@@ -322,26 +357,12 @@ parse_drift(const RawOptions *raw, SimscanConfig *config, GError **error)
                                "jump, random-walk, figure6)"));
         m->type = type;
     }
-    if (raw->velocity) {
-        if (!parse_pair(raw->velocity, "velocity", FALSE, NM, pair, error))
-            return FALSE;
-        m->v[0] = pair[0];
-        m->v[1] = pair[1];
-    }
-    if (raw->offset) {
-        if (!parse_pair(raw->offset, "offset", FALSE, NM, m->p0, error))
+    for (i = 0; i < G_N_ELEMENTS(pairs); i++) {
+        if (pairs[i].text
+            && !parse_pair(pairs[i].text, pairs[i].option, FALSE, NM,
+                           pairs[i].value, error))
             return FALSE;
     }
-    if (raw->settle_velocity
-        && !parse_pair(raw->settle_velocity, "settle-velocity", FALSE, NM,
-                       m->u, error))
-        return FALSE;
-    if (raw->amplitude
-        && !parse_pair(raw->amplitude, "amplitude", FALSE, NM, m->a, error))
-        return FALSE;
-    if (raw->jump_step
-        && !parse_pair(raw->jump_step, "jump-step", FALSE, NM, m->step, error))
-        return FALSE;
     m->tau = raw->tau;
     m->period = raw->period;
     m->phase = raw->phase;
@@ -416,30 +437,39 @@ raw_to_config(const RawOptions *raw, SimscanConfig *config, GError **error)
 static gboolean
 parse_given(RawOptions *raw, guint *given, GError **error)
 {
+    const struct {
+        const gchar *text, *option;
+        gdouble min, max;
+        gboolean min_open;
+        gdouble *real;              /* a number ... */
+        gint *integer;              /* ... or a whole number */
+        guint flag;
+    } options[] = {
+        { raw->radius_text, "radius", 0, 1e6, TRUE, &raw->radius, NULL,
+          SIMSCAN_GIVEN_RADIUS },
+        { raw->ls_rmax_text, "ls-rmax", 0, 1e9, FALSE, &raw->ls_rmax, NULL,
+          SIMSCAN_GIVEN_RMAX },
+        { raw->xres_text, "xres", MIN_RES, MAX_RES, FALSE, NULL, &raw->xres,
+          SIMSCAN_GIVEN_RESOLUTION },
+        { raw->yres_text, "yres", MIN_RES, MAX_RES, FALSE, NULL, &raw->yres,
+          SIMSCAN_GIVEN_RESOLUTION },
+    };
+    guint i;
+
     *given = 0;
-    if (raw->radius_text) {
-        if (!option_value_parse_double(raw->radius_text, 0, 1e6, TRUE,
-                                       "radius", &raw->radius, error))
+    for (i = 0; i < G_N_ELEMENTS(options); i++) {
+        if (!options[i].text)
+            continue;
+        if (options[i].real
+            ? !option_value_parse_double(options[i].text, options[i].min,
+                                         options[i].max, options[i].min_open,
+                                         options[i].option, options[i].real,
+                                         error)
+            : !option_value_parse_int(options[i].text, (gint)options[i].min,
+                                      (gint)options[i].max, options[i].option,
+                                      options[i].integer, error))
             return FALSE;
-        *given |= SIMSCAN_GIVEN_RADIUS;
-    }
-    if (raw->ls_rmax_text) {
-        if (!option_value_parse_double(raw->ls_rmax_text, 0, 1e9, FALSE,
-                                       "ls-rmax", &raw->ls_rmax, error))
-            return FALSE;
-        *given |= SIMSCAN_GIVEN_RMAX;
-    }
-    if (raw->xres_text) {
-        if (!option_value_parse_int(raw->xres_text, MIN_RES, MAX_RES, "xres",
-                                    &raw->xres, error))
-            return FALSE;
-        *given |= SIMSCAN_GIVEN_RESOLUTION;
-    }
-    if (raw->yres_text) {
-        if (!option_value_parse_int(raw->yres_text, MIN_RES, MAX_RES, "yres",
-                                    &raw->yres, error))
-            return FALSE;
-        *given |= SIMSCAN_GIVEN_RESOLUTION;
+        *given |= options[i].flag;
     }
     if (raw->velocity)
         *given |= SIMSCAN_GIVEN_VELOCITY;
@@ -452,35 +482,25 @@ check_scene_limits(const SimscanConfig *config, GError **error)
 {
     const SimParticleParams *pp = &config->particles;
     gdouble pixels = (gdouble)config->xres*config->yres, particles;
-    gchar *msg;
 
-    if (pixels > MAX_PIXELS) {
-        msg = g_strdup_printf(_("%d x %d is more than %d pixels"),
-                              config->xres, config->yres, MAX_PIXELS);
-        bad_value(error, "xres", msg);
-        g_free(msg);
-        return FALSE;
-    }
+    if (pixels > MAX_PIXELS)
+        return bad_value_printf(error, "xres",
+                                _("%d x %d is more than %d pixels"),
+                                config->xres, config->yres, MAX_PIXELS);
     if (config->sample_file)
         return TRUE;
-    if (2.0*pp->radius >= MIN(pp->xreal, pp->yreal)) {
-        msg = g_strdup_printf(_("particles %g nm across do not fit a scan "
-                                "of %g x %g um"), 2e9*pp->radius,
-                              1e6*pp->xreal, 1e6*pp->yreal);
-        bad_value(error, "radius", msg);
-        g_free(msg);
-        return FALSE;
-    }
+    if (2.0*pp->radius >= MIN(pp->xreal, pp->yreal))
+        return bad_value_printf(error, "radius",
+                                _("particles %g nm across do not fit a scan "
+                                  "of %g x %g um"), 2e9*pp->radius,
+                                1e6*pp->xreal, 1e6*pp->yreal);
     particles = pp->density*pp->xreal*pp->yreal;
-    if (!pp->count && particles > MAX_PARTICLES) {
-        msg = g_strdup_printf(_("%g particles per um^2 over %g x %g um are "
-                                "%.3g particles, more than %d"),
-                              pp->density*UM*UM, 1e6*pp->xreal, 1e6*pp->yreal,
-                              particles, MAX_PARTICLES);
-        bad_value(error, "density", msg);
-        g_free(msg);
-        return FALSE;
-    }
+    if (!pp->count && particles > MAX_PARTICLES)
+        return bad_value_printf(error, "density",
+                                _("%g particles per um^2 over %g x %g um are "
+                                  "%.3g particles, more than %d"),
+                                pp->density*UM*UM, 1e6*pp->xreal,
+                                1e6*pp->yreal, particles, MAX_PARTICLES);
     return TRUE;
 }
 
