@@ -6,6 +6,7 @@
 #include "config.h"
 #include <string.h>
 #include <math.h>
+#include <libgwyddion/gwymath.h>
 #include "drift-fit.h"
 
 #define MAX_BASIS 4
@@ -68,6 +69,16 @@ drift_fit_options_init(DriftFitOptions *options)
     options->min_cycles = 1.5;
 }
 
+/* The options given, or the defaults in *defaults. */
+static const DriftFitOptions*
+options_or_defaults(const DriftFitOptions *options, DriftFitOptions *defaults)
+{
+    if (options)
+        return options;
+    drift_fit_options_init(defaults);
+    return defaults;
+}
+
 gdouble
 drift_fit_min_period(gdouble line_time, gint lines, gint n_blocks)
 {
@@ -113,14 +124,6 @@ model_has_nonlinear(FitKind kind)
             || kind == DRIFT_MODEL_JUMP || kind == KIND_LOG_CREEP);
 }
 
-static gint
-compare_doubles(gconstpointer a, gconstpointer b)
-{
-    gdouble x = *(const gdouble*)a, y = *(const gdouble*)b;
-
-    return (x < y) ? -1 : (x > y);
-}
-
 /* The sorted distinct times of the measurements; returns their count. */
 static gint
 distinct_times(const Prepared *pm, gdouble **times)
@@ -134,7 +137,7 @@ distinct_times(const Prepared *pm, gdouble **times)
         t[m++] = pm->ta[i];
         t[m++] = pm->tb[i];
     }
-    qsort(t, m, sizeof(gdouble), compare_doubles);
+    gwy_math_sort(m, t);
     for (i = k = 0; i < m; i++) {
         if (!k || t[i] - t[k-1] > 1e-9*(1.0 + fabs(t[i])))
             t[k++] = t[i];
@@ -222,7 +225,7 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
         gaps = g_new(gdouble, nt - 1);
         for (i = 0; i+1 < nt; i++)
             gaps[i] = times[i+1] - times[i];
-        qsort(gaps, nt - 1, sizeof(gdouble), compare_doubles);
+        gwy_math_sort(nt - 1, gaps);
         pm->t_resolution = MAX(gaps[(nt - 1)/2], 1e-9);
         pm->longest_gap = gaps[nt - 2];
         g_free(gaps);
@@ -232,7 +235,10 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
 }
 
 /* Solves the k x k system a x = b (a, b destroyed) by Gaussian elimination
- * with partial pivoting; a vanishing pivot gives a zero coefficient. */
+ * with partial pivoting; a vanishing pivot gives a zero coefficient.  Not
+ * gwy_math_lin_solve(): it refuses singular systems, and a jump that no
+ * measurement spans (its basis zero everywhere) must still fit the
+ * velocity, with a zero step. */
 static void
 solve_small(gdouble *a, gdouble *b, gint k, gdouble *x)
 {
@@ -595,22 +601,28 @@ fit_prepared(const Prepared *pm, FitKind kind,
     return TRUE;
 }
 
+/* fit_prepared() on the measurements mask keeps (NULL: all). */
+static gboolean
+fit_masked(const DriftMeasurement *meas, gint n, const gboolean *mask,
+           FitKind kind, const DriftFitOptions *options, DriftFit *fit)
+{
+    Prepared pm;
+    gboolean ok;
+
+    prepare(meas, n, mask, &pm);
+    ok = fit_prepared(&pm, kind, options, fit);
+    prepared_free(&pm);
+    return ok;
+}
+
 gboolean
 drift_fit_model(const DriftMeasurement *meas, gint n, DriftModelType type,
                 const DriftFitOptions *options, DriftFit *fit)
 {
     DriftFitOptions defaults;
-    Prepared pm;
-    gboolean ok;
 
-    if (!options) {
-        drift_fit_options_init(&defaults);
-        options = &defaults;
-    }
-    prepare(meas, n, NULL, &pm);
-    ok = fit_prepared(&pm, type, options, fit);
-    prepared_free(&pm);
-    return ok;
+    options = options_or_defaults(options, &defaults);
+    return fit_masked(meas, n, NULL, type, options, fit);
 }
 
 void
@@ -702,10 +714,7 @@ drift_fit_observable_periods(const DriftMeasurement *meas, gint n,
     Prepared pm;
     gboolean ok;
 
-    if (!options) {
-        drift_fit_options_init(&defaults);
-        options = &defaults;
-    }
+    options = options_or_defaults(options, &defaults);
     prepare(meas, n, NULL, &pm);
     ok = observable_periods(&pm, options, shortest, longest);
     prepared_free(&pm);
@@ -718,10 +727,7 @@ drift_fit_cross_validate(const DriftMeasurement *meas, gint n,
 {
     DriftFitOptions defaults;
 
-    if (!options) {
-        drift_fit_options_init(&defaults);
-        options = &defaults;
-    }
+    options = options_or_defaults(options, &defaults);
     return cross_validate_masked(meas, n, NULL, type, options);
 }
 
@@ -731,18 +737,11 @@ drift_fit_creep(const DriftMeasurement *meas, gint n, DriftFitCreep creep,
 {
     DriftFitOptions defaults;
     FitKind kind = DRIFT_MODEL_NTYPES + creep;
-    Prepared pm;
 
     g_return_val_if_fail(creep == DRIFT_FIT_CREEP_ACCELERATION
                          || creep == DRIFT_FIT_CREEP_LOGARITHMIC, FALSE);
-    if (!options) {
-        drift_fit_options_init(&defaults);
-        options = &defaults;
-    }
-    prepare(meas, n, NULL, &pm);
-    fit_prepared(&pm, kind, options, fit);
-    prepared_free(&pm);
-    if (fit->ok)
+    options = options_or_defaults(options, &defaults);
+    if (fit_masked(meas, n, NULL, kind, options, fit))
         fit->cv_rms_nm = cross_validate_masked(meas, n, NULL, kind, options);
     return fit->ok;
 }
@@ -785,9 +784,8 @@ worst_outlier(const DriftMeasurement *meas, gint n, const DriftFit *fit,
             worst = i;
     }
     if (m) {
-        qsort(sorted, m, sizeof(gdouble), compare_doubles);
         /* The median of a 2-D radial residual is about 1.18 sigma. */
-        scale = sorted[m/2]/1.1774;
+        scale = gwy_math_kth_rank(m, sorted, m/2)/1.1774;
         if (!(r[worst] > sigmas*MAX(scale, 1e-6)))
             worst = -1;
     }
@@ -805,7 +803,6 @@ drop_outliers(const DriftMeasurement *meas, gint n,
               const DriftFitOptions *options, DriftFit *fit, gboolean *mask)
 {
     FitKind kind = fit_kind(fit);
-    Prepared pm;
     gint dropped, worst;
 
     for (dropped = 0; dropped < n/4; dropped++) {
@@ -813,10 +810,7 @@ drop_outliers(const DriftMeasurement *meas, gint n,
         if (worst < 0)
             break;
         mask[worst] = FALSE;
-        prepare(meas, n, mask, &pm);
-        fit_prepared(&pm, kind, options, fit);
-        prepared_free(&pm);
-        if (!fit->ok)
+        if (!fit_masked(meas, n, mask, kind, options, fit))
             break;
     }
 }
@@ -847,10 +841,7 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
     gboolean *mask = g_new(gboolean, n);
     Prepared pm;
 
-    if (!options) {
-        drift_fit_options_init(&defaults);
-        options = &defaults;
-    }
+    options = options_or_defaults(options, &defaults);
     prepare(meas, n, NULL, &pm);
     for (i = 0; i < n_types; i++)
         fit_prepared(&pm, types[i], options, fits + i);
@@ -930,7 +921,10 @@ drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
         params->step_nm[ax] = params->accel_nm_per_s2[ax] = NAN;
     }
     switch (fit_kind(fit)) {
+        /* A logarithmic creep reports t0 and its initial excess velocity
+         * in settling's places. */
         case DRIFT_MODEL_SETTLING:
+        case KIND_LOG_CREEP:
         params->tau_s = fit->nonlinear;
         params->u_nm_per_s[0] = fit->coef[0][1];
         params->u_nm_per_s[1] = fit->coef[1][1];
@@ -950,12 +944,6 @@ drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
         case KIND_ACCELERATION:
         params->accel_nm_per_s2[0] = 2.0*fit->coef[0][1];
         params->accel_nm_per_s2[1] = 2.0*fit->coef[1][1];
-        break;
-
-        case KIND_LOG_CREEP:
-        params->tau_s = fit->nonlinear;
-        params->u_nm_per_s[0] = fit->coef[0][1];
-        params->u_nm_per_s[1] = fit->coef[1][1];
         break;
 
         default:

@@ -8,6 +8,7 @@
 #include <math.h>
 #include <string.h>
 #include <stdlib.h>
+#include <libgwyddion/gwymath.h>
 #include "drift-trajectory.h"
 #include "stripe-geometry.h"
 #include "localscan-intl.h"
@@ -434,22 +435,18 @@ smoother_leverages(Smoother *smoother)
     return trace;
 }
 
-static gint
-compare_doubles(gconstpointer pa, gconstpointer pb)
-{
-    const gdouble *a = pa, *b = pb;
-
-    if (*a < *b)
-        return -1;
-    return *a > *b;
-}
-
-/* Median of n values, which it reorders. */
+/* Median of n values, which it reorders; of an even count the mean of the
+ * two middle ones (gwy_math_median takes one of them). */
 static gdouble
 median_in_place(gdouble *values, gint n)
 {
-    qsort(values, n, sizeof(gdouble), compare_doubles);
-    return n % 2 ? values[n/2] : 0.5*(values[n/2 - 1] + values[n/2]);
+    const guint k[2] = { n/2 - 1, n/2 };
+    gdouble middle[2];
+
+    if (n % 2)
+        return gwy_math_kth_rank(n, values, n/2);
+    gwy_math_kth_ranks(n, values, 2, k, middle);
+    return 0.5*(middle[0] + middle[1]);
 }
 
 /* Standardises the residuals of the current fit to the noise of one

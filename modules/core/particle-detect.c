@@ -335,14 +335,6 @@ particle_detect(GwyDataField *field, const ParticleDetectParams *params,
     return particles;
 }
 
-static gint
-compare_doubles(gconstpointer a, gconstpointer b)
-{
-    gdouble x = *(const gdouble*)a, y = *(const gdouble*)b;
-
-    return (x > y) - (x < y);
-}
-
 gdouble
 particle_typical_radius(const GArray *particles, gdouble dx, gdouble dy)
 {
@@ -358,11 +350,10 @@ particle_typical_radius(const GArray *particles, gdouble dx, gdouble dy)
 
         radii[k] = sqrt(p->top_area*dx*dy/G_PI)/TOP_CUT_RADIUS;
     }
-    qsort(radii, n, sizeof(gdouble), compare_doubles);
     /* The lower quartile, a radius that some particle really has: the
      * search must not step over the smaller particles' tops, and a single
      * speck must not set it. */
-    r = radii[(n - 1)/4];
+    r = gwy_math_kth_rank(n, radii, (n - 1)/4);
     g_free(radii);
     return r;
 }
