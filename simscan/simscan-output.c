@@ -6,7 +6,7 @@
 #include "config.h"
 #include <string.h>
 #include <math.h>
-#include <json-glib/json-glib.h>
+#include "json-values.h"
 #include <libgwyddion/gwyserializable.h>
 #include "localscan-channel.h"
 #include "output-files.h"
@@ -125,16 +125,6 @@ simscan_output_particles(GwyContainer *data)
     return (const gchar*)text;
 }
 
-/* JSON has no NaN or infinity: a number not known is null. */
-static void
-add_number(JsonBuilder *b, gdouble value)
-{
-    if (isfinite(value))
-        json_builder_add_double_value(b, value);
-    else
-        json_builder_add_null_value(b);
-}
-
 static void
 add_error(JsonBuilder *b, const gchar *name, const CentreError *e)
 {
@@ -144,14 +134,10 @@ add_error(JsonBuilder *b, const gchar *name, const CentreError *e)
     json_builder_add_int_value(b, e->n_expected);
     json_builder_set_member_name(b, "matched");
     json_builder_add_int_value(b, e->n_matched);
-    json_builder_set_member_name(b, "rms_px");
-    add_number(b, e->rms_px);
-    json_builder_set_member_name(b, "max_px");
-    add_number(b, e->max_px);
-    json_builder_set_member_name(b, "rms_nm");
-    add_number(b, e->rms_nm);
-    json_builder_set_member_name(b, "max_nm");
-    add_number(b, e->max_nm);
+    json_values_set_number(b, "rms_px", e->rms_px);
+    json_values_set_number(b, "max_px", e->max_px);
+    json_values_set_number(b, "rms_nm", e->rms_nm);
+    json_values_set_number(b, "max_nm", e->max_nm);
     json_builder_end_object(b);
 }
 
@@ -159,11 +145,7 @@ static void
 add_number_or_null(JsonBuilder *b, const gchar *name, gboolean known,
                    gdouble value)
 {
-    json_builder_set_member_name(b, name);
-    if (known)
-        add_number(b, value);
-    else
-        json_builder_add_null_value(b);
+    json_values_set_number(b, name, known ? value : NAN);
 }
 
 static void
@@ -180,11 +162,8 @@ add_stripes(JsonBuilder *b, const SimscanMeasurement *m)
         json_builder_begin_object(b);
         json_builder_set_member_name(b, "stripe");
         json_builder_add_int_value(b, s);
-        json_builder_set_member_name(b, "true_px");
-        json_builder_begin_array(b);
-        add_number(b, m->true_dx[s]);
-        add_number(b, m->true_dy[s]);
-        json_builder_end_array(b);
+        json_values_set_pair(b, "true_px",
+                             (const gdouble[2]){ m->true_dx[s], m->true_dy[s] });
         add_number_or_null(b, "dx", row->has_drift, row->dx);
         add_number_or_null(b, "dy", row->has_drift, row->dy);
         add_number_or_null(b, "dx_exact", row->has_drift, r->dx);
@@ -205,9 +184,6 @@ simscan_output_json(const SimscanScene *scene, const SimscanMeasurement *m)
 {
     const SimscanConfig *config = scene->config;
     JsonBuilder *b = json_builder_new();
-    JsonGenerator *gen;
-    JsonNode *root;
-    gchar *text;
 
     json_builder_begin_object(b);
     json_builder_set_member_name(b, "preset");
@@ -220,27 +196,22 @@ simscan_output_json(const SimscanScene *scene, const SimscanMeasurement *m)
     json_builder_add_int_value(b, scene->scan.xres);
     json_builder_set_member_name(b, "yres");
     json_builder_add_int_value(b, scene->scan.yres);
-    json_builder_set_member_name(b, "pixel_nm");
-    json_builder_begin_array(b);
-    add_number(b, 1e9*scene->scan.xreal/scene->scan.xres);
-    add_number(b, 1e9*scene->scan.yreal/scene->scan.yres);
-    json_builder_end_array(b);
-    json_builder_set_member_name(b, "frame_time_s");
-    add_number(b, scan_timing_frame_end(&scene->timing));
+    json_values_set_pair(b, "pixel_nm",
+                         (const gdouble[2]){
+                             1e9*scene->scan.xreal/scene->scan.xres,
+                             1e9*scene->scan.yreal/scene->scan.yres });
+    json_values_set_number(b, "frame_time_s",
+                           scan_timing_frame_end(&scene->timing));
     json_builder_set_member_name(b, "local_scans");
     json_builder_begin_object(b);
-    json_builder_set_member_name(b, "start_s");
-    add_number(b, m->t_start);
-    json_builder_set_member_name(b, "end_s");
-    add_number(b, m->t_end);
+    json_values_set_number(b, "start_s", m->t_start);
+    json_values_set_number(b, "end_s", m->t_end);
     json_builder_set_member_name(b, "lines");
     json_builder_add_int_value(b, m->lines);
     json_builder_end_object(b);
-    json_builder_set_member_name(b, "reference_drift_nm");
-    json_builder_begin_array(b);
-    add_number(b, 1e9*m->ref_drift[0]);
-    add_number(b, 1e9*m->ref_drift[1]);
-    json_builder_end_array(b);
+    json_values_set_pair(b, "reference_drift_nm",
+                         (const gdouble[2]){ 1e9*m->ref_drift[0],
+                                             1e9*m->ref_drift[1] });
     add_stripes(b, m);
     if (m->have_errors) {
         json_builder_set_member_name(b, "centre_error");
@@ -250,16 +221,7 @@ simscan_output_json(const SimscanScene *scene, const SimscanMeasurement *m)
         json_builder_end_object(b);
     }
     json_builder_end_object(b);
-
-    root = json_builder_get_root(b);
-    gen = json_generator_new();
-    json_generator_set_pretty(gen, TRUE);
-    json_generator_set_root(gen, root);
-    text = json_generator_to_data(gen, NULL);
-    json_node_unref(root);
-    g_object_unref(gen);
-    g_object_unref(b);
-    return text;
+    return json_values_finish(b);
 }
 
 static GByteArray*

@@ -7,7 +7,7 @@
 #include "config.h"
 #include <string.h>
 #include <math.h>
-#include <json-glib/json-glib.h>
+#include "json-values.h"
 #include "fit-report.h"
 
 gboolean
@@ -47,39 +47,6 @@ fit_report_clear(FitReport *report)
     report->n_meas = 0;
 }
 
-/* JSON has no NaN or infinity: a number not known is null. */
-static void
-add_number_value(JsonBuilder *b, gdouble v)
-{
-    if (isfinite(v))
-        json_builder_add_double_value(b, v);
-    else
-        json_builder_add_null_value(b);
-}
-
-static void
-add_pair_value(JsonBuilder *b, const gdouble *v)
-{
-    json_builder_begin_array(b);
-    add_number_value(b, v[0]);
-    add_number_value(b, v[1]);
-    json_builder_end_array(b);
-}
-
-static void
-add_pair(JsonBuilder *b, const gchar *name, const gdouble *v)
-{
-    json_builder_set_member_name(b, name);
-    add_pair_value(b, v);
-}
-
-static void
-add_double(JsonBuilder *b, const gchar *name, gdouble v)
-{
-    json_builder_set_member_name(b, name);
-    add_number_value(b, v);
-}
-
 static void
 add_parameters(JsonBuilder *b, const DriftFit *fit)
 {
@@ -90,26 +57,26 @@ add_parameters(JsonBuilder *b, const DriftFit *fit)
     json_builder_begin_object(b);
     switch (fit->type) {
         case DRIFT_MODEL_SETTLING:
-        add_double(b, "tau_s", p.tau_s);
-        add_pair(b, "u_nm_per_s", p.u_nm_per_s);
+        json_values_set_number(b, "tau_s", p.tau_s);
+        json_values_set_pair(b, "u_nm_per_s", p.u_nm_per_s);
         break;
 
         case DRIFT_MODEL_OSCILLATION:
-        add_double(b, "period_s", p.period_s);
-        add_pair(b, "amplitude_nm", p.amplitude_nm);
-        add_double(b, "phase_rad", p.phase_rad);
+        json_values_set_number(b, "period_s", p.period_s);
+        json_values_set_pair(b, "amplitude_nm", p.amplitude_nm);
+        json_values_set_number(b, "phase_rad", p.phase_rad);
         break;
 
         case DRIFT_MODEL_JUMP:
-        add_double(b, "t_s", p.t_s);
-        add_pair(b, "step_nm", p.step_nm);
+        json_values_set_number(b, "t_s", p.t_s);
+        json_values_set_pair(b, "step_nm", p.step_nm);
         break;
 
         default:
         break;
     }
     json_builder_end_object(b);
-    add_pair(b, "velocity_nm_per_s", p.velocity_nm_per_s);
+    json_values_set_pair(b, "velocity_nm_per_s", p.velocity_nm_per_s);
 }
 
 /* The periods the series can show an oscillation with; none (null) when
@@ -123,7 +90,7 @@ add_period_range(JsonBuilder *b, const FitReport *report)
     if (drift_fit_observable_periods(report->meas, report->n_meas,
                                      &report->fit_options,
                                      range, range + 1))
-        add_pair_value(b, range);
+        json_values_add_pair(b, range);
     else
         json_builder_add_null_value(b);
 }
@@ -145,11 +112,11 @@ add_models(JsonBuilder *b, const FitReport *report)
         json_builder_add_boolean_value(b, fit->ok);
         if (fit->type == DRIFT_MODEL_OSCILLATION)
             add_period_range(b, report);
-        add_double(b, "rms_nm", fit->rms_nm);
+        json_values_set_number(b, "rms_nm", fit->rms_nm);
         /* The score is the Bayesian information criterion: lower is
          * better, and each parameter costs log(n). */
-        add_double(b, "score", fit->bic);
-        add_double(b, "cv_rms_nm", fit->cv_rms_nm);
+        json_values_set_number(b, "score", fit->bic);
+        json_values_set_number(b, "cv_rms_nm", fit->cv_rms_nm);
         json_builder_set_member_name(b, "n_params");
         json_builder_add_int_value(b, fit->n_params);
         add_parameters(b, fit);
@@ -171,8 +138,8 @@ add_frames(JsonBuilder *b, const FrameSeries *series)
         json_builder_begin_object(b);
         json_builder_set_member_name(b, "label");
         json_builder_add_string_value(b, f->label);
-        add_double(b, "start_s", f->timing.frame_start);
-        add_double(b, "line_time_s", f->timing.line_time);
+        json_values_set_number(b, "start_s", f->timing.frame_start);
+        json_values_set_number(b, "line_time_s", f->timing.line_time);
         json_builder_set_member_name(b, "direction");
         json_builder_add_string_value(b, f->timing.direction
                                          == SCAN_DIRECTION_UP ? "up" : "down");
@@ -190,9 +157,6 @@ gchar*
 fit_report_to_json(const FitReport *report, const FrameSeries *series)
 {
     JsonBuilder *b = json_builder_new();
-    JsonGenerator *gen = json_generator_new();
-    JsonNode *root;
-    gchar *text;
     gint i, used = 0;
 
     json_builder_begin_object(b);
@@ -212,13 +176,5 @@ fit_report_to_json(const FitReport *report, const FrameSeries *series)
     if (series)
         add_frames(b, series);
     json_builder_end_object(b);
-
-    root = json_builder_get_root(b);
-    json_generator_set_root(gen, root);
-    json_generator_set_pretty(gen, TRUE);
-    text = json_generator_to_data(gen, NULL);
-    json_node_unref(root);
-    g_object_unref(gen);
-    g_object_unref(b);
-    return text;
+    return json_values_finish(b);
 }
