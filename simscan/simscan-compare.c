@@ -47,7 +47,7 @@ channel(GwyContainer *data, gint id)
 static gint
 find_compensated(GwyContainer *data)
 {
-    gint *ids = simscan_channel_ids(data);
+    gint *ids = localscan_channel_ids(data);
     const guchar *title;
     gint i, found = -1;
 

@@ -8,32 +8,13 @@
 #include <libgwymodule/gwymodule-file.h>
 #include <app/gwyapp.h>
 #include "simscan-sample-file.h"
+#include "localscan-channel.h"
 #include "simscan-i18n.h"
 
 static GQuark
 simscan_sample_error_quark(void)
 {
     return g_quark_from_static_string("simscan-sample-error-quark");
-}
-
-static gint
-compare_ids(gconstpointer a, gconstpointer b)
-{
-    gint ia = *(const gint*)a, ib = *(const gint*)b;
-
-    return (ia > ib) - (ia < ib);
-}
-
-gint*
-simscan_channel_ids(GwyContainer *data)
-{
-    gint *ids = gwy_app_data_browser_get_data_ids(data);
-    guint n = 0;
-
-    while (ids[n] != -1)
-        n++;
-    qsort(ids, n, sizeof(gint), compare_ids);
-    return ids;
 }
 
 static GwyDataField*
@@ -69,7 +50,7 @@ simscan_load_channel(const gchar *filename, gint id, GError **error)
         return NULL;
     }
     if (id < 0) {
-        ids = simscan_channel_ids(data);
+        ids = localscan_channel_ids(data);
         if (ids[0] >= 0)
             field = channel_field(data, ids[0]);
         g_free(ids);

@@ -12,10 +12,6 @@
 
 G_BEGIN_DECLS
 
-/* The image channel ids of data, ascending, terminated by -1; free with
- * g_free(). */
-gint*          simscan_channel_ids   (GwyContainer *data);
-
 /* Channel id of filename (-1: the lowest id), a new reference.  Starts
  * Gwyddion's application library headless on first use. */
 GwyDataField*  simscan_load_channel  (const gchar *filename,

@@ -18,6 +18,7 @@
 #include "stripe-registration.h"
 #include "continuous-compensate.h"
 #include "channel-spec.h"
+#include "localscan-channel.h"
 #include "headless-run.h"
 #include "localscan-settings.h"
 
@@ -394,7 +395,7 @@ static gint
 pick_channel(GwyContainer *data, const gchar *filename, gint wanted,
              GError **error)
 {
-    gint *ids = headless_run_channel_ids(data);
+    gint *ids = localscan_channel_ids(data);
     gchar *list;
     gint id = -1;
 

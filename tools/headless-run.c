@@ -13,6 +13,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "headless-run.h"
+#include "localscan-channel.h"
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -119,26 +120,6 @@ headless_run_load(const gchar *filename, GError **error)
     return data;
 }
 
-static gint
-compare_ids(gconstpointer a, gconstpointer b)
-{
-    gint ia = *(const gint*)a, ib = *(const gint*)b;
-
-    return (ia > ib) - (ia < ib);
-}
-
-gint*
-headless_run_channel_ids(GwyContainer *data)
-{
-    gint *ids = gwy_app_data_browser_get_data_ids(data);
-    guint n = 0;
-
-    while (ids[n] != -1)
-        n++;
-    qsort(ids, n, sizeof(gint), compare_ids);
-    return ids;
-}
-
 gboolean
 headless_run_has_channel(GwyContainer *data, gint id)
 {
@@ -184,14 +165,14 @@ headless_run_process(GwyContainer *data, gint id, const gchar *funcname,
     GPrintFunc printerr;
     gint newid;
 
-    before = headless_run_channel_ids(data);
+    before = localscan_channel_ids(data);
     gwy_app_data_browser_add(data);
     gwy_app_data_browser_select_data_field(data, id);
     function_output = g_string_new(NULL);
     printerr = g_set_printerr_handler(collect_function_output);
     gwy_process_func_run(funcname, data, GWY_RUN_IMMEDIATE);
     g_set_printerr_handler(printerr);
-    after = headless_run_channel_ids(data);
+    after = localscan_channel_ids(data);
     gwy_app_data_browser_remove(data);
 
     newid = first_new_id(before, after);

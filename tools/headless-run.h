@@ -42,8 +42,6 @@ gboolean      headless_run_require_function(const gchar *funcname,
 GwyContainer* headless_run_load            (const gchar *filename,
                                             GError **error);
 
-/* Channel ids in ascending order, -1 terminated; free with g_free(). */
-gint*         headless_run_channel_ids     (GwyContainer *data);
 gboolean      headless_run_has_channel     (GwyContainer *data, gint id);
 
 /* Runs funcname on channel id with GWY_RUN_IMMEDIATE and returns the id of

@@ -12,6 +12,7 @@
 #include <libprocess/gwyprocess.h>
 #include "frame-series.h"
 #include "scan-timing-meta.h"
+#include "localscan-channel.h"
 #include "localscan-intl.h"
 
 /* Timing facts read from one channel's metadata; NaN/-1 when absent. */
@@ -167,41 +168,6 @@ channel_field(GwyContainer *data, gint id)
     return gwy_container_get_object_by_name(data, key);
 }
 
-/* Adds the id of an item "/ID/data" holding a data field. */
-static void
-collect_channel_id(gpointer hkey, gpointer hvalue, gpointer user_data)
-{
-    const gchar *name = g_quark_to_string(GPOINTER_TO_UINT(hkey));
-    GValue *value = (GValue*)hvalue;
-    GArray *ids = (GArray*)user_data;
-    gchar *end;
-    glong id;
-    gint value_id;
-
-    if (name[0] != '/' || !g_ascii_isdigit(name[1]))
-        return;
-    id = strtol(name + 1, &end, 10);
-    if (strcmp(end, "/data") != 0 || id > G_MAXINT
-        || !G_VALUE_HOLDS_OBJECT(value)
-        || !GWY_IS_DATA_FIELD(g_value_get_object(value)))
-        return;
-    value_id = (gint)id;
-    g_array_append_val(ids, value_id);
-}
-
-/* The channel ids of data, in no particular order, terminated by -1 (what
- * Gwyddion's data browser lists, without needing the GUI library). */
-static gint*
-channel_ids(GwyContainer *data)
-{
-    GArray *ids = g_array_new(FALSE, FALSE, sizeof(gint));
-    gint end = -1;
-
-    gwy_container_foreach(data, NULL, collect_channel_id, ids);
-    g_array_append_val(ids, end);
-    return (gint*)g_array_free(ids, FALSE);
-}
-
 static gboolean
 fields_alike(GwyDataField *a, GwyDataField *b)
 {
@@ -249,7 +215,7 @@ append_channel(FrameSeries *series, GwyContainer *data, gint id,
 static gint
 first_channel_id(GwyContainer *data, const gchar *wanted)
 {
-    gint *ids = channel_ids(data);
+    gint *ids = localscan_channel_ids(data);
     gint i, found = -1;
 
     for (i = 0; ids[i] >= 0; i++) {
@@ -261,25 +227,18 @@ first_channel_id(GwyContainer *data, const gchar *wanted)
     return found;
 }
 
-static gint
-compare_ints(gconstpointer a, gconstpointer b)
-{
-    return *(const gint*)a - *(const gint*)b;
-}
-
 static gboolean
 load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
                           const gchar *filename,
                           const FrameSeriesOptions *options,
                           MetaTiming **mts, GError **error)
 {
-    gint *ids = channel_ids(data);
+    gint *ids = localscan_channel_ids(data);
     GwyDataField *first = NULL;
     gint i, n;
 
     for (n = 0; ids[n] >= 0; n++)
         ;
-    qsort(ids, n, sizeof(gint), compare_ints);
     *mts = g_new0(MetaTiming, n + 1);
     for (i = 0; i < n; i++) {
         GwyDataField *field = channel_field(data, ids[i]);

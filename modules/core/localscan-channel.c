@@ -5,6 +5,7 @@
  */
 #include "config.h"
 #include <string.h>
+#include <stdlib.h>
 #include <math.h>
 #include <libgwyddion/gwymacros.h>
 #include <libgwyddion/gwysiunit.h>
@@ -421,4 +422,46 @@ localscan_table_stated_px(const DriftTable *table, GwyDataField *field,
     }
     g_free(filled_dx);
     return count;
+}
+
+/* Adds the id of an item "/ID/data" holding a data field. */
+static void
+collect_channel_id(gpointer hkey, gpointer hvalue, gpointer user_data)
+{
+    const gchar *name = g_quark_to_string(GPOINTER_TO_UINT(hkey));
+    GValue *value = (GValue*)hvalue;
+    GArray *ids = (GArray*)user_data;
+    gchar *end;
+    glong id;
+    gint value_id;
+
+    if (name[0] != '/' || !g_ascii_isdigit(name[1]))
+        return;
+    id = strtol(name + 1, &end, 10);
+    if (strcmp(end, "/data") != 0 || id > G_MAXINT
+        || !G_VALUE_HOLDS_OBJECT(value)
+        || !GWY_IS_DATA_FIELD(g_value_get_object(value)))
+        return;
+    value_id = (gint)id;
+    g_array_append_val(ids, value_id);
+}
+
+static gint
+compare_ids(gconstpointer a, gconstpointer b)
+{
+    gint ia = *(const gint*)a, ib = *(const gint*)b;
+
+    return (ia > ib) - (ia < ib);
+}
+
+gint*
+localscan_channel_ids(GwyContainer *data)
+{
+    GArray *ids = g_array_new(FALSE, FALSE, sizeof(gint));
+    gint end = -1;
+
+    gwy_container_foreach(data, NULL, collect_channel_id, ids);
+    g_array_sort(ids, compare_ids);
+    g_array_append_val(ids, end);
+    return (gint*)g_array_free(ids, FALSE);
 }

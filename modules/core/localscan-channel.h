@@ -214,6 +214,11 @@ void         localscan_applied_to_physical   (const LocalscanApplied *applied,
                                               gdouble *dx,
                                               gdouble *dy);
 
+/* The ids of data's channels (items "/ID/data" holding a data field) in
+ * ascending order, terminated by -1; free with g_free().  What Gwyddion's
+ * data browser lists, without its GUI library. */
+gint*        localscan_channel_ids           (GwyContainer *data);
+
 G_END_DECLS
 
 #endif
