@@ -17,6 +17,11 @@
 #include <app/gwyapp.h>
 #include "fit-report.h"
 #include "frame-series-load.h"
+#include "drift-table.h"
+#include "stripe-geometry.h"
+#include "paper-compensate.h"
+#include "continuous-compensate.h"
+#include "localscan-params.h"
 #include "sample.h"
 #include "scanner.h"
 
@@ -88,8 +93,8 @@ paper_predict(const DriftFit *none, const DriftMeasurement *m,
               gdouble xstep, gdouble ystep, gdouble *dx, gdouble *dy)
 {
     drift_fit_predict(none, m, dx, dy);
-    *dx = xstep*floor(*dx/xstep + 0.5);
-    *dy = ystep*floor(*dy/ystep + 0.5);
+    *dx = xstep*drift_px_round(*dx/xstep);
+    *dy = ystep*drift_px_round(*dy/ystep);
 }
 
 static gint
@@ -149,52 +154,80 @@ leveled_copy(GwyDataField *field)
     return out;
 }
 
-/* Drift-free image of a frame: output (r, c) reads the frame where the
- * content of (r, c) appeared, row r's scan time giving the drift.  With
- * stripes > 0 the drift is one whole-pixel value per stripe (paper mode);
- * fit NULL: no compensation.  NaN where the frame has no data. */
+/* The fit's drift over the frame as the product's trajectory D(t) = p(t) -
+ * p(0), px: the fit sampled at every row's centre time (and the frame's
+ * ends) and interpolated, as a trajectory built from a drift model. */
+static DriftTrajectory*
+fit_trajectory(const ScanTiming *tm, const DriftFit *fit, gdouble xstep,
+               gdouble ystep)
+{
+    gint n = tm->yres + 2, i;
+    DriftMeasurement *meas = g_new0(DriftMeasurement, n);
+    DriftTrajectory *trajectory;
+    gdouble px, py;
+
+    for (i = 0; i < n; i++) {
+        meas[i].t_a = (i == 0 ? tm->frame_start
+                       : i == n-1 ? scan_timing_frame_end(tm)
+                       : scan_timing_pixel_time(tm, i-1, 0.5*tm->xres));
+        meas[i].t_b = 0.0;
+        drift_fit_eval(fit, meas[i].t_a, &px, &py);
+        meas[i].dx = px/xstep;
+        meas[i].dy = py/ystep;
+    }
+    trajectory = drift_trajectory_new_interpolating(meas, n, NULL);
+    g_free(meas);
+    return trajectory;
+}
+
+/* Drift-free image of a frame by the product's compensation: with stripes
+ * > 0 paper mode (paper_compensate) with each stripe's drift the fit's at
+ * the stripe's centre time, rounded to whole pixels by drift_px_round;
+ * else continuous mode (continuous_compensate_trajectory, the module's
+ * default interpolation) along the fit.  fit NULL: no compensation.  NaN
+ * where the frame has no data. */
 static gdouble*
 compensate(const SeriesFrame *frame, const gdouble *data, const DriftFit *fit,
            gint stripes)
 {
     const ScanTiming *tm = &frame->timing;
-    gint xres = tm->xres, yres = tm->yres, r, c;
+    gint xres = tm->xres, yres = tm->yres, s;
     gdouble xstep = gwy_data_field_get_dx(frame->field);
     gdouble ystep = gwy_data_field_get_dy(frame->field);
-    gdouble *out = g_new(gdouble, xres*yres);
+    gdouble *out = g_new(gdouble, xres*yres), px, py;
+    DriftTrajectory *trajectory;
+    gint *dx, *dy;
 
-    for (r = 0; r < yres; r++) {
-        gdouble px = 0.0, py = 0.0, t;
-
-        if (fit && stripes > 0) {
-            gint s = r*stripes/yres;
-            t = scan_timing_rows_time(tm, s*yres/stripes, (s + 1)*yres/stripes);
-            drift_fit_eval(fit, t, &px, &py);
-            px = floor(px/xstep + 0.5);
-            py = floor(py/ystep + 0.5);
-        }
-        else if (fit) {
-            t = scan_timing_pixel_time(tm, r, 0.5*xres);
-            drift_fit_eval(fit, t, &px, &py);
-            px /= xstep;
-            py /= ystep;
-        }
-        for (c = 0; c < xres; c++) {
-            gdouble sr = r + py, sc = c + px, fr, fc;
-            gint ir = (gint)floor(sr), ic = (gint)floor(sc);
-
-            if (ir < 0 || ic < 0 || ir + 1 >= yres || ic + 1 >= xres) {
-                out[r*xres + c] = NAN;
-                continue;
-            }
-            fr = sr - ir;
-            fc = sc - ic;
-            out[r*xres + c] = ((1 - fr)*((1 - fc)*data[ir*xres + ic]
-                                         + fc*data[ir*xres + ic + 1])
-                               + fr*((1 - fc)*data[(ir + 1)*xres + ic]
-                                     + fc*data[(ir + 1)*xres + ic + 1]));
-        }
+    if (!fit) {
+        memcpy(out, data, xres*yres*sizeof(gdouble));
+        return out;
     }
+    if (stripes > 0) {
+        dx = g_new(gint, stripes);
+        dy = g_new(gint, stripes);
+        for (s = 0; s < stripes; s++) {
+            drift_fit_eval(fit, scan_timing_rows_time(tm,
+                                                      stripe_first_row(s, stripes, yres),
+                                                      stripe_end_row(s, stripes, yres)),
+                           &px, &py);
+            dx[s] = (gint)drift_px_round(px/xstep);
+            dy[s] = (gint)drift_px_round(py/ystep);
+        }
+        paper_compensate(data, xres, yres, stripes, dx, dy, NAN, out, NULL);
+        g_free(dx);
+        g_free(dy);
+        return out;
+    }
+    trajectory = fit_trajectory(tm, fit, xstep, ystep);
+    if (!trajectory
+        || !continuous_compensate_trajectory(data, xres, yres, trajectory, tm,
+                                             LOCALSCAN_DEFAULT_INTERPOLATION,
+                                             NAN, out, NULL, NULL)) {
+        for (s = 0; s < xres*yres; s++)
+            out[s] = NAN;
+    }
+    if (trajectory)
+        drift_trajectory_free(trajectory);
     return out;
 }
 
@@ -963,8 +996,8 @@ trajectory_error(const FrameSeries *series, const DriftFit *fit,
 
             drift_fit_eval(fit, t, &px, &py);
             if (rounded) {
-                px = xstep*floor(px/xstep + 0.5);
-                py = ystep*floor(py/ystep + 0.5);
+                px = xstep*drift_px_round(px/xstep);
+                py = ystep*drift_px_round(py/ystep);
             }
             drift_model_eval(truth, t, &tx, &ty);
             sum += 1e18*((px - tx)*(px - tx) + (py - ty)*(py - ty));
@@ -1461,7 +1494,11 @@ write_header(GString *md)
         "The paper model is constant velocity fitted to the same "
         "measurements, applied as one whole-pixel drift per block of lines; "
         "the extended model is simscan's settling drift "
-        "p' = v + u exp(-t/tau), continuous and sub-pixel.\n",
+        "p' = v + u exp(-t/tau), continuous and sub-pixel.  Frames are "
+        "compensated by the product's own code: paper mode "
+        "(paper_compensate, drift rounded by drift_px_round) and "
+        "continuous mode (continuous_compensate_trajectory, the module's "
+        "default B-spline interpolation).\n",
         dopt.n_blocks, 100.0*dopt.smooth, dopt.min_score,
         fopt.outlier_sigmas, fopt.n_folds, fopt.bic_margin,
         100.0*fopt.cv_gain, fopt.min_explained, fopt.min_cycles);
