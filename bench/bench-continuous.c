@@ -17,6 +17,7 @@
 #include <malloc.h>
 #endif
 #include <glib.h>
+#include <libgwyddion/gwymath.h>
 #include "continuous-compensate.h"
 #include "stripe-geometry.h"
 
@@ -37,21 +38,13 @@ typedef struct {
     gboolean memory;
 } BenchOptions;
 
-static gint
-compare_doubles(gconstpointer a, gconstpointer b)
-{
-    gdouble x = *(const gdouble*)a, y = *(const gdouble*)b;
-
-    return (x > y) - (x < y);
-}
-
 static Timing
 summarise(gdouble *seconds, gdouble *cpu_seconds, gint n)
 {
     Timing timing;
 
-    qsort(seconds, n, sizeof(gdouble), compare_doubles);
-    qsort(cpu_seconds, n, sizeof(gdouble), compare_doubles);
+    gwy_math_sort(n, seconds);
+    gwy_math_sort(n, cpu_seconds);
     timing.best = seconds[0];
     timing.median = seconds[n/2];
     timing.cpu_best = cpu_seconds[0];

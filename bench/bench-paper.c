@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <glib.h>
+#include <libgwyddion/gwymath.h>
 #include "paper-compensate.h"
 
 enum {
@@ -21,20 +22,12 @@ typedef struct {
     gdouble median;
 } Timing;
 
-static gint
-compare_doubles(gconstpointer a, gconstpointer b)
-{
-    gdouble x = *(const gdouble*)a, y = *(const gdouble*)b;
-
-    return (x > y) - (x < y);
-}
-
 static Timing
 summarise(gdouble *seconds)
 {
     Timing timing;
 
-    qsort(seconds, REPETITIONS, sizeof(gdouble), compare_doubles);
+    gwy_math_sort(REPETITIONS, seconds);
     timing.best = seconds[0];
     timing.median = seconds[REPETITIONS/2];
     return timing;

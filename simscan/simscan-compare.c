@@ -32,30 +32,17 @@ typedef struct {
     gchar **inputs;
 } CompareOptions;
 
-static GwyDataField*
-channel(GwyContainer *data, gint id)
-{
-    GwyDataField *field = NULL;
-    gchar key[32];
-
-    g_snprintf(key, sizeof(key), "/%d/data", id);
-    gwy_container_gis_object_by_name(data, key, &field);
-    return field;
-}
-
 /* The lowest id whose title says it is compensated, or -1. */
 static gint
 find_compensated(GwyContainer *data)
 {
     gint *ids = localscan_channel_ids(data);
-    const guchar *title;
+    const gchar *title;
     gint i, found = -1;
 
     for (i = 0; ids[i] >= 0 && found < 0; i++) {
-        if (gwy_container_gis_string(data,
-                                     gwy_app_get_data_title_key_for_id(ids[i]),
-                                     &title)
-            && g_str_has_suffix((const gchar*)title, LOCALSCAN_TITLE_SUFFIX))
+        if ((title = localscan_channel_title(data, ids[i]))
+            && g_str_has_suffix(title, LOCALSCAN_TITLE_SUFFIX))
             found = ids[i];
     }
     g_free(ids);
@@ -179,17 +166,6 @@ measure(GwyDataField *field, const gdouble *search, const gdouble *truth,
     g_array_free(found, TRUE);
 }
 
-static GwyDataField*
-channel_mask(GwyContainer *data, gint id)
-{
-    GwyDataField *mask = NULL;
-    gchar key[32];
-
-    g_snprintf(key, sizeof(key), "/%d/mask", id);
-    gwy_container_gis_object_by_name(data, key, &mask);
-    return mask;
-}
-
 /* One picture; the caption is its title line, then what all share. */
 static gboolean
 add_picture(OutputFiles *files, GwyDataField *field, ChannelPngStyle *style,
@@ -219,8 +195,9 @@ static gboolean
 write_pngs(GwyContainer *data, gint comp_id, const CompareOptions *options,
            const gdouble *truth, gint n, GError **error)
 {
-    GwyDataField *before = channel(data, 0), *after = channel(data, comp_id);
-    GwyDataField *drift_free = channel(data, 1);
+    GwyDataField *before = localscan_channel_item(data, 0, "data");
+    GwyDataField *after = localscan_channel_item(data, comp_id, "data");
+    GwyDataField *drift_free = localscan_channel_item(data, 1, "data");
     gint res = MAX(gwy_data_field_get_xres(before),
                    gwy_data_field_get_yres(before));
     OutputFiles *files = output_files_new();
@@ -241,7 +218,7 @@ write_pngs(GwyContainer *data, gint comp_id, const CompareOptions *options,
                          _("Before: the drift-contaminated scan"),
                          _("red rings: where the particles truly are"),
                          options->before_png, error));
-    style.mask = channel_mask(data, comp_id);
+    style.mask = localscan_channel_item(data, comp_id, "mask");
     ok = ok && (!options->after_png
                 || add_picture(files, after, &style,
                                after_title(compensation_mode(data, comp_id)),
@@ -279,7 +256,7 @@ compare_file(const gchar *filename, const CompareOptions *options,
         return FALSE;
     comp_id = find_compensated(data);
     n = read_particles(data, &truth, &shown);
-    if (comp_id < 0 || !channel(data, 0))
+    if (comp_id < 0 || !localscan_channel_item(data, 0, "data"))
         g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL,
                     _("%s has no channel titled ...%s"), filename,
                     LOCALSCAN_TITLE_SUFFIX);
@@ -291,8 +268,10 @@ compare_file(const gchar *filename, const CompareOptions *options,
         ok = write_pngs(data, comp_id, options, truth, n, error);
     if (ok) {
         radius = match_radius(truth, n);
-        measure(channel(data, 0), shown, truth, n, radius, &before);
-        measure(channel(data, comp_id), truth, truth, n, radius, &after);
+        measure(localscan_channel_item(data, 0, "data"), shown, truth, n,
+                radius, &before);
+        measure(localscan_channel_item(data, comp_id, "data"), truth, truth,
+                n, radius, &after);
         printf(_("%s: particle centres against their true places (channel "
                  "%d, %s)\n"),
                filename, comp_id, mode_name(compensation_mode(data, comp_id)));

@@ -137,37 +137,6 @@ title_matches(const gchar *title, const gchar *wanted)
     return TRUE;
 }
 
-static const gchar*
-channel_title(GwyContainer *data, gint id)
-{
-    const guchar *title = NULL;
-    gchar key[40];
-
-    g_snprintf(key, sizeof(key), "/%d/data/title", id);
-    gwy_container_gis_string_by_name(data, key, &title);
-    return (const gchar*)title;
-}
-
-static GwyContainer*
-channel_meta(GwyContainer *data, gint id)
-{
-    GwyContainer *meta = NULL;
-    gchar key[40];
-
-    g_snprintf(key, sizeof(key), "/%d/meta", id);
-    gwy_container_gis_object_by_name(data, key, &meta);
-    return meta;
-}
-
-static GwyDataField*
-channel_field(GwyContainer *data, gint id)
-{
-    gchar key[40];
-
-    g_snprintf(key, sizeof(key), "/%d/data", id);
-    return gwy_container_get_object_by_name(data, key);
-}
-
 static gboolean
 fields_alike(GwyDataField *a, GwyDataField *b)
 {
@@ -197,9 +166,9 @@ static void
 append_channel(FrameSeries *series, GwyContainer *data, gint id,
                const gchar *filename, gboolean with_title, MetaTiming *mts)
 {
-    GwyDataField *field = channel_field(data, id);
+    GwyDataField *field = localscan_channel_item(data, id, "data");
     gchar *base = g_path_get_basename(filename);
-    const gchar *title = channel_title(data, id);
+    const gchar *title = localscan_channel_title(data, id);
     gchar *label;
     MetaTiming *mt = mts + series->n_frames;
 
@@ -207,7 +176,8 @@ append_channel(FrameSeries *series, GwyContainer *data, gint id,
                        : g_strdup(base);
     frame_series_append(series, field, label, NULL);
     series->frames[series->n_frames-1].channel_id = id;
-    read_meta_timing(channel_meta(data, id), gwy_data_field_get_yres(field), mt);
+    read_meta_timing(localscan_channel_item(data, id, "meta"),
+                     gwy_data_field_get_yres(field), mt);
     g_free(label);
     g_free(base);
 }
@@ -219,7 +189,8 @@ first_channel_id(GwyContainer *data, const gchar *wanted)
     gint i, found = -1;
 
     for (i = 0; ids[i] >= 0; i++) {
-        if ((!wanted || title_matches(channel_title(data, ids[i]), wanted))
+        if ((!wanted
+             || title_matches(localscan_channel_title(data, ids[i]), wanted))
             && (found < 0 || ids[i] < found))
             found = ids[i];
     }
@@ -241,14 +212,15 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
         ;
     *mts = g_new0(MetaTiming, n + 1);
     for (i = 0; i < n; i++) {
-        GwyDataField *field = channel_field(data, ids[i]);
+        GwyDataField *field = localscan_channel_item(data, ids[i], "data");
 
         if (options->first_id >= 0 && ids[i] < options->first_id)
             continue;
         if (options->last_id >= 0 && ids[i] > options->last_id)
             continue;
         if (options->channel
-            && !title_matches(channel_title(data, ids[i]), options->channel))
+            && !title_matches(localscan_channel_title(data, ids[i]),
+                              options->channel))
             continue;
         if (!first)
             first = field;
@@ -258,7 +230,8 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
                         _("%s: channel %d (%s) differs in size or pixel size "
                           "from the first frame"),
-                        filename, ids[i], channel_title(data, ids[i]));
+                        filename, ids[i],
+                        localscan_channel_title(data, ids[i]));
             g_free(ids);
             return FALSE;
         }
@@ -286,7 +259,7 @@ load_one_channel_per_file(FrameSeries *series, gchar **filenames, gint n_files,
             return FALSE;
         }
         if (k && !fields_alike(series->frames[0].field,
-                               channel_field(datas[k], id))) {
+                               localscan_channel_item(datas[k], id, "data"))) {
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
                         _("%s: the frame differs in size, pixel size or unit "
                           "from %s"), filenames[k], filenames[0]);

@@ -465,3 +465,25 @@ localscan_channel_ids(GwyContainer *data)
     g_array_append_val(ids, end);
     return (gint*)g_array_free(ids, FALSE);
 }
+
+gpointer
+localscan_channel_item(GwyContainer *data, gint id, const gchar *item)
+{
+    GObject *object = NULL;
+    gchar *key = g_strdup_printf("/%d/%s", id, item);
+
+    gwy_container_gis_object_by_name(data, key, &object);
+    g_free(key);
+    return object;
+}
+
+const gchar*
+localscan_channel_title(GwyContainer *data, gint id)
+{
+    const guchar *title = NULL;
+    gchar key[40];
+
+    g_snprintf(key, sizeof(key), "/%d/data/title", id);
+    gwy_container_gis_string_by_name(data, key, &title);
+    return (const gchar*)title;
+}

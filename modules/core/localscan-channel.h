@@ -219,6 +219,15 @@ void         localscan_applied_to_physical   (const LocalscanApplied *applied,
  * data browser lists, without its GUI library. */
 gint*        localscan_channel_ids           (GwyContainer *data);
 
+/* The object at "/ID/ITEM" of data (item "data": the channel's field,
+ * "mask", "meta"), or NULL when there is none; no reference is added. */
+gpointer     localscan_channel_item          (GwyContainer *data,
+                                              gint id,
+                                              const gchar *item);
+/* The channel's title ("/ID/data/title"), or NULL. */
+const gchar* localscan_channel_title         (GwyContainer *data,
+                                              gint id);
+
 G_END_DECLS
 
 #endif
