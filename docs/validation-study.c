@@ -453,6 +453,22 @@ legend(cairo_t *cr, gdouble x, gdouble y, const gdouble *rgb,
     return x + 14 + ext.x_advance + 28;
 }
 
+/* A used measurement's displacement (nm) and the paper and extension
+ * models' predictions of it (m); FALSE for a measurement not used. */
+static gboolean
+plotted_values(const DriftMeasurement *m, const DriftFit *none,
+               const DriftFit *ext, gdouble xstep, gdouble ystep,
+               gdouble *md, gdouble *pd, gdouble *ed)
+{
+    if (!(m->weight > 0.0))
+        return FALSE;
+    md[0] = 1e9*m->dx;
+    md[1] = 1e9*m->dy;
+    paper_predict(none, m, xstep, ystep, pd, pd + 1);
+    drift_fit_predict(ext, m, ed, ed + 1);
+    return TRUE;
+}
+
 /* Measured and predicted displacement (x and y) over the later scan time,
  * and the residuals of both models. */
 static void
@@ -487,12 +503,10 @@ plot_displacements(const SeriesResult *res, const gchar *path,
     }
     for (i = 0; i < rep->n_meas; i++) {
         const DriftMeasurement *m = rep->meas + i;
-        gdouble pd[2], ed[2], md[2] = { 1e9*m->dx, 1e9*m->dy };
+        gdouble pd[2], ed[2], md[2];
 
-        if (!(m->weight > 0.0))
+        if (!plotted_values(m, none, ext, xstep, ystep, md, pd, ed))
             continue;
-        paper_predict(none, m, xstep, ystep, pd, pd + 1);
-        drift_fit_predict(ext, m, ed, ed + 1);
         for (ax = 0; ax < 2; ax++) {
             Panel *a = p + ax, *b = p + 2 + ax;
             gdouble r1 = md[ax] - 1e9*pd[ax], r2 = md[ax] - 1e9*ed[ax];
@@ -522,12 +536,10 @@ plot_displacements(const SeriesResult *res, const gchar *path,
     cairo_set_line_width(cr, 1.2);
     for (i = 0; i < rep->n_meas; i++) {
         const DriftMeasurement *m = rep->meas + i;
-        gdouble pd[2], ed[2], md[2] = { 1e9*m->dx, 1e9*m->dy };
+        gdouble pd[2], ed[2], md[2];
 
-        if (!(m->weight > 0.0))
+        if (!plotted_values(m, none, ext, xstep, ystep, md, pd, ed))
             continue;
-        paper_predict(none, m, xstep, ystep, pd, pd + 1);
-        drift_fit_predict(ext, m, ed, ed + 1);
         for (ax = 0; ax < 2; ax++) {
             dot(cr, px_x(p + ax, m->t_a), px_y(p + ax, md[ax]), 2.5, black, TRUE);
             dot(cr, px_x(p + ax, m->t_a), px_y(p + ax, 1e9*pd[ax]), 3.5, red, FALSE);

@@ -140,14 +140,14 @@ simscan_scene_free(SimscanScene *scene)
     g_free(scene);
 }
 
-static gdouble
-m_to_col(const SimscanScene *scene, gdouble x)
+gdouble
+simscan_scene_column(const SimscanScene *scene, gdouble x)
 {
     return (x - scene->scan.xoff)*scene->scan.xres/scene->scan.xreal - 0.5;
 }
 
-static gdouble
-m_to_row(const SimscanScene *scene, gdouble y)
+gdouble
+simscan_scene_row(const SimscanScene *scene, gdouble y)
 {
     return (y - scene->scan.yoff)*scene->scan.yres/scene->scan.yreal - 0.5;
 }
@@ -172,7 +172,8 @@ static void
 displayed_position(const SimscanScene *scene, gdouble x, gdouble y,
                    gdouble *col, gdouble *row)
 {
-    gdouble c0 = m_to_col(scene, x), r0 = m_to_row(scene, y);
+    gdouble c0 = simscan_scene_column(scene, x);
+    gdouble r0 = simscan_scene_row(scene, y);
     gdouble c = c0, r = r0, px, py;
     gint iter;
 
@@ -188,8 +189,8 @@ displayed_position(const SimscanScene *scene, gdouble x, gdouble y,
                                                CLAMP(c, 0, scene->scan.xres-1));
 
             drift_model_eval(&scene->drift, t, &px, &py);
-            c = m_to_col(scene, x + px);
-            r = m_to_row(scene, y + py);
+            c = simscan_scene_column(scene, x + px);
+            r = simscan_scene_row(scene, y + py);
         }
     }
     *col = c;
@@ -288,8 +289,8 @@ measure_errors(const SimscanScene *scene, SimscanMeasurement *m)
 
         sim_sample_particle(scene->sample, i, &x, &y, NULL);
         displayed_position(scene, x, y, shown + 2*i, shown + 2*i + 1);
-        truth[2*i] = m_to_col(scene, x + m->ref_drift[0]);
-        truth[2*i + 1] = m_to_row(scene, y + m->ref_drift[1]);
+        truth[2*i] = simscan_scene_column(scene, x + m->ref_drift[0]);
+        truth[2*i + 1] = simscan_scene_row(scene, y + m->ref_drift[1]);
     }
     centre_error_measure(scene->particles, shown, truth, n,
                          scene->scan.xres, scene->scan.yres, r_px + 2.0,

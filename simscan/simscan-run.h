@@ -60,6 +60,12 @@ SimscanScene*        simscan_scene_new          (const SimscanConfig *config,
                                                  GwyDataField *sample_field,
                                                  GError **error);
 void                 simscan_scene_free         (SimscanScene *scene);
+/* Pixel column and row (centres at whole numbers) of scan position x, y
+ * (m) in the scene's image. */
+gdouble              simscan_scene_column       (const SimscanScene *scene,
+                                                 gdouble x);
+gdouble              simscan_scene_row          (const SimscanScene *scene,
+                                                 gdouble y);
 
 /* Fails (with a message) only when no stripe got a particle measured. */
 SimscanMeasurement*  simscan_measure            (SimscanScene *scene,

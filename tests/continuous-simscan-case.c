@@ -26,18 +26,6 @@ typedef struct {
     gdouble dx_m, dy_m;
 } Judge;
 
-static gdouble
-m_to_col(const SimscanScene *scene, gdouble x)
-{
-    return (x - scene->scan.xoff)*scene->scan.xres/scene->scan.xreal - 0.5;
-}
-
-static gdouble
-m_to_row(const SimscanScene *scene, gdouble y)
-{
-    return (y - scene->scan.yoff)*scene->scan.yres/scene->scan.yreal - 0.5;
-}
-
 /* Where every particle should be in an image showing the sample as it was
  * at time t (per particle when times is not NULL). */
 static gdouble*
@@ -49,8 +37,8 @@ truth_at(const SimscanScene *scene, gdouble t, const gdouble *times)
     for (i = 0; i < n; i++) {
         sim_sample_particle(scene->sample, i, &x, &y, NULL);
         drift_model_eval(&scene->drift, times ? times[i] : t, &px, &py);
-        truth[2*i] = m_to_col(scene, x + px);
-        truth[2*i + 1] = m_to_row(scene, y + py);
+        truth[2*i] = simscan_scene_column(scene, x + px);
+        truth[2*i + 1] = simscan_scene_row(scene, y + py);
     }
     return truth;
 }
@@ -241,8 +229,8 @@ measurement_error(const SimscanScene *scene, const SimscanMeasurement *m,
         sum_disp += ex*ex + ey*ey;
         sim_sample_particle(scene->sample, i, &x, &y, NULL);
         drift_model_eval(&scene->drift, scan->t_local, &px, &py);
-        ex = scan->x_act - m_to_col(scene, x + px);
-        ey = scan->y_act - m_to_row(scene, y + py);
+        ex = scan->x_act - simscan_scene_column(scene, x + px);
+        ey = scan->y_act - simscan_scene_row(scene, y + py);
         sum_act += ex*ex + ey*ey;
         result->n_measured++;
     }

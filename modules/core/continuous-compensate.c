@@ -488,16 +488,12 @@ timing_or_default(const ScanTiming *timing, gint xres, gint yres,
 }
 
 gboolean
-continuous_compensate_trajectory(const gdouble *a,
-                                 gint xres,
-                                 gint yres,
+continuous_compensate_trajectory(const gdouble *a, gint xres, gint yres,
                                  const DriftTrajectory *trajectory,
                                  const ScanTiming *timing,
                                  GwyInterpolationType interpolation,
-                                 gdouble fill_value,
-                                 gdouble *result,
-                                 gdouble *mask,
-                                 GError **error)
+                                 gdouble fill_value, gdouble *result,
+                                 gdouble *mask, GError **error)
 {
     ScanTiming default_timing;
     ResamplePlan plan;
@@ -520,18 +516,13 @@ continuous_compensate_trajectory(const gdouble *a,
 }
 
 gboolean
-continuous_compensate_table(const gdouble *a,
-                            gint xres,
-                            gint yres,
+continuous_compensate_table(const gdouble *a, gint xres, gint yres,
                             const DriftTable *table,
-                            gdouble x_pixel_size,
-                            gdouble y_pixel_size,
+                            gdouble x_pixel_size, gdouble y_pixel_size,
                             const ScanTiming *timing,
                             GwyInterpolationType interpolation,
-                            gdouble fill_value,
-                            gdouble *result,
-                            gdouble *mask,
-                            GError **error)
+                            gdouble fill_value, gdouble *result,
+                            gdouble *mask, GError **error)
 {
     ScanTiming default_timing;
     DriftTrajectory *trajectory;

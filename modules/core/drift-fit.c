@@ -908,6 +908,14 @@ oscillation_polar(const DriftFit *fit, gdouble *amp, gdouble *phase)
                    + fit->coef[ax][2]*sin(*phase));
 }
 
+/* The effect's coefficient (after the velocity) of both axes, scaled. */
+static void
+second_coefficients(const DriftFit *fit, gdouble scale, gdouble *v)
+{
+    v[0] = scale*fit->coef[0][1];
+    v[1] = scale*fit->coef[1][1];
+}
+
 void
 drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
 {
@@ -926,8 +934,7 @@ drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
         case DRIFT_MODEL_SETTLING:
         case KIND_LOG_CREEP:
         params->tau_s = fit->nonlinear;
-        params->u_nm_per_s[0] = fit->coef[0][1];
-        params->u_nm_per_s[1] = fit->coef[1][1];
+        second_coefficients(fit, 1.0, params->u_nm_per_s);
         break;
 
         case DRIFT_MODEL_OSCILLATION:
@@ -937,13 +944,11 @@ drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
 
         case DRIFT_MODEL_JUMP:
         params->t_s = fit->nonlinear;
-        params->step_nm[0] = fit->coef[0][1];
-        params->step_nm[1] = fit->coef[1][1];
+        second_coefficients(fit, 1.0, params->step_nm);
         break;
 
         case KIND_ACCELERATION:
-        params->accel_nm_per_s2[0] = 2.0*fit->coef[0][1];
-        params->accel_nm_per_s2[1] = 2.0*fit->coef[1][1];
+        second_coefficients(fit, 2.0, params->accel_nm_per_s2);
         break;
 
         default:
@@ -951,36 +956,39 @@ drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
     }
 }
 
+/* A pair in nm as metres. */
+static void
+pair_to_metres(const gdouble *nm, gdouble *m)
+{
+    m[0] = 1e-9*nm[0];
+    m[1] = 1e-9*nm[1];
+}
+
 void
 drift_fit_to_model(const DriftFit *fit, DriftModel *model)
 {
     DriftFitParameters params;
-    gint ax;
 
     memset(model, 0, sizeof(DriftModel));
     model->type = fit->type;
     model->tau = model->period = model->walk_dt = 1.0;
     drift_fit_parameters(fit, &params);
-    for (ax = 0; ax < 2; ax++)
-        model->v[ax] = 1e-9*params.velocity_nm_per_s[ax];
+    pair_to_metres(params.velocity_nm_per_s, model->v);
     switch (fit->type) {
         case DRIFT_MODEL_SETTLING:
         model->tau = params.tau_s;
-        model->u[0] = 1e-9*params.u_nm_per_s[0];
-        model->u[1] = 1e-9*params.u_nm_per_s[1];
+        pair_to_metres(params.u_nm_per_s, model->u);
         break;
 
         case DRIFT_MODEL_OSCILLATION:
         model->period = params.period_s;
         model->phase = params.phase_rad;
-        model->a[0] = 1e-9*params.amplitude_nm[0];
-        model->a[1] = 1e-9*params.amplitude_nm[1];
+        pair_to_metres(params.amplitude_nm, model->a);
         break;
 
         case DRIFT_MODEL_JUMP:
         model->t_jump = params.t_s;
-        model->step[0] = 1e-9*params.step_nm[0];
-        model->step[1] = 1e-9*params.step_nm[1];
+        pair_to_metres(params.step_nm, model->step);
         break;
 
         default:

@@ -111,8 +111,8 @@ gboolean       drift_fit_observable_periods(const DriftMeasurement *meas,
  * (group modulo n_folds), each fold predicted by the model fitted to the
  * others, its nonlinear parameter searched again (an oscillation's over the
  * periods the whole series can show: a held-out fold's gaps would shut out
- * short periods); NaN when no fold could be fitted.  drift_fit_select fills DriftFit.cv_rms_nm the same way over the
- * measurements it kept. */
+ * short periods); NaN when no fold could be fitted.  drift_fit_select
+ * fills DriftFit.cv_rms_nm the same way over the measurements it kept. */
 gdouble        drift_fit_cross_validate(const DriftMeasurement *meas,
                                         gint n,
                                         DriftModelType type,
@@ -133,7 +133,8 @@ gboolean       drift_fit_creep        (const DriftMeasurement *meas,
  * when it beats "none" by bic_margin, predicts held-out groups better by
  * the fraction cv_gain and explains min_explained times its residual; an
  * oscillation only with a period inside the observable range, not at its
- * long end (drift_fit_observable_periods).  Returns -1 when nothing could be fitted. */
+ * long end (drift_fit_observable_periods).  Returns -1 when nothing
+ * could be fitted. */
 gint           drift_fit_select       (const DriftMeasurement *meas,
                                        gint n,
                                        const DriftFitOptions *options,
