@@ -1021,33 +1021,49 @@ trajectory_error(const FrameSeries *series, const DriftFit *fit,
 
 /* ---- The document ---- */
 
+/* The apparent velocity of consecutive pair k-1, k (nm/s): the mean over
+ * its used blocks of displacement over time difference, weighted; t_mid
+ * the blocks' mean time, used their count.  FALSE without a used block. */
+static gboolean
+pair_velocity(const FitReport *rep, gint k, gdouble *v, gdouble *t_mid,
+              gint *used)
+{
+    gdouble sx = 0, sy = 0, st = 0, sw = 0;
+    gint i;
+
+    *used = 0;
+    for (i = 0; i < rep->n_meas; i++) {
+        const DriftMeasurement *m = rep->meas + i;
+        gdouble dt = m->t_a - m->t_b;
+
+        if (m->frame_a != k || m->frame_b != k-1 || !(m->weight > 0.0))
+            continue;
+        sx += m->weight*1e9*m->dx/dt;
+        sy += m->weight*1e9*m->dy/dt;
+        st += m->weight*0.5*(m->t_a + m->t_b);
+        sw += m->weight;
+        (*used)++;
+    }
+    if (!(sw > 0))
+        return FALSE;
+    v[0] = sx/sw;
+    v[1] = sy/sw;
+    *t_mid = st/sw;
+    return TRUE;
+}
+
 static void
 write_pair_velocities(GString *md, const SeriesResult *res)
 {
-    const FitReport *rep = &res->report;
-    gint k, i;
+    gdouble v[2], t_mid;
+    gint k, used;
 
     g_string_append(md, "\n| frames | mid time (s) | apparent v_x (nm/s) | "
                     "apparent v_y (nm/s) | blocks used |\n|---|---|---|---|---|\n");
     for (k = 1; k < res->series->n_frames; k++) {
-        gdouble sx = 0, sy = 0, st = 0, sw = 0;
-        gint used = 0;
-
-        for (i = 0; i < rep->n_meas; i++) {
-            const DriftMeasurement *m = rep->meas + i;
-            gdouble dt = m->t_a - m->t_b;
-
-            if (m->frame_a != k || m->frame_b != k-1 || !(m->weight > 0.0))
-                continue;
-            sx += m->weight*1e9*m->dx/dt;
-            sy += m->weight*1e9*m->dy/dt;
-            st += m->weight*0.5*(m->t_a + m->t_b);
-            sw += m->weight;
-            used++;
-        }
-        if (sw > 0)
+        if (pair_velocity(&res->report, k, v, &t_mid, &used))
             g_string_append_printf(md, "| %d-%d | %.1f | %.4f | %.4f | %d |\n",
-                                   k-1, k, st/sw, sx/sw, sy/sw, used);
+                                   k-1, k, t_mid, v[0], v[1], used);
     }
 }
 
@@ -1343,30 +1359,18 @@ write_finding(GString *md, const SeriesSpec *spec, const SeriesResult *res)
 static gboolean
 pair_velocity_trend(const SeriesResult *res, gdouble *first, gdouble *last)
 {
-    const FitReport *rep = &res->report;
-    gint k, i, found = 0;
+    gdouble v[2], t_mid;
+    gint k, used, found = 0;
 
     for (k = 1; k < res->series->n_frames; k++) {
-        gdouble sx = 0, sy = 0, sw = 0;
-
-        for (i = 0; i < rep->n_meas; i++) {
-            const DriftMeasurement *m = rep->meas + i;
-            gdouble dt = m->t_a - m->t_b;
-
-            if (m->frame_a != k || m->frame_b != k-1 || !(m->weight > 0.0))
-                continue;
-            sx += m->weight*1e9*m->dx/dt;
-            sy += m->weight*1e9*m->dy/dt;
-            sw += m->weight;
-        }
-        if (!(sw > 0))
+        if (!pair_velocity(&res->report, k, v, &t_mid, &used))
             continue;
         if (!found++) {
-            first[0] = sx/sw;
-            first[1] = sy/sw;
+            first[0] = v[0];
+            first[1] = v[1];
         }
-        last[0] = sx/sw;
-        last[1] = sy/sw;
+        last[0] = v[0];
+        last[1] = v[1];
     }
     return found >= 2;
 }
