@@ -104,9 +104,17 @@ main(void)
     gsize size = (gsize)RES*RES;
     gdouble *a, *result, *mask, d, checksum = 0.0;
     gint dx[N_STRIPES], dy[N_STRIPES];
+    static const struct {
+        const gchar *name;
+        void (*fill)(gint *dx, gint *dy);
+    } tables[] = {
+        { "Figure 6 scaled", figure6_table },
+        { "large shifts", large_table },
+    };
     Timing baseline, timing;
     gint64 start;
     gsize i;
+    guint t, with_mask;
 
     a = g_new(gdouble, size);
     result = g_new(gdouble, size);
@@ -127,21 +135,19 @@ main(void)
     baseline = time_memcpy(a, result);
     report("memcpy (baseline)", baseline, baseline);
 
-    figure6_table(dx, dy);
-    timing = time_paper(a, dx, dy, d, result, NULL);
-    report("paper, Figure 6 scaled, no mask", timing, baseline);
-    checksum += result[size/2];
-    timing = time_paper(a, dx, dy, d, result, mask);
-    report("paper, Figure 6 scaled, with mask", timing, baseline);
-    checksum += mask[0];
+    for (t = 0; t < G_N_ELEMENTS(tables); t++) {
+        tables[t].fill(dx, dy);
+        for (with_mask = 0; with_mask < 2; with_mask++) {
+            gchar *name = g_strdup_printf("paper, %s, %s", tables[t].name,
+                                          with_mask ? "with mask" : "no mask");
 
-    large_table(dx, dy);
-    timing = time_paper(a, dx, dy, d, result, NULL);
-    report("paper, large shifts, no mask", timing, baseline);
-    checksum += result[size/3];
-    timing = time_paper(a, dx, dy, d, result, mask);
-    report("paper, large shifts, with mask", timing, baseline);
-    checksum += mask[size - 1];
+            timing = time_paper(a, dx, dy, d, result, with_mask ? mask : NULL);
+            report(name, timing, baseline);
+            checksum += (with_mask ? mask[t ? size - 1 : 0]
+                         : result[size/(2 + t)]);
+            g_free(name);
+        }
+    }
 
     /* Printed so the compiler cannot drop the work. */
     printf("(checksum %g; target: paper mode without mask within 3x of "
