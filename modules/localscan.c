@@ -18,6 +18,9 @@
 #include "localscan-channel.h"
 #include "localscan-params.h"
 #include "stripe-registration.h"
+#include "compensation-marker.h"
+#include "reference-choice.h"
+#include "run-description.h"
 
 /* Our strings live in our own domain, not in Gwyddion's. */
 #undef _
@@ -44,7 +47,9 @@ enum {
     PARAM_PLOT_DRIFT,
     PARAM_MASK_COLOR,
     PARAM_REFERENCE_CHANNEL,
+    PARAM_FORCE,
     WIDGET_TABLE_FILE,
+    WIDGET_REFERENCE,
     MESSAGE_STATUS,
 };
 
@@ -81,6 +86,8 @@ typedef struct {
     GtkWidget *file_button;
     GwyContainer *data;
     GwyGraphModel *drift_gmodel;
+    GtkWidget *reference_combo;
+    GtkListStore *references;
     LocalscanTimingFound timing_in_meta;
     guint stripes_settle_id;
 } ModuleGUI;
@@ -92,6 +99,8 @@ static void             localscan_drift     (GwyContainer *data,
                                              const gchar *name);
 static void             use_reference_channel_setting(ModuleArgs *args,
                                                       GwyRunType runtype);
+static gboolean         check_not_compensated(ModuleArgs *args,
+                                              GwyRunType runtype);
 static void             remember_reference_channel   (ModuleArgs *args);
 static gboolean         execute             (ModuleArgs *args,
                                              GError **error);
@@ -103,6 +112,7 @@ static GwyDialogOutcome run_gui             (ModuleArgs *args);
 static GtkWidget*       create_drift_graph  (ModuleGUI *gui);
 static GtkWidget*       create_file_chooser (gpointer user_data);
 static void             table_file_chosen   (ModuleGUI *gui);
+static GtkWidget*       create_reference_chooser(gpointer user_data);
 static gboolean         reference_filter    (GwyContainer *data,
                                              gint id,
                                              gpointer user_data);
@@ -223,6 +233,9 @@ define_module_params(void)
     gwy_param_def_add_int(paramdef, PARAM_REFERENCE_CHANNEL, LOCALSCAN_KEY_REFERENCE_CHANNEL, NULL,
                           LOCALSCAN_REFERENCE_CHANNEL_NONE, G_MAXINT32,
                           LOCALSCAN_REFERENCE_CHANNEL_NONE);
+    /* Batch callers only (gwy-localscan --force): the dialog asks instead. */
+    gwy_param_def_add_boolean(paramdef, PARAM_FORCE, LOCALSCAN_KEY_FORCE, NULL,
+                              LOCALSCAN_DEFAULT_FORCE);
     return paramdef;
 }
 
@@ -244,6 +257,8 @@ localscan_drift(GwyContainer *data, GwyRunType runtype, G_GNUC_UNUSED const gcha
     args.mask = gwy_data_field_new_alike(args.field, TRUE);
     args.params = gwy_params_new_from_settings(define_module_params());
     use_reference_channel_setting(&args, runtype);
+    if (!check_not_compensated(&args, runtype))
+        goto end;
 
     if (runtype == GWY_RUN_INTERACTIVE) {
         outcome = run_gui(&args);
@@ -297,6 +312,53 @@ use_reference_channel_setting(ModuleArgs *args, GwyRunType runtype)
             refid = none;
     }
     gwy_params_set_image_id(args->params, PARAM_REFERENCE, refid);
+}
+
+/* A compensated channel carries the drift table it was made with, so
+ * nothing else would stop Repeat last from applying the drift twice. */
+static gboolean
+ask_compensate_again(ModuleArgs *args)
+{
+    GtkWindow *parent = gwy_app_find_window_for_channel(args->data, args->id);
+    GtkWidget *dialog;
+    gint response;
+
+    dialog = gtk_message_dialog_new(parent, GTK_DIALOG_MODAL | GTK_DIALOG_DESTROY_WITH_PARENT,
+                                    GTK_MESSAGE_QUESTION, GTK_BUTTONS_NONE,
+                                    "%s", _("This channel is already local-scan compensated."));
+    gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(dialog), "%s",
+                                             _("Compensating it again applies the drift a second "
+                                               "time.  Compensate it anyway?"));
+    gtk_dialog_add_buttons(GTK_DIALOG(dialog),
+                           GTK_STOCK_CANCEL, GTK_RESPONSE_CANCEL,
+                           _("Compensate _Again"), GTK_RESPONSE_YES,
+                           NULL);
+    gtk_dialog_set_default_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
+    response = gtk_dialog_run(GTK_DIALOG(dialog));
+    gtk_widget_destroy(dialog);
+    return response == GTK_RESPONSE_YES;
+}
+
+static gboolean
+check_not_compensated(ModuleArgs *args, GwyRunType runtype)
+{
+    GError *error = NULL;
+    gchar *name;
+    gboolean ok;
+
+    if (!compensation_marker_get(args->data, args->id))
+        return TRUE;
+    if (runtype == GWY_RUN_INTERACTIVE)
+        return ask_compensate_again(args);
+    name = g_strdup_printf(_("channel %d"), args->id);
+    ok = compensation_marker_check(args->data, args->id, name,
+                                   gwy_params_get_boolean(args->params, PARAM_FORCE),
+                                   _("set the parameter force to do it anyway"), &error);
+    g_free(name);
+    if (!ok)
+        report_error(args, error);
+    g_clear_error(&error);
+    return ok;
 }
 
 /* So that the settings (and the log, which records them) name the chosen
@@ -457,6 +519,68 @@ execute(ModuleArgs *args, GError **error)
                                       &args->applied, error);
 }
 
+/* How the reference is named everywhere: "file — channel". */
+static gchar*
+reference_label(GwyContainer *data, gint id)
+{
+    gchar *untitled = g_strdup_printf(_("Untitled %d"), gwy_app_data_browser_get_number(data));
+    gchar *label = reference_choice_label(data, id, untitled);
+
+    g_free(untitled);
+    return label;
+}
+
+/* The settings that made the result, by name. */
+static gchar*
+describe_run(ModuleArgs *args)
+{
+    GwyParams *params = args->params;
+    GwyAppDataId refid = gwy_params_get_data_id(params, PARAM_REFERENCE);
+    GwyContainer *refdata = refid.id >= 0 ? gwy_app_data_browser_get(refid.datano) : NULL;
+    RunDescription run;
+    gchar *reference = NULL, *text;
+
+    run.source = gwy_params_get_enum(params, PARAM_SOURCE);
+    run.table_file = gwy_params_get_string(params, PARAM_TABLE_FILE);
+    if (run.source == LOCALSCAN_SOURCE_REFERENCE && refdata)
+        reference = reference_label(refdata, refid.id);
+    run.reference = reference;
+    run.stripes = gwy_params_get_int(params, PARAM_STRIPES);
+    run.mode = gwy_params_get_enum(params, PARAM_MODE);
+    run.interpolation = gwy_params_get_enum(params, PARAM_INTERPOLATION);
+    run.fill = gwy_params_get_enum(params, PARAM_FILL);
+    text = run_description_format(&run);
+    g_free(reference);
+    return text;
+}
+
+/* Gwyddion's own log entry would list the stored settings as numbers; the
+ * entry is written with their names instead, in the same form
+ * (function(args)@time), after the source's log is copied. */
+static void
+log_run(GwyContainer *data, gint id, gint newid, const gchar *description)
+{
+    GwyStringList *log = NULL;
+    GDateTime *now;
+    gchar key[40], *stamp;
+
+    if (!gwy_log_get_enabled())
+        return;
+    gwy_app_channel_log_add(data, id, newid, NULL, NULL);
+    g_snprintf(key, sizeof(key), "/%d/data/log", newid);
+    if (!gwy_container_gis_object_by_name(data, key, &log)) {
+        log = gwy_string_list_new();
+        gwy_container_set_object_by_name(data, key, log);
+        g_object_unref(log);
+    }
+    now = g_date_time_new_now_local();
+    stamp = g_date_time_format(now, "%Y-%m-%d %H:%M:%S");
+    gwy_string_list_append_take(log, g_strdup_printf("proc::%s(%s)@%s", LOCALSCAN_FUNCTION_NAME,
+                                                     description, stamp));
+    g_free(stamp);
+    g_date_time_unref(now);
+}
+
 /* The source channel is never touched: adding the new channel is the whole
  * (undoable) change. */
 static void
@@ -464,7 +588,7 @@ create_outputs(ModuleArgs *args)
 {
     GwyContainer *data = args->data;
     gint id = args->id, newid;
-    gchar *title, *newtitle;
+    gchar *title, *newtitle, *description;
 
     newid = gwy_app_data_browser_add_data_field(args->result, data, TRUE);
     title = gwy_app_get_data_field_title(data, id);
@@ -486,7 +610,10 @@ create_outputs(ModuleArgs *args)
      * again; the applied per-stripe values follow from it and the image. */
     localscan_channel_store_table(data, newid, args->table);
     localscan_channel_drop_source_meta(data, newid);
-    gwy_app_channel_log_add_proc(data, id, newid);
+    description = describe_run(args);
+    compensation_marker_set(data, newid, description, args->table);
+    log_run(data, id, newid, description);
+    g_free(description);
 
     if (gwy_params_get_boolean(args->params, PARAM_PLOT_DRIFT))
         add_drift_graph(args);
@@ -612,8 +739,7 @@ run_gui(ModuleArgs *args)
     gwy_param_table_append_header(table, -1, _("Drift"));
     gwy_param_table_append_radio(table, PARAM_SOURCE);
     gwy_param_table_append_foreign(table, WIDGET_TABLE_FILE, create_file_chooser, &gui, NULL);
-    gwy_param_table_append_image_id(table, PARAM_REFERENCE);
-    gwy_param_table_data_id_set_filter(table, PARAM_REFERENCE, reference_filter, args, NULL);
+    gwy_param_table_append_foreign(table, WIDGET_REFERENCE, create_reference_chooser, &gui, NULL);
     gwy_param_table_append_slider(table, PARAM_STRIPES);
     gwy_param_table_slider_restrict_range(table, PARAM_STRIPES, LOCALSCAN_STRIPES_MIN,
                                           MIN(LOCALSCAN_STRIPES_MAX,
@@ -737,18 +863,130 @@ table_file_chosen(ModuleGUI *gui)
 }
 
 /* Registration compares the image with another scan of the same area, so
- * only images of the same pixel and physical size qualify. */
+ * only images of the same pixel and physical size qualify, never the image
+ * itself. */
 static gboolean
 reference_filter(GwyContainer *data, gint id, gpointer user_data)
 {
     ModuleArgs *args = (ModuleArgs*)user_data;
-    GwyDataField *other;
 
-    if (data == args->data && id == args->id)
-        return FALSE;
-    if (!gwy_container_gis_object(data, gwy_app_get_data_key_for_id(id), &other))
-        return FALSE;
-    return localscan_reference_fits(args->field, other);
+    return reference_choice_rank(args->data, args->id, data, id) != REFERENCE_RANK_UNFIT;
+}
+
+
+static void
+add_reference_candidates(GwyContainer *data, gpointer user_data)
+{
+    ModuleGUI *gui = (ModuleGUI*)user_data;
+    ModuleArgs *args = gui->args;
+    gint *ids = gwy_app_data_browser_get_data_ids(data);
+    gint datano = gwy_app_data_browser_get_number(data), i;
+    ReferenceRank rank;
+    gchar *label, *shown;
+
+    for (i = 0; ids[i] >= 0; i++) {
+        if (!(rank = reference_choice_rank(args->data, args->id, data, ids[i])))
+            continue;
+        label = reference_label(data, ids[i]);
+        /* A sibling shares the image's drift and registers to zero. */
+        shown = (rank == REFERENCE_RANK_SIBLING
+                 ? g_strdup_printf(_("%s (same scan)"), label) : g_strdup(label));
+        gtk_list_store_insert_with_values(gui->references, NULL, G_MAXINT,
+                                          LOCALSCAN_REFERENCE_COLUMN_LABEL, shown,
+                                          LOCALSCAN_REFERENCE_COLUMN_DATANO, datano,
+                                          LOCALSCAN_REFERENCE_COLUMN_ID, ids[i],
+                                          LOCALSCAN_REFERENCE_COLUMN_RANK, rank,
+                                          -1);
+        g_free(shown);
+        g_free(label);
+    }
+    g_free(ids);
+}
+
+/* The remembered reference if it is as good as the best offered, else the
+ * best (the first of the highest rank); -1 when nothing is offered. */
+static gint
+preferred_reference(ModuleGUI *gui)
+{
+    GtkTreeModel *model = GTK_TREE_MODEL(gui->references);
+    GwyAppDataId remembered = gwy_params_get_data_id(gui->args->params, PARAM_REFERENCE);
+    gint best = -1, best_rank = 0, kept = -1, kept_rank = 0, n = 0, datano, id, rank;
+    GtkTreeIter iter;
+    gboolean more;
+
+    for (more = gtk_tree_model_get_iter_first(model, &iter); more;
+         more = gtk_tree_model_iter_next(model, &iter), n++) {
+        gtk_tree_model_get(model, &iter, LOCALSCAN_REFERENCE_COLUMN_DATANO, &datano,
+                           LOCALSCAN_REFERENCE_COLUMN_ID, &id, LOCALSCAN_REFERENCE_COLUMN_RANK, &rank, -1);
+        if (rank > best_rank) {
+            best = n;
+            best_rank = rank;
+        }
+        if (datano == remembered.datano && id == remembered.id) {
+            kept = n;
+            kept_rank = rank;
+        }
+    }
+    return (kept >= 0 && kept_rank == best_rank) ? kept : best;
+}
+
+static void
+set_reference_from_chooser(ModuleGUI *gui)
+{
+    GwyAppDataId refid = GWY_APP_DATA_ID_NONE;
+    GtkTreeIter iter;
+
+    if (gtk_combo_box_get_active_iter(GTK_COMBO_BOX(gui->reference_combo), &iter)) {
+        gtk_tree_model_get(GTK_TREE_MODEL(gui->references), &iter,
+                           LOCALSCAN_REFERENCE_COLUMN_DATANO, &refid.datano,
+                           LOCALSCAN_REFERENCE_COLUMN_ID, &refid.id, -1);
+    }
+    gwy_params_set_image_id(gui->args->params, PARAM_REFERENCE, refid);
+}
+
+static void
+reference_chosen(ModuleGUI *gui)
+{
+    set_reference_from_chooser(gui);
+    gwy_param_table_param_changed(gui->table, PARAM_REFERENCE);
+}
+
+/* Gwyddion's image chooser names channels without their files and offers
+ * the image's own siblings first; this one names "file — channel", offers
+ * only compatible channels and preselects a scan made at another time. */
+static GtkWidget*
+create_reference_chooser(gpointer user_data)
+{
+    ModuleGUI *gui = (ModuleGUI*)user_data;
+    GtkCellRenderer *renderer;
+    GtkWidget *hbox, *label;
+
+    gui->references = gtk_list_store_new(LOCALSCAN_REFERENCE_NCOLUMNS,
+                                         G_TYPE_STRING, G_TYPE_INT, G_TYPE_INT, G_TYPE_INT);
+    gwy_app_data_browser_foreach(add_reference_candidates, gui);
+
+    hbox = gtk_hbox_new(FALSE, 6);
+    label = gtk_label_new_with_mnemonic(_("_Reference:"));
+    gtk_box_pack_start(GTK_BOX(hbox), label, FALSE, FALSE, 0);
+    gui->reference_combo = gtk_combo_box_new_with_model(GTK_TREE_MODEL(gui->references));
+    gtk_widget_set_name(gui->reference_combo, LOCALSCAN_REFERENCE_WIDGET_NAME);
+    g_object_unref(gui->references);
+    renderer = gtk_cell_renderer_text_new();
+    g_object_set(renderer, "ellipsize", PANGO_ELLIPSIZE_MIDDLE, "width-chars", 28, NULL);
+    gtk_cell_layout_pack_start(GTK_CELL_LAYOUT(gui->reference_combo), renderer, TRUE);
+    gtk_cell_layout_add_attribute(GTK_CELL_LAYOUT(gui->reference_combo), renderer,
+                                  "text", LOCALSCAN_REFERENCE_COLUMN_LABEL);
+    gtk_label_set_mnemonic_widget(GTK_LABEL(label), gui->reference_combo);
+    gtk_widget_set_tooltip_text(gui->reference_combo,
+                                _("Another scan of the same area (same pixels and physical "
+                                  "size) against which every stripe is registered; scans made "
+                                  "at another time are listed first-choice, channels of the "
+                                  "same scan share its drift"));
+    gtk_combo_box_set_active(GTK_COMBO_BOX(gui->reference_combo), preferred_reference(gui));
+    set_reference_from_chooser(gui);
+    g_signal_connect_swapped(gui->reference_combo, "changed", G_CALLBACK(reference_chosen), gui);
+    gtk_box_pack_start(GTK_BOX(hbox), gui->reference_combo, TRUE, TRUE, 0);
+    return hbox;
 }
 
 static void
@@ -761,7 +999,7 @@ param_changed(ModuleGUI *gui, gint id)
 
     if (id < 0 || id == PARAM_SOURCE) {
         gwy_param_table_set_sensitive(table, WIDGET_TABLE_FILE, source == LOCALSCAN_SOURCE_FILE);
-        gwy_param_table_set_sensitive(table, PARAM_REFERENCE, source == LOCALSCAN_SOURCE_REFERENCE);
+        gwy_param_table_set_sensitive(table, WIDGET_REFERENCE, source == LOCALSCAN_SOURCE_REFERENCE);
         gwy_param_table_set_sensitive(table, PARAM_STRIPES, source == LOCALSCAN_SOURCE_REFERENCE);
     }
     if (id < 0 || id == PARAM_MODE) {

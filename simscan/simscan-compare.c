@@ -12,6 +12,8 @@
 #include <app/gwyapp.h>
 #include "localscan-channel.h"
 #include "localscan-params.h"
+#include "compensation-marker.h"
+#include "run-description.h"
 #include "particle-detect.h"
 #include "centre-error.h"
 #include "simscan-output.h"
@@ -49,19 +51,20 @@ find_compensated(GwyContainer *data)
     return found;
 }
 
-/* The mode the channel's log says it was compensated in ("proc::" entries
- * list the function's parameters): -1 when the log does not say. */
+/* The mode the channel was compensated in: its compensation marker says,
+ * else its log ("proc::" entries list the function's parameters, older
+ * files by number); -1 when neither says. */
 static gint
 compensation_mode(GwyContainer *data, gint id)
 {
     static const gchar call[] = "::" LOCALSCAN_FUNCTION_NAME "(";
-    static const gchar key[] = LOCALSCAN_KEY_MODE "=";
     GwyStringList *log = NULL;
-    const gchar *entry, *p;
+    const gchar *entry, *marker;
     gchar name[40];
     gint i, mode = -1;
-    gchar *end;
 
+    if ((marker = compensation_marker_get(data, id)))
+        return run_description_parse_mode(marker);
     g_snprintf(name, sizeof(name), "/%d/data/log", id);
     if (!gwy_container_gis_object_by_name(data, name, &log)
         || !GWY_IS_STRING_LIST(log))
@@ -69,16 +72,8 @@ compensation_mode(GwyContainer *data, gint id)
     /* The last compensation made the channel. */
     for (i = gwy_string_list_get_length(log) - 1; i >= 0 && mode < 0; i--) {
         entry = gwy_string_list_get(log, i);
-        if (!entry || !(p = strstr(entry, call)))
-            continue;
-        for (p += strlen(call); (p = strstr(p, key)); p++) {
-            if (p[-1] == '(' || p[-1] == ' ') {
-                mode = (gint)g_ascii_strtoll(p + strlen(key), &end, 10);
-                if (end == p + strlen(key))
-                    mode = -1;
-                break;
-            }
-        }
+        if (entry && strstr(entry, call))
+            mode = run_description_parse_mode(strstr(entry, call) + strlen(call));
     }
     return mode;
 }

@@ -156,7 +156,8 @@ simscan_file_truth_rms(const SimscanFileCase *fcase, GwyContainer *data, gint id
 }
 
 GwyDataField*
-simscan_file_expected_continuous(GwyContainer *data, const ScanTiming *timing)
+simscan_file_expected_continuous(GwyContainer *data, const ScanTiming *timing,
+                                 GwyInterpolationType interpolation)
 {
     GwyDataField *field = channel_field(data, 0, "data"), *result;
     gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
@@ -168,7 +169,7 @@ simscan_file_expected_continuous(GwyContainer *data, const ScanTiming *timing)
     result = gwy_data_field_new_alike(field, FALSE);
     ok = continuous_compensate_table(a, xres, yres, table,
                                      gwy_data_field_get_dx(field), gwy_data_field_get_dy(field),
-                                     timing, GWY_INTERPOLATION_BSPLINE, paper_image_mean(a, xres, yres),
+                                     timing, interpolation, paper_image_mean(a, xres, yres),
                                      gwy_data_field_get_data(result), NULL, NULL);
     drift_table_free(table);
     if (!ok)

@@ -62,10 +62,11 @@ gdouble       simscan_file_truth_rms       (const SimscanFileCase *fcase,
                                             gdouble t_ref);
 
 /* What continuous mode gives channel 0 of data with its stored table, this
- * timing, B-spline and the image mean as fill: continuous_compensate_table()'s
- * result, or NULL when it refuses. */
+ * timing, interpolation and the image mean as fill:
+ * continuous_compensate_table()'s result, or NULL when it refuses. */
 GwyDataField* simscan_file_expected_continuous(GwyContainer *data,
-                                               const ScanTiming *timing);
+                                               const ScanTiming *timing,
+                                               GwyInterpolationType interpolation);
 
 G_END_DECLS
 

@@ -26,6 +26,7 @@
 #include "registration-frames.h"
 #include "localscan-channel.h"
 #include "localscan-params.h"
+#include "compensation-marker.h"
 #include "simscan-file-case.h"
 
 #define TOOL_PATH TEST_BUILDDIR "/tools/gwy-localscan"
@@ -670,6 +671,77 @@ START_TEST(test_channel_option)
                   (const gchar *const[]){ "-c", "6", "-m", "paper", "-o", output, tc.input, NULL }, &exp);
     expected_clear(&exp);
     g_free(output);
+    three_channels_clear(&tc);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* The id of the channel whose title ends in the result suffix. */
+static gint
+result_channel(GwyContainer *data)
+{
+    gint *ids = gwy_app_data_browser_get_data_ids(data), i, found = -1;
+    gchar key[40];
+
+    for (i = 0; ids[i] >= 0; i++) {
+        g_snprintf(key, sizeof(key), "/%d/data/title", ids[i]);
+        if (g_str_has_suffix(get_string(data, key), TITLE_SUFFIX))
+            found = ids[i];
+    }
+    g_free(ids);
+    return found;
+}
+
+/* A result carries its drift table: compensating it again must be refused
+ * in one line, and done when forced, its marker naming the run. */
+START_TEST(test_no_double_correction)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 7);
+    gchar *first = g_build_filename(scratch, "first.gwy", NULL), *output = out_path("again.gwy");
+    gchar *channel, *expected;
+    GwyContainer *out, *meta;
+    const guchar *marker;
+    ThreeChannels tc;
+    ToolRun run;
+    gint id;
+
+    three_channels_init(&tc, rng);
+    run_tool(&run, (const gchar *const[]){ "-o", first, tc.input, NULL });
+    assert_success(&run);
+    tool_run_clear(&run);
+    out = load_gwy(first);
+    id = result_channel(out);
+    ck_assert_int_ge(id, 0);
+    channel = g_strdup_printf("/%d/meta", id);
+    ck_assert(gwy_container_gis_object_by_name(out, channel, &meta));
+    g_free(channel);
+    ck_assert(gwy_container_gis_string_by_name(meta, LOCALSCAN_META_COMPENSATED, &marker));
+    printf("test-gwy-localscan: marker of the result: %s\n", (const gchar*)marker);
+    ck_assert_msg(g_str_has_prefix((const gchar*)marker, "source=stored table, mode=paper, "
+                                   "fill=mean\nstripe,dx,dy"), "marker %s", marker);
+    g_object_unref(out);
+
+    channel = g_strdup_printf("%d", id);
+    run_tool(&run, (const gchar *const[]){ "-c", channel, "-o", output, first, NULL });
+    expected = g_strdup_printf("gwy-localscan: %s channel %d is already local-scan compensated*",
+                               first, id);
+    assert_failure(&run, 1, expected);
+    ck_assert_msg(strstr(run.err, "--force"), "the refusal does not say how to force: %s", run.err);
+    tool_run_clear(&run);
+
+    run_tool(&run, (const gchar *const[]){ "--force", "-c", channel, "-o", output, first, NULL });
+    assert_success(&run);
+    tool_run_clear(&run);
+    out = load_gwy(output);
+    ck_assert_int_ge(result_channel(out), 0);
+    g_object_unref(out);
+
+    g_unlink(output);
+    g_unlink(first);
+    g_free(expected);
+    g_free(channel);
+    g_free(output);
+    g_free(first);
     three_channels_clear(&tc);
     g_rand_free(rng);
 }
@@ -1894,6 +1966,11 @@ END_TEST
 
 static const SimscanFileCase *const simscan_cases[] = { &simscan_file_default, &simscan_file_up };
 
+/* Continuous mode is judged against paper mode for its sub-pixel
+ * positions, so with a sub-pixel kernel (the default keeps heights). */
+#define SIMSCAN_KERNEL GWY_INTERPOLATION_BSPLINE
+#define SIMSCAN_KERNEL_NAME "bspline"
+
 /* Runs gwy-localscan in a mode; the loaded output, or NULL when the tool
  * refused (its one line in *message). */
 static GwyContainer*
@@ -1903,7 +1980,8 @@ run_simscan_mode(const gchar *input, const gchar *mode, gchar **message)
     GwyContainer *out = NULL;
     ToolRun run;
 
-    run_tool(&run, (const gchar *const[]){ "-m", mode, "-o", output, input, NULL });
+    run_tool(&run, (const gchar *const[]){ "-m", mode, "--interpolation", SIMSCAN_KERNEL_NAME,
+                                           "-o", output, input, NULL });
     if (run.status == 0) {
         assert_success(&run);
         out = load_gwy(output);
@@ -1952,7 +2030,7 @@ check_simscan_timing(const SimscanFileCase *fcase, guint32 seed, GwyContainer *i
                   && found.frame_start == 0.0,
                   "%s, seed %u: read %g s, direction %d, frame start %g s", fcase->name, seed,
                   found.line_time, found.direction, found.frame_start);
-    expected = simscan_file_expected_continuous(in, &told);
+    expected = simscan_file_expected_continuous(in, &told, SIMSCAN_KERNEL);
     ck_assert_msg((expected != NULL) == (out != NULL), "%s, seed %u: the tool %s, the expected result %s",
                   fcase->name, seed, out ? "succeeded" : "failed", expected ? "exists" : "does not");
     if (expected) {
@@ -2035,6 +2113,7 @@ gwy_localscan_suite(void)
     tcase_add_checked_fixture(tc, setup_scratch, teardown_scratch);
     tcase_add_test(tc, test_stored_table_first_channel);
     tcase_add_test(tc, test_channel_option);
+    tcase_add_test(tc, test_no_double_correction);
     tcase_add_loop_test(tc, test_table_file_physical_units, 0, G_N_ELEMENTS(unit_names));
     tcase_add_loop_test(tc, test_random_cases, 0, N_RANDOM_CASES);
     tcase_add_test(tc, test_write_drift);

@@ -335,18 +335,57 @@ find_labelled_spin(GtkWidget *widget, const gchar *label_text)
     return found;
 }
 
+static GtkWidget*
+find_named_widget(GtkWidget *widget, const gchar *name)
+{
+    GList *children, *l;
+    GtkWidget *found = NULL;
+
+    if (!g_strcmp0(gtk_widget_get_name(widget), name))
+        return widget;
+    if (!GTK_IS_CONTAINER(widget))
+        return NULL;
+    children = gtk_container_get_children(GTK_CONTAINER(widget));
+    for (l = children; l && !found; l = g_list_next(l))
+        found = find_named_widget(GTK_WIDGET(l->data), name);
+    g_list_free(children);
+    return found;
+}
+
+static gboolean
+chooser_offers(GtkTreeModel *model, gint datano, gint id)
+{
+    GtkTreeIter iter;
+    gboolean more;
+    gint d, i;
+
+    for (more = gtk_tree_model_get_iter_first(model, &iter); more;
+         more = gtk_tree_model_iter_next(model, &iter)) {
+        gtk_tree_model_get(model, &iter, LOCALSCAN_REFERENCE_COLUMN_DATANO, &d,
+                           LOCALSCAN_REFERENCE_COLUMN_ID, &i, -1);
+        if (d == datano && i == id)
+            return TRUE;
+    }
+    return FALSE;
+}
+
 static void
 inspect_reference_chooser(GtkWidget *dialog, ReferenceProbe *probe)
 {
-    GtkWidget *chooser = find_widget(dialog, GWY_TYPE_DATA_CHOOSER, NULL);
+    GtkWidget *chooser = find_named_widget(dialog, LOCALSCAN_REFERENCE_WIDGET_NAME);
+    gint datano = gwy_app_data_browser_get_number(probe->data);
+    GtkTreeModel *model;
+    GtkTreeIter iter;
 
-    ck_assert_msg(chooser, "no reference chooser in the dialog");
-    probe->offered = gtk_tree_model_iter_n_children(gtk_combo_box_get_model(GTK_COMBO_BOX(chooser)), NULL);
-    gwy_data_chooser_get_active(GWY_DATA_CHOOSER(chooser), &probe->chosen);
-    /* set_active finds only offered channels; none of these may be. */
-    probe->offers_other_size = gwy_data_chooser_set_active(GWY_DATA_CHOOSER(chooser), probe->data, 2);
-    probe->offers_other_real = gwy_data_chooser_set_active(GWY_DATA_CHOOSER(chooser), probe->data, 3);
-    probe->offers_itself = gwy_data_chooser_set_active(GWY_DATA_CHOOSER(chooser), probe->data, 1);
+    ck_assert_msg(chooser && GTK_IS_COMBO_BOX(chooser), "no reference chooser in the dialog");
+    model = gtk_combo_box_get_model(GTK_COMBO_BOX(chooser));
+    probe->offered = gtk_tree_model_iter_n_children(model, NULL);
+    probe->chosen = -1;
+    if (gtk_combo_box_get_active_iter(GTK_COMBO_BOX(chooser), &iter))
+        gtk_tree_model_get(model, &iter, LOCALSCAN_REFERENCE_COLUMN_ID, &probe->chosen, -1);
+    probe->offers_other_size = chooser_offers(model, datano, 2);
+    probe->offers_other_real = chooser_offers(model, datano, 3);
+    probe->offers_itself = chooser_offers(model, datano, 1);
 }
 
 static gint

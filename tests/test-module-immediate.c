@@ -23,6 +23,7 @@
 #include "continuous-compensate.h"
 #include "localscan-channel.h"
 #include "localscan-params.h"
+#include "compensation-marker.h"
 #include "scan-timing-meta.h"
 #include "registration-frames.h"
 #include "simscan-file-case.h"
@@ -479,6 +480,42 @@ START_TEST(test_csv_file_source)
 }
 END_TEST
 
+/* Repeat last on the result: the result carries the table it was made
+ * with, and must not be compensated again unless forced. */
+START_TEST(test_result_not_compensated_twice)
+{
+    GwyDataField *field = make_worked_example(2, 1e-9, 1e-9, "m");
+    GwyContainer *data = make_container(field, NULL);
+    ModuleSettings ms = default_settings;
+    gchar *message = NULL;
+    gint newid, again;
+
+    ms.source = LOCALSCAN_SOURCE_STORED;
+    localscan_channel_store_table_text(data, 0, "stripe,dx,dy\n0,2,2\n1,-2,0\n2,0,-2\n");
+    set_module_settings(&ms);
+    newid = run_module(data, NULL);
+    ck_assert_int_eq(newid, 1);
+    ck_assert(compensation_marker_get(data, newid));
+    ck_assert(!compensation_marker_get(data, 0));
+
+    gwy_app_data_browser_select_data_field(data, newid);
+    again = run_module(data, &message);
+    printf("test-module-immediate: Repeat last on the result says: %s", message);
+    ck_assert_int_eq(again, -1);
+    ck_assert_msg(strstr(message, "already local-scan compensated") && !strchr(message, '\n')[1],
+                  "not one line about the double correction: %s", message);
+    g_free(message);
+
+    gwy_container_set_boolean_by_name(gwy_app_settings_get(), LOCALSCAN_SETTINGS_KEY(FORCE), TRUE);
+    again = run_module(data, NULL);
+    gwy_container_set_boolean_by_name(gwy_app_settings_get(), LOCALSCAN_SETTINGS_KEY(FORCE), FALSE);
+    ck_assert_int_eq(again, 2);
+
+    g_object_unref(field);
+    drop_container(data);
+}
+END_TEST
+
 START_TEST(test_fill_values)
 {
     static const gint fills[3] = { LOCALSCAN_FILL_ZERO, LOCALSCAN_FILL_MINIMUM, LOCALSCAN_FILL_MAXIMUM };
@@ -920,6 +957,9 @@ set_reference_settings(gint mode, gboolean plot_drift)
     ms.stripes = REF_STRIPES;
     ms.mode = mode;
     ms.plot_drift = plot_drift;
+    /* Sub-pixel accuracy of the measured drift is judged with a sub-pixel
+     * kernel; the default nearest pixel keeps heights instead. */
+    ms.interpolation = GWY_INTERPOLATION_BSPLINE;
     set_module_settings(&ms);
 }
 
@@ -1086,8 +1126,10 @@ START_TEST(test_reference_graph_and_log)
     entry = gwy_string_list_get(log, gwy_string_list_get_length(log) - 1);
     printf("test-module-immediate: log entry: %s\n", entry);
     ck_assert_msg(g_str_has_prefix(entry, "proc::" LOCALSCAN_FUNCTION_NAME "("), "log entry %s", entry);
-    ck_assert_msg(strstr(entry, "source=2"), "log entry %s", entry);
-    ck_assert_msg(strstr(entry, "reference-channel=0"), "log entry %s", entry);
+    /* Settings by name, the reference as "file — channel". */
+    ck_assert_msg(strstr(entry, "source=reference"), "log entry %s", entry);
+    ck_assert_msg(strstr(entry, " \342\200\224 Reference"), "log entry %s", entry);
+    ck_assert_msg(strstr(entry, "mode=paper"), "log entry %s", entry);
 
     drift_table_free(table);
     drop_container(data);
@@ -1253,15 +1295,28 @@ load_simscan_file(const SimscanFileCase *fcase, guint32 seed)
 /* The direction setting is the opposite of the file's: the metadata must
  * win. */
 static gint
-run_simscan_mode(GwyContainer *data, const SimscanFileCase *fcase, gint mode)
+run_simscan_mode_with(GwyContainer *data, const SimscanFileCase *fcase, gint mode,
+                      gint interpolation)
 {
     ModuleSettings ms = default_settings;
 
     ms.mode = mode;
+    ms.interpolation = interpolation;
     ms.direction = (fcase->direction == SCAN_DIRECTION_UP ? SCAN_DIRECTION_DOWN : SCAN_DIRECTION_UP);
     set_module_settings(&ms);
     gwy_app_data_browser_select_data_field(data, 0);
     return run_module(data, NULL);
+}
+
+/* Continuous mode is judged against paper mode for its sub-pixel
+ * positions, so with a sub-pixel kernel; the default nearest pixel keeps
+ * heights instead (tests/test-height-keeping). */
+#define SIMSCAN_KERNEL GWY_INTERPOLATION_BSPLINE
+
+static gint
+run_simscan_mode(GwyContainer *data, const SimscanFileCase *fcase, gint mode)
+{
+    return run_simscan_mode_with(data, fcase, mode, SIMSCAN_KERNEL);
 }
 
 /* The timing read from the file is what simscan was told, and continuous
@@ -1282,7 +1337,7 @@ check_simscan_timing(GwyContainer *data, const SimscanFileCase *fcase, guint32 s
                   "%s, seed %u: timing %g s, direction %d, frame start %g s read; simscan was told %g s, %d",
                   fcase->name, seed, found.line_time, found.direction, found.frame_start,
                   told.line_time, told.direction);
-    expected = simscan_file_expected_continuous(data, &told);
+    expected = simscan_file_expected_continuous(data, &told, SIMSCAN_KERNEL);
     id = run_simscan_mode(data, fcase, LOCALSCAN_MODE_CONTINUOUS);
     if (!expected)
         ck_assert_int_eq(id, -1);
@@ -1360,8 +1415,12 @@ START_TEST(test_simscan_frame_start)
     gdouble t, range, diff;
     gint s, id;
 
+    /* A kernel continuous in the source position: the nearest pixel (the
+     * default) flips wherever the shifted clock's rounding crosses half a
+     * pixel, which says nothing about the timing. */
     ck_assert(table);
-    id = run_simscan_mode(data, &simscan_file_up, LOCALSCAN_MODE_CONTINUOUS);
+    id = run_simscan_mode_with(data, &simscan_file_up, LOCALSCAN_MODE_CONTINUOUS,
+                               GWY_INTERPOLATION_BSPLINE);
     ck_assert_int_ge(id, 0);
     first = get_field(data, gwy_app_get_data_key_for_id(id));
     for (s = 0; s < table->n_stripes; s++) {
@@ -1373,7 +1432,8 @@ START_TEST(test_simscan_frame_start)
     localscan_channel_store_table(data, 0, table);
     ck_assert(gwy_container_gis_object_by_name(data, "/0/meta", &meta));
     set_string(meta, "Frame start (s)", "1000");
-    id = run_simscan_mode(data, &simscan_file_up, LOCALSCAN_MODE_CONTINUOUS);
+    id = run_simscan_mode_with(data, &simscan_file_up, LOCALSCAN_MODE_CONTINUOUS,
+                               GWY_INTERPOLATION_BSPLINE);
     ck_assert_int_ge(id, 0);
     later = gwy_data_field_duplicate(get_field(data, gwy_app_get_data_key_for_id(id)));
     range = gwy_data_field_get_max(first) - gwy_data_field_get_min(first);
@@ -1436,6 +1496,7 @@ main(void)
     tcase_add_loop_test(tc, test_random_table_matches_paper_compensate, 0, 8);
     tcase_add_test(tc, test_result_channel_items);
     tcase_add_test(tc, test_csv_file_source);
+    tcase_add_test(tc, test_result_not_compensated_twice);
     tcase_add_test(tc, test_fill_values);
     tcase_add_test(tc, test_mask_only_when_wanted);
     tcase_add_test(tc, test_drift_graph);

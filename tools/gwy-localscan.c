@@ -21,6 +21,8 @@
 #include "localscan-channel.h"
 #include "headless-run.h"
 #include "localscan-settings.h"
+#include "compensation-marker.h"
+#include "run-description.h"
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -49,6 +51,9 @@ typedef struct {
     gchar *line_time_arg;
     gchar *direction_name;
     gchar *frame_start_arg;
+    gchar *interpolation_name;
+    gint interpolation;          /* -1: the user's setting */
+    gboolean force;
     gboolean show_version;
     gchar **inputs;
 } Options;
@@ -56,6 +61,7 @@ typedef struct {
 static Options options = {
     .channel = CHANNEL_FIRST,
     .stripes = STRIPES_UNSET,
+    .interpolation = -1,
 };
 
 /* --reference FILE[:ID] taken apart. */
@@ -100,6 +106,12 @@ static GOptionEntry option_table[] = {
       N_("Continuous mode: start of the frame, seconds in the clock of the "
          "table's t_image and t_local, where the file's metadata does not give "
          "it (the metadata wins; default 0)"), N_("S") },
+    { "interpolation", 0, 0, G_OPTION_ARG_STRING, &options.interpolation_name,
+      NULL, N_("NAME") },   /* interpolation_help() */
+    { "force", 0, 0, G_OPTION_ARG_NONE, &options.force,
+      N_("Compensate a channel that is already local-scan compensated (it carries the "
+         "metadata item 'Local-scan compensation'); without it such a channel is refused"),
+      NULL },
     { "write-drift", 0, 0, G_OPTION_ARG_FILENAME, &options.write_drift,
       N_("Also write the drift table used to TABLE.csv"), N_("TABLE.csv") },
     { "version", 0, 0, G_OPTION_ARG_NONE, &options.show_version,
@@ -161,6 +173,7 @@ free_options(void)
     g_free(options.line_time_arg);
     g_free(options.direction_name);
     g_free(options.frame_start_arg);
+    g_free(options.interpolation_name);
     g_free(reference_spec.file);
     g_strfreev(options.inputs);
 }
@@ -172,6 +185,18 @@ stripes_help(void)
     return g_strdup_printf(_("Register N stripes with --reference (default %d; at most %d and the "
                              "image's rows)"),
                            LOCALSCAN_STRIPES_DEFAULT, LOCALSCAN_STRIPES_MAX);
+}
+
+static gchar*
+interpolation_help(void)
+{
+    gchar *names = run_description_interpolation_names(), *help;
+
+    help = g_strdup_printf(_("Continuous mode: interpolation kernel, one of %s (default: the "
+                             "module's setting, initially %s, which keeps heights)"),
+                           names, run_description_interpolation_name(LOCALSCAN_DEFAULT_INTERPOLATION));
+    g_free(names);
+    return help;
 }
 
 static GOptionEntry*
@@ -190,12 +215,13 @@ static gboolean
 parse_options(gint *argc, gchar ***argv, GError **error)
 {
     GOptionContext *context;
-    gchar *help = stripes_help();
+    gchar *help = stripes_help(), *kernel_help = interpolation_help();
     gboolean ok;
 
-    /* Entries with a description are translated by the context; this one
-     * already is. */
+    /* Entries with a description are translated by the context; these
+     * already are. */
     find_option("stripes")->description = help;
+    find_option("interpolation")->description = kernel_help;
 
     context = g_option_context_new(NULL);
     g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
@@ -210,6 +236,7 @@ parse_options(gint *argc, gchar ***argv, GError **error)
     ok = g_option_context_parse(context, argc, argv, error);
     g_option_context_free(context);
     g_free(help);
+    g_free(kernel_help);
     return ok;
 }
 
@@ -375,6 +402,16 @@ check_command_line(GError **error)
         return NULL;
     if (!parse_timing_options(error))
         return NULL;
+    if (options.interpolation_name
+        && (options.interpolation
+            = run_description_interpolation_from_name(options.interpolation_name)) < 0) {
+        gchar *names = run_description_interpolation_names();
+
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("unknown interpolation '%s' (known: %s)"), options.interpolation_name, names);
+        g_free(names);
+        return NULL;
+    }
     if (!check_outputs_distinct(error))
         return NULL;
     return find_mode(options.mode_name, error);
@@ -537,6 +574,8 @@ settings_interpolation(void)
 {
     gint32 interpolation = LOCALSCAN_DEFAULT_INTERPOLATION;
 
+    if (options.interpolation >= 0)
+        return options.interpolation;
     gwy_container_gis_int32_by_name(gwy_app_settings_get(), LOCALSCAN_SETTINGS_KEY(INTERPOLATION),
                                     &interpolation);
     return interpolation;
@@ -611,6 +650,8 @@ compensate_channel(GwyContainer *data, gint id, const gchar *table_file,
     params.line_time = timing_fallback.line_time;
     params.direction = timing_fallback.direction;
     params.frame_start = timing_fallback.frame_start;
+    params.interpolation = options.interpolation;
+    params.force = options.force;
     localscan_settings_apply(&params);
     return headless_run_process(data, id, LOCALSCAN_FUNCTION_NAME, error) >= 0;
 }
@@ -659,6 +700,19 @@ save_results(GwyContainer *data, const DriftTable *table, GError **error)
     }
     ok = ok && output_files_commit(files, error);
     output_files_free(files);
+    return ok;
+}
+
+/* The result of an earlier run carries its drift table, so only the
+ * marker stops the drift from being applied twice. */
+static gboolean
+check_not_compensated(GwyContainer *data, const gchar *filename, gint id, GError **error)
+{
+    gchar *name = describe_channel(filename, id);
+    gboolean ok = compensation_marker_check(data, id, name, options.force,
+                                            _("give --force to compensate it again"), error);
+
+    g_free(name);
     return ok;
 }
 
@@ -715,6 +769,8 @@ run_batch(const CompensationMode *mode, GError **error)
     if (!(data = headless_run_load(input, error)))
         return FALSE;
     if ((id = pick_channel(data, input, options.channel, error)) < 0)
+        goto end;
+    if (!check_not_compensated(data, input, id, error))
         goto end;
     if (!(table = obtain_drift_table(data, input, id, mode, error)))
         goto end;

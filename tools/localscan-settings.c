@@ -31,4 +31,7 @@ localscan_settings_apply(const LocalscanBatchParams *params)
     gwy_container_set_int32_by_name(settings, KEY(FILL), LOCALSCAN_FILL_MEAN);
     gwy_container_set_boolean_by_name(settings, KEY(ADD_MASK), TRUE);
     gwy_container_set_boolean_by_name(settings, KEY(PLOT_DRIFT), FALSE);
+    if (params->interpolation >= 0)
+        gwy_container_set_int32_by_name(settings, KEY(INTERPOLATION), params->interpolation);
+    gwy_container_set_boolean_by_name(settings, KEY(FORCE), params->force);
 }

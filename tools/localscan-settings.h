@@ -24,6 +24,8 @@ typedef struct {
     gdouble line_time;
     ScanDirection direction;
     gdouble frame_start;
+    gint interpolation;          /* -1: the user's setting stays */
+    gboolean force;              /* compensate a compensated channel again */
     /* Reference registration adds the reference image and stripe count. */
 } LocalscanBatchParams;
 

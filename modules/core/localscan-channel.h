@@ -35,6 +35,7 @@ typedef enum {
     LOCALSCAN_CHANNEL_ERROR_UNITS,        /* physical table, non-metre image */
     LOCALSCAN_CHANNEL_ERROR_REFERENCE,    /* no usable reference image */
     LOCALSCAN_CHANNEL_ERROR_STRIPES,      /* more stripes than image rows */
+    LOCALSCAN_CHANNEL_ERROR_COMPENSATED,  /* the channel is a result already */
 } LocalscanChannelError;
 
 /* The values are stored in the settings: never renumber them. */

@@ -34,6 +34,7 @@
 #define LOCALSCAN_KEY_ADD_MASK          "add-mask"
 #define LOCALSCAN_KEY_PLOT_DRIFT        "plot-drift"
 #define LOCALSCAN_KEY_REFERENCE_CHANNEL "reference-channel"
+#define LOCALSCAN_KEY_FORCE             "force"
 
 #define LOCALSCAN_DEFAULT_SOURCE        LOCALSCAN_SOURCE_STORED
 #define LOCALSCAN_DEFAULT_MODE          LOCALSCAN_MODE_PAPER
@@ -42,6 +43,8 @@
 #define LOCALSCAN_DEFAULT_FILL          LOCALSCAN_FILL_MEAN
 #define LOCALSCAN_DEFAULT_ADD_MASK      TRUE
 #define LOCALSCAN_DEFAULT_PLOT_DRIFT    FALSE
+/* A compensated channel is compensated again only when forced. */
+#define LOCALSCAN_DEFAULT_FORCE         FALSE
 
 /* Stripes registered against a reference image. */
 #define LOCALSCAN_STRIPES_MIN           1
@@ -58,6 +61,18 @@
 #define LOCALSCAN_FRAME_START_MIN       -1e9
 #define LOCALSCAN_FRAME_START_MAX       1e9
 #define LOCALSCAN_FRAME_START_DEFAULT   0.0
+
+/* The dialog's reference chooser, a GtkComboBox named so that tests find
+ * it; its model's columns: label (string), data number, channel id, rank
+ * (ints). */
+#define LOCALSCAN_REFERENCE_WIDGET_NAME "localscan-reference"
+enum {
+    LOCALSCAN_REFERENCE_COLUMN_LABEL,
+    LOCALSCAN_REFERENCE_COLUMN_DATANO,
+    LOCALSCAN_REFERENCE_COLUMN_ID,
+    LOCALSCAN_REFERENCE_COLUMN_RANK,
+    LOCALSCAN_REFERENCE_NCOLUMNS
+};
 
 /* A channel id of the image's own file, for batch callers; -1: none. */
 #define LOCALSCAN_REFERENCE_CHANNEL_NONE -1
