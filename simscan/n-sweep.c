@@ -101,6 +101,25 @@ check_sweep_config(const SimscanConfig *config, GError **error)
     return TRUE;
 }
 
+/* The plot's title names the drift as simscan's options do, except the
+ * model type "none", which is no additional effect on top of the constant
+ * velocity: the title says the velocity (or that there is no drift). */
+static gchar*
+sweep_title(const SimscanConfig *config)
+{
+    const DriftModel *drift = &config->drift;
+
+    if (config->figure6)
+        return g_strdup_printf(_("Figure 6 drift, seed %u"), config->seed);
+    if (drift->type != DRIFT_MODEL_NONE)
+        return g_strdup_printf(_("%s drift, seed %u"), drift_model_type_name(drift->type),
+                               config->seed);
+    if (drift->v[0] == 0.0 && drift->v[1] == 0.0)
+        return g_strdup_printf(_("no drift, seed %u"), config->seed);
+    return g_strdup_printf(_("constant drift %.3g, %.3g nm/s, seed %u"),
+                           1e9*drift->v[0], 1e9*drift->v[1], config->seed);
+}
+
 static gboolean
 run_sweep(const SimscanConfig *config, GArray *list, const gchar *plot,
           GError **error)
@@ -117,10 +136,7 @@ run_sweep(const SimscanConfig *config, GArray *list, const gchar *plot,
     for (i = 0; i < list->len; i++)
         sweep_point(scene, g_array_index(list, gint, i), points + i);
     if (plot) {
-        title = g_strdup_printf(_("drift %s, seed %u"),
-                                config->figure6 ? "figure6"
-                                : drift_model_type_name(config->drift.type),
-                                config->seed);
+        title = sweep_title(config);
         ok = sweep_plot_write_png(points, list->len, title, plot, error);
         g_free(title);
     }
