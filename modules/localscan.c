@@ -21,6 +21,7 @@
 #include "compensation-marker.h"
 #include "reference-choice.h"
 #include "run-description.h"
+#include "preview-field.h"
 
 /* Our strings live in our own domain, not in Gwyddion's. */
 #undef _
@@ -77,6 +78,8 @@ typedef struct {
     LocalscanTimingFound timing_found;
     gint batch_reference;     /* reference-channel of an IMMEDIATE run, or -1 */
     MeasuredDrift measured;
+    gboolean show_progress;   /* the final run in Gwyddion's wait dialog */
+    gboolean cancelled;       /* the user cancelled it there */
 } ModuleArgs;
 
 typedef struct {
@@ -90,6 +93,13 @@ typedef struct {
     GtkListStore *references;
     LocalscanTimingFound timing_in_meta;
     guint stripes_settle_id;
+    /* A large image is previewed on a reduced copy (preview-field.h), and
+     * so is its reference, registered against it. */
+    PreviewField *preview;
+    PreviewField *preview_reference;
+    GwyAppDataId preview_reference_id;
+    MeasuredDrift preview_measured;
+    LocalscanApplied preview_applied;
 } ModuleGUI;
 
 static gboolean         module_register     (void);
@@ -104,6 +114,12 @@ static gboolean         check_not_compensated(ModuleArgs *args,
 static void             remember_reference_channel   (ModuleArgs *args);
 static gboolean         execute             (ModuleArgs *args,
                                              GError **error);
+static gboolean         execute_preview     (ModuleGUI *gui,
+                                             GError **error);
+static DriftTable*      load_drift_table    (ModuleArgs *args,
+                                             GError **error);
+static gboolean         progress_stage      (ModuleArgs *args,
+                                             const gchar *message);
 static void             create_outputs      (ModuleArgs *args);
 static void             add_drift_graph     (ModuleArgs *args);
 static void             report_error        (ModuleArgs *args,
@@ -206,7 +222,8 @@ define_module_params(void)
     gwy_param_def_add_gwyenum(paramdef, PARAM_MODE, LOCALSCAN_KEY_MODE, _("Mode"),
                               translate_enum(modes, G_N_ELEMENTS(modes)),
                               G_N_ELEMENTS(modes), LOCALSCAN_DEFAULT_MODE);
-    gwy_param_def_add_enum(paramdef, PARAM_INTERPOLATION, LOCALSCAN_KEY_INTERPOLATION, NULL,
+    gwy_param_def_add_enum(paramdef, PARAM_INTERPOLATION, LOCALSCAN_KEY_INTERPOLATION,
+                           _("_Interpolation"),
                            GWY_TYPE_INTERPOLATION_TYPE, LOCALSCAN_DEFAULT_INTERPOLATION);
     gwy_param_def_add_gwyenum(paramdef, PARAM_DIRECTION, LOCALSCAN_KEY_DIRECTION,
                               _("Slow scan _direction"),
@@ -245,6 +262,7 @@ localscan_drift(GwyContainer *data, GwyRunType runtype, G_GNUC_UNUSED const gcha
     GwyDialogOutcome outcome = GWY_DIALOG_PROCEED;
     GError *error = NULL;
     ModuleArgs args;
+    gboolean ok;
 
     g_return_if_fail(runtype & RUN_MODES);
     gwy_clear(&args, 1);
@@ -253,8 +271,9 @@ localscan_drift(GwyContainer *data, GwyRunType runtype, G_GNUC_UNUSED const gcha
                                      0);
     g_return_if_fail(args.field);
     args.data = data;
-    args.result = gwy_data_field_new_alike(args.field, TRUE);
-    args.mask = gwy_data_field_new_alike(args.field, TRUE);
+    /* Compensation writes every pixel of both. */
+    args.result = gwy_data_field_new_alike(args.field, FALSE);
+    args.mask = gwy_data_field_new_alike(args.field, FALSE);
     args.params = gwy_params_new_from_settings(define_module_params());
     use_reference_channel_setting(&args, runtype);
     if (!check_not_compensated(&args, runtype))
@@ -267,14 +286,24 @@ localscan_drift(GwyContainer *data, GwyRunType runtype, G_GNUC_UNUSED const gcha
         if (outcome == GWY_DIALOG_CANCEL)
             goto end;
     }
-    /* Computed again even after a preview: it is cheap, and so the GUI and
-     * IMMEDIATE runs take exactly the same path to the result.  Only the
-     * registration against a reference is slow; its table is reused when
-     * the reference and the stripe count are still those it was measured
-     * with. */
-    if (execute(&args, &error))
+    /* Computed again after a preview, which may have been of a reduced
+     * copy, so that the GUI and IMMEDIATE runs take exactly the same path to
+     * the result.  A registration of the whole image is reused when the
+     * reference and the stripe count are still those it was measured with.
+     * With a GUI the run shows Gwyddion's wait dialog; cancelled, it adds
+     * nothing. */
+    args.show_progress = (runtype == GWY_RUN_INTERACTIVE || gwy_app_main_window_get());
+    if (args.show_progress)
+        gwy_app_wait_start(gwy_app_find_window_for_channel(data, args.id),
+                           _("Local-scan drift compensation..."));
+    ok = execute(&args, &error);
+    if (args.show_progress) {
+        ok = ok && progress_stage(&args, _("Creating the channel..."));
+        gwy_app_wait_finish();
+    }
+    if (ok)
         create_outputs(&args);
-    else
+    else if (!args.cancelled)
         report_error(&args, error);
 
 end:
@@ -424,25 +453,20 @@ measured_drift_clear(MeasuredDrift *measured)
     gwy_clear(measured, 1);
 }
 
-/* The exact measured table, from the last registration when it had the same
- * reference and stripe count (its failure is kept just as well). */
+/* The exact table registering image against reference measured, from the
+ * last registration when it had the same reference and stripe count (its
+ * failure is kept just as well). */
 static const DriftTable*
-measure_reference_drift(ModuleArgs *args, GError **error)
+measure_drift(MeasuredDrift *measured, GwyDataField *image, GwyDataField *reference,
+              GwyAppDataId refid, gint n, GError **error)
 {
-    MeasuredDrift *measured = &args->measured;
-    gint n = gwy_params_get_int(args->params, PARAM_STRIPES);
-    GwyDataField *reference;
-    GwyAppDataId refid;
-
-    if (!(reference = find_reference(args, &refid, error)))
-        return NULL;
     if (!measured->valid || measured->stripes != n
         || measured->reference.datano != refid.datano || measured->reference.id != refid.id) {
         measured_drift_clear(measured);
-        g_debug("%s: registering %d stripes against channel %d",
-                LOCALSCAN_FUNCTION_NAME, n, refid.id);
-        measured->table = stripe_registration_table_for_fields(args->field, reference, n, 0.0,
-                                                               FALSE,
+        g_debug("%s: registering %d stripes against channel %d (%d x %d px)",
+                LOCALSCAN_FUNCTION_NAME, n, refid.id,
+                gwy_data_field_get_xres(image), gwy_data_field_get_yres(image));
+        measured->table = stripe_registration_table_for_fields(image, reference, n, 0.0, FALSE,
                                                                &measured->error);
         measured->valid = TRUE;
         measured->reference = refid;
@@ -453,6 +477,18 @@ measure_reference_drift(ModuleArgs *args, GError **error)
         return NULL;
     }
     return measured->table;
+}
+
+static const DriftTable*
+measure_reference_drift(ModuleArgs *args, GError **error)
+{
+    GwyDataField *reference;
+    GwyAppDataId refid;
+
+    if (!(reference = find_reference(args, &refid, error)))
+        return NULL;
+    return measure_drift(&args->measured, args->field, reference, refid,
+                         gwy_params_get_int(args->params, PARAM_STRIPES), error);
 }
 
 /* Paper mode shifts by whole pixels; the exact columns stay for continuous
@@ -489,32 +525,54 @@ load_drift_table(ModuleArgs *args, GError **error)
     return reference_drift_table(args, error);
 }
 
+/* Between the stages of a run in the wait dialog: FALSE when the user
+ * cancelled it. */
 static gboolean
-execute(ModuleArgs *args, GError **error)
+progress_stage(ModuleArgs *args, const gchar *message)
+{
+    if (!args->show_progress || args->cancelled)
+        return !args->cancelled;
+    args->cancelled = !gwy_app_wait_set_message(message);
+    return !args->cancelled;
+}
+
+/* The options of the run: the timing settings are only the fallbacks for
+ * files that do not say how they were scanned. */
+static void
+gather_options(ModuleArgs *args, LocalscanOptions *options)
 {
     GwyParams *params = args->params;
-    LocalscanOptions options;
 
-    if (args->table)
-        drift_table_free(args->table);
-    localscan_applied_clear(&args->applied);
-    if (!(args->table = load_drift_table(args, error)))
-        return FALSE;
-
-    /* The timing settings are only the fallbacks for files that do not say
-     * how they were scanned. */
     args->timing_found
         = localscan_channel_scan_timing_fallback(args->data, args->id,
                                                  gwy_params_get_double(params, PARAM_LINE_TIME),
                                                  gwy_params_get_enum(params, PARAM_DIRECTION),
                                                  gwy_params_get_double(params, PARAM_FRAME_START),
                                                  &args->timing);
-    options.mode = gwy_params_get_enum(params, PARAM_MODE);
-    options.fill = gwy_params_get_enum(params, PARAM_FILL);
-    options.interpolation = gwy_params_get_enum(params, PARAM_INTERPOLATION);
-    options.line_time = args->timing.line_time;
-    options.direction = args->timing.direction;
-    options.frame_start = args->timing.frame_start;
+    options->mode = gwy_params_get_enum(params, PARAM_MODE);
+    options->fill = gwy_params_get_enum(params, PARAM_FILL);
+    options->interpolation = gwy_params_get_enum(params, PARAM_INTERPOLATION);
+    options->line_time = args->timing.line_time;
+    options->direction = args->timing.direction;
+    options->frame_start = args->timing.frame_start;
+}
+
+static gboolean
+execute(ModuleArgs *args, GError **error)
+{
+    LocalscanOptions options;
+
+    if (args->table)
+        drift_table_free(args->table);
+    args->table = NULL;
+    localscan_applied_clear(&args->applied);
+    if (!progress_stage(args, _("Reading the drift...")))
+        return FALSE;
+    if (!(args->table = load_drift_table(args, error)))
+        return FALSE;
+    if (!progress_stage(args, _("Compensating...")))
+        return FALSE;
+    gather_options(args, &options);
     return localscan_compensate_field(args->field, args->table, &options, args->result, args->mask,
                                       &args->applied, error);
 }
@@ -696,6 +754,112 @@ report_error(ModuleArgs *args, const GError *error)
     gtk_widget_destroy(dialog);
 }
 
+/* A label's or button's text as the user reads it: no mnemonic
+ * underscore, no colon the parameter table appends. */
+static gchar*
+plain_label(const gchar *text)
+{
+    GString *plain = g_string_new(NULL);
+    const gchar *p;
+
+    for (p = text; *p; p++) {
+        if (*p != '_')
+            g_string_append_c(plain, *p);
+    }
+    if (plain->len && plain->str[plain->len - 1] == ':')
+        g_string_truncate(plain, plain->len - 1);
+    return g_string_free(plain, FALSE);
+}
+
+static const gchar*
+find_tooltip(const gchar *text)
+{
+    /* Keyed by the labels of define_module_params(), as translated. */
+    static const gchar *const tooltips[][2] = {
+        { N_("Table stored with the image"),
+          N_("The drift table in the channel's metadata (item 'Local-scan drift table'), as "
+             "simscan and the local-scan measurement store it") },
+        { N_("Table file (CSV)"),
+          N_("A drift table file: stripe,dx,dy per row, in px, nm, um or m") },
+        { N_("Registration to a reference"),
+          N_("Measure the drift of every stripe by registering it against another scan of "
+             "the same area, made without (or with other) drift") },
+        { N_("Table file"), N_("The CSV drift table to apply") },
+        { N_("Stripes"),
+          N_("How many stripes along the slow axis are registered against the reference") },
+        { N_("Paper (whole-pixel stripes)"),
+          N_("Shift every stripe by whole pixels, exactly as the paper does") },
+        { N_("Continuous (line by line)"),
+          N_("Move every scan line back by the drift at its own scan time, from a drift "
+             "trajectory through the stripe measurements") },
+        { N_("Interpolation"),
+          N_("How continuous mode resamples: Round (nearest pixel, the default) keeps "
+             "heights exactly; the sub-pixel kernels place features more exactly but "
+             "change the peaks of small particles (see docs/heights.md)") },
+        { N_("Slow scan direction"),
+          N_("Whether the image was scanned top to bottom or bottom to top; used only when "
+             "the metadata does not say") },
+        { N_("Line time"),
+          N_("Seconds per scan line, trace and retrace; used only when the metadata does "
+             "not say") },
+        { N_("Frame start"),
+          N_("When the frame started, in the clock of the table's t_image and t_local "
+             "columns; used only when the metadata does not say") },
+        { N_("Fill value"),
+          N_("The value of pixels that no stripe covers after the shift (the paper uses "
+             "the image mean)") },
+        { N_("Mask filled pixels"),
+          N_("Add a mask over the filled pixels to the new channel") },
+        { N_("Plot drift graph"),
+          N_("Add a graph of the drift of every stripe (dx and dy against the stripe's "
+             "position) to the file") },
+        { N_("Mask color"), N_("The colour of the mask in the preview and the new channel") },
+    };
+    guint i;
+
+    for (i = 0; i < G_N_ELEMENTS(tooltips); i++) {
+        gchar *label = plain_label(_(tooltips[i][0]));
+        gboolean found = gwy_strequal(label, text);
+
+        g_free(label);
+        if (found)
+            return _(tooltips[i][1]);
+    }
+    return NULL;
+}
+
+/* GwyParamTable offers no tooltips; its labels and buttons are found by
+ * their text, and a label's tooltip goes to its widget too. */
+static void
+add_tooltips(GtkWidget *widget)
+{
+    const gchar *text = NULL, *tooltip;
+    GtkWidget *target;
+    GList *children, *l;
+    gchar *plain;
+
+    if (GTK_IS_LABEL(widget))
+        text = gtk_label_get_label(GTK_LABEL(widget));
+    else if (GTK_IS_BUTTON(widget))
+        text = gtk_button_get_label(GTK_BUTTON(widget));
+    if (text) {
+        plain = plain_label(text);
+        if ((tooltip = find_tooltip(plain))) {
+            gtk_widget_set_tooltip_text(widget, tooltip);
+            if (GTK_IS_LABEL(widget)
+                && (target = gtk_label_get_mnemonic_widget(GTK_LABEL(widget))))
+                gtk_widget_set_tooltip_text(target, tooltip);
+        }
+        g_free(plain);
+    }
+    if (!GTK_IS_CONTAINER(widget))
+        return;
+    children = gtk_container_get_children(GTK_CONTAINER(widget));
+    for (l = children; l; l = g_list_next(l))
+        add_tooltips(GTK_WIDGET(l->data));
+    g_list_free(children);
+}
+
 static GwyDialogOutcome
 run_gui(ModuleArgs *args)
 {
@@ -708,8 +872,14 @@ run_gui(ModuleArgs *args)
     gwy_clear(&gui, 1);
     gui.args = args;
     gui.data = gwy_container_new();
-    gwy_container_set_object_by_name(gui.data, "/0/data", args->result);
-    gwy_container_set_object_by_name(gui.data, "/0/mask", args->mask);
+    gui.preview = preview_field_new(args->field, PREVIEW_FIELD_SIZE);
+    if (!preview_field_is_reduced(gui.preview)) {
+        /* Previewed exactly: the preview shows the result itself. */
+        preview_field_free(gui.preview);
+        gui.preview = preview_field_new_with_result(args->field, args->result, args->mask);
+    }
+    gwy_container_set_object_by_name(gui.data, "/0/data", preview_field_result(gui.preview));
+    gwy_container_set_object_by_name(gui.data, "/0/mask", preview_field_mask(gui.preview));
     gwy_app_sync_data_items(args->data, gui.data, args->id, 0, FALSE,
                             GWY_DATA_ITEM_GRADIENT,
                             GWY_DATA_ITEM_RANGE_TYPE,
@@ -759,6 +929,7 @@ run_gui(ModuleArgs *args)
     gwy_param_table_append_checkbox(table, PARAM_PLOT_DRIFT);
     gwy_param_table_append_message(table, MESSAGE_STATUS, NULL);
 
+    add_tooltips(gwy_param_table_widget(table));
     gtk_box_pack_start(GTK_BOX(hbox), gwy_param_table_widget(table), TRUE, TRUE, 0);
     gwy_dialog_add_param_table(dialog, table);
 
@@ -770,6 +941,10 @@ run_gui(ModuleArgs *args)
         g_source_remove(gui.stripes_settle_id);
     g_object_unref(gui.drift_gmodel);
     g_object_unref(gui.data);
+    preview_field_free(gui.preview);
+    preview_field_free(gui.preview_reference);
+    measured_drift_clear(&gui.preview_measured);
+    localscan_applied_clear(&gui.preview_applied);
 
     return outcome;
 }
@@ -1084,11 +1259,20 @@ append_timing(GString *status, const ScanTiming *timing, LocalscanTimingFound fo
                            (found & LOCALSCAN_TIMING_FRAME_START) ? from_meta : setting);
 }
 
-/* Short lines: the message must not widen the dialog. */
+/* Short lines: the message must not widen the dialog.  A reduced preview
+ * says so; its filled pixels are counted on it and scaled to the image. */
 static gchar*
-format_status(ModuleArgs *args)
+format_status(ModuleGUI *gui)
 {
+    ModuleArgs *args = gui->args;
     GString *status = g_string_new(NULL);
+
+    if (preview_field_is_reduced(gui->preview)) {
+        g_string_append_printf(status, _("Preview of a %d x %d copy (the result is computed "
+                                         "in full):"),
+                               preview_field_xres(gui->preview), preview_field_yres(gui->preview));
+        g_string_append_c(status, '\n');
+    }
 
     if (gwy_params_get_enum(args->params, PARAM_SOURCE) == LOCALSCAN_SOURCE_REFERENCE)
         append_registration(status, args);
@@ -1103,6 +1287,74 @@ format_status(ModuleArgs *args)
     return g_string_free(status, FALSE);
 }
 
+/* The drift for a reduced preview: a table of the image (stored, file), or
+ * measured by registering the reduced copy against a reduced copy of the
+ * reference, in the copy's pixels; the registration is cached like the
+ * full one. */
+static DriftTable*
+preview_drift_table(ModuleGUI *gui, gboolean *in_preview_px, GError **error)
+{
+    ModuleArgs *args = gui->args;
+    gint n = gwy_params_get_int(args->params, PARAM_STRIPES);
+    const DriftTable *measured;
+    GwyDataField *reference;
+    GwyAppDataId refid;
+
+    *in_preview_px = FALSE;
+    if (gwy_params_get_enum(args->params, PARAM_SOURCE) != LOCALSCAN_SOURCE_REFERENCE)
+        return load_drift_table(args, error);
+    if (!(reference = find_reference(args, &refid, error)))
+        return NULL;
+    /* More stripes than the copy has rows: only the image can tell. */
+    if (n > preview_field_yres(gui->preview))
+        return load_drift_table(args, error);
+    if (!gui->preview_reference || gui->preview_reference_id.datano != refid.datano
+        || gui->preview_reference_id.id != refid.id) {
+        preview_field_free(gui->preview_reference);
+        gui->preview_reference = preview_field_new(reference, PREVIEW_FIELD_SIZE);
+        gui->preview_reference_id = refid;
+    }
+    if (!(measured = measure_drift(&gui->preview_measured, preview_field_source(gui->preview),
+                                   preview_field_source(gui->preview_reference), refid, n, error)))
+        return NULL;
+    *in_preview_px = TRUE;
+    if (gwy_params_get_enum(args->params, PARAM_MODE) == LOCALSCAN_MODE_PAPER)
+        return localscan_table_round_px(measured);
+    return drift_table_copy(measured);
+}
+
+/* A change of a setting on a large image: the reduced copy is compensated;
+ * args->table and args->applied describe it in the image's pixels, for the
+ * status and the drift graph. */
+static gboolean
+execute_preview(ModuleGUI *gui, GError **error)
+{
+    ModuleArgs *args = gui->args;
+    gdouble image_pixels, preview_pixels;
+    LocalscanOptions options;
+    gboolean in_preview_px, ok;
+    DriftTable *table;
+
+    if (args->table)
+        drift_table_free(args->table);
+    args->table = NULL;
+    localscan_applied_clear(&args->applied);
+    localscan_applied_clear(&gui->preview_applied);
+    if (!(table = preview_drift_table(gui, &in_preview_px, error)))
+        return FALSE;
+    gather_options(args, &options);
+    ok = preview_field_compensate(gui->preview, table, in_preview_px, &options,
+                                  &gui->preview_applied, error);
+    args->table = in_preview_px ? preview_field_table_to_image(gui->preview, table) : table;
+    if (in_preview_px)
+        drift_table_free(table);
+    image_pixels = (gdouble)gwy_data_field_get_xres(args->field)*gwy_data_field_get_yres(args->field);
+    preview_pixels = (gdouble)preview_field_xres(gui->preview)*preview_field_yres(gui->preview);
+    args->applied.n_stripes = gui->preview_applied.n_stripes;
+    args->applied.n_filled = GWY_ROUND(gui->preview_applied.n_filled*image_pixels/preview_pixels);
+    return ok;
+}
+
 /* An unusable drift source leaves the source image in the preview, the
  * parser's own message in the dialog and OK insensitive. */
 static void
@@ -1115,25 +1367,29 @@ preview(gpointer user_data)
     gchar *text;
 
     gwy_app_wait_cursor_start(GTK_WINDOW(gui->dialog));
-    ok = execute(args, &error);
+    if (preview_field_is_reduced(gui->preview))
+        ok = execute_preview(gui, &error);
+    else
+        ok = execute(args, &error);
     gwy_app_wait_cursor_finish(GTK_WINDOW(gui->dialog));
     update_drift_graph(gui, ok);
     if (ok) {
-        text = format_status(args);
+        text = format_status(gui);
         gwy_param_table_message_set_type(gui->table, MESSAGE_STATUS, GTK_MESSAGE_INFO);
     }
     else {
         text = g_markup_escape_text(error->message, -1);
         gwy_param_table_message_set_type(gui->table, MESSAGE_STATUS, GTK_MESSAGE_ERROR);
-        gwy_data_field_assign(args->result, args->field);
-        gwy_data_field_clear(args->mask);
+        gwy_data_field_assign(preview_field_result(gui->preview),
+                              preview_field_source(gui->preview));
+        gwy_data_field_clear(preview_field_mask(gui->preview));
         g_clear_error(&error);
     }
     gwy_param_table_set_label(gui->table, MESSAGE_STATUS, text);
     g_free(text);
     gtk_dialog_set_response_sensitive(GTK_DIALOG(gui->dialog), GTK_RESPONSE_OK, ok);
-    gwy_data_field_data_changed(args->result);
-    gwy_data_field_data_changed(args->mask);
+    gwy_data_field_data_changed(preview_field_result(gui->preview));
+    gwy_data_field_data_changed(preview_field_mask(gui->preview));
     if (ok)
         gwy_dialog_have_result(GWY_DIALOG(gui->dialog));
 }

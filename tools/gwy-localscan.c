@@ -581,15 +581,15 @@ settings_interpolation(void)
     return interpolation;
 }
 
-/* Continuous compensation done here as the module will do it, so that its
- * refusals name the table as the user named it (not the absolute path the
- * module is given); the few that do not name it get its name. */
+/* Continuous compensation checked here as the module will do it (planned,
+ * not computed: the module computes it once), so that its refusals name
+ * the table as the user named it (not the absolute path the module is
+ * given); the few that do not name it get its name. */
 static gboolean
 check_continuous(GwyContainer *data, gint id, const DriftTable *table, GwyDataField *field,
                  GError **error)
 {
     const TimingFallback *tf = &timing_fallback;
-    GwyDataField *result = gwy_data_field_new_alike(field, FALSE);
     LocalscanOptions lo;
     ScanTiming timing;
     GError *err = NULL;
@@ -603,8 +603,7 @@ check_continuous(GwyContainer *data, gint id, const DriftTable *table, GwyDataFi
     lo.line_time = timing.line_time;
     lo.direction = timing.direction;
     lo.frame_start = timing.frame_start;
-    ok = localscan_compensate_field(field, table, &lo, result, NULL, NULL, &err);
-    g_object_unref(result);
+    ok = localscan_compensate_check(field, table, &lo, &err);
     if (ok)
         return TRUE;
     if (g_error_matches(err, CONTINUOUS_COMPENSATE_ERROR, CONTINUOUS_COMPENSATE_ERROR_TOO_FAST))

@@ -543,3 +543,30 @@ continuous_compensate_table(const gdouble *a, gint xres, gint yres,
     drift_trajectory_free(trajectory);
     return ok;
 }
+
+gboolean
+continuous_compensate_check_table(gint xres, gint yres, const DriftTable *table,
+                                  gdouble x_pixel_size, gdouble y_pixel_size,
+                                  const ScanTiming *timing, GwyInterpolationType interpolation,
+                                  GError **error)
+{
+    ScanTiming default_timing;
+    DriftTrajectory *trajectory;
+    ResamplePlan plan;
+    gboolean ok;
+
+    g_return_val_if_fail(table, FALSE);
+    g_return_val_if_fail(xres >= 1 && yres >= 1, FALSE);
+    timing = timing_or_default(timing, xres, yres, &default_timing);
+    if (!check_inputs(xres, yres, timing, interpolation, error))
+        return FALSE;
+    trajectory = drift_trajectory_new_from_table(table, x_pixel_size, y_pixel_size, timing, error);
+    if (!trajectory)
+        return FALSE;
+    resample_plan_init(&plan, yres);
+    ok = (plan_columns(trajectory, timing, &plan, error)
+          && plan_rows(trajectory, timing, &plan, error));
+    resample_plan_clear(&plan);
+    drift_trajectory_free(trajectory);
+    return ok;
+}

@@ -55,6 +55,19 @@ gboolean continuous_compensate_table(const gdouble *a,
                                      gdouble *mask,
                                      GError **error);
 
+/* Whether continuous_compensate_table() would accept the table, timing and
+ * interpolation for an xres x yres image, with the same errors; builds the
+ * trajectory and the resampling plan (work of the order of the rows), not
+ * the image. */
+gboolean continuous_compensate_check_table(gint xres,
+                                           gint yres,
+                                           const DriftTable *table,
+                                           gdouble x_pixel_size,
+                                           gdouble y_pixel_size,
+                                           const ScanTiming *timing,
+                                           GwyInterpolationType interpolation,
+                                           GError **error);
+
 /* The same with the trajectory given directly, D(t) in px (e.g. built
  * with drift_trajectory_new() from a drift model sampled densely). */
 gboolean continuous_compensate_trajectory(const gdouble *a,

@@ -302,6 +302,44 @@ count_filled(GwyDataField *mask)
     return count;
 }
 
+/* dest gets field's pixels (its values unspecified), size and units. */
+static void
+take_geometry(GwyDataField *dest, GwyDataField *field)
+{
+    gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
+
+    if (gwy_data_field_get_xres(dest) != xres || gwy_data_field_get_yres(dest) != yres)
+        gwy_data_field_resample(dest, xres, yres, GWY_INTERPOLATION_NONE);
+    gwy_data_field_set_xreal(dest, gwy_data_field_get_xreal(field));
+    gwy_data_field_set_yreal(dest, gwy_data_field_get_yreal(field));
+    gwy_data_field_set_xoffset(dest, gwy_data_field_get_xoffset(field));
+    gwy_data_field_set_yoffset(dest, gwy_data_field_get_yoffset(field));
+    gwy_si_unit_assign(gwy_data_field_get_si_unit_xy(dest), gwy_data_field_get_si_unit_xy(field));
+    gwy_si_unit_assign(gwy_data_field_get_si_unit_z(dest), gwy_data_field_get_si_unit_z(field));
+}
+
+gboolean
+localscan_compensate_check(GwyDataField *field, const DriftTable *table,
+                           const LocalscanOptions *options, GError **error)
+{
+    gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
+    gboolean paper = (options->mode == LOCALSCAN_MODE_PAPER);
+    gdouble *dx = g_new(gdouble, 2*table->n_stripes), *dy = dx + table->n_stripes;
+    ScanTiming timing;
+    gboolean ok;
+
+    ok = localscan_table_to_field_pixels(table, field, paper, dx, dy, error);
+    g_free(dx);
+    if (!ok || paper)
+        return ok;
+    scan_timing_init(&timing, xres, yres,
+                     options->frame_start, options->line_time, options->direction);
+    return continuous_compensate_check_table(xres, yres, table,
+                                             gwy_data_field_get_dx(field),
+                                             gwy_data_field_get_dy(field),
+                                             &timing, options->interpolation, error);
+}
+
 gboolean
 localscan_compensate_field(GwyDataField *field, const DriftTable *table,
                            const LocalscanOptions *options,
@@ -324,12 +362,13 @@ localscan_compensate_field(GwyDataField *field, const DriftTable *table,
     }
 
     /* Continuous compensation reads the table itself (exact columns, times);
-     * the conversion above still validates it and gives the applied drift. */
-    gwy_data_field_assign(result, field);
+     * the conversion above still validates it and gives the applied drift.
+     * Both compensations write every pixel of result and mask, so neither
+     * is copied from the image nor cleared first. */
+    take_geometry(result, field);
     filled = mask ? g_object_ref(mask) : gwy_data_field_new_alike(field, FALSE);
-    gwy_data_field_assign(filled, field);
+    take_geometry(filled, field);
     gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(filled), NULL);
-    gwy_data_field_clear(filled);
 
     fill_value = localscan_fill_value(field, options->fill);
     if (paper)

@@ -170,6 +170,14 @@ gboolean     localscan_compensate_field      (GwyDataField *field,
                                               GError **error);
 void         localscan_applied_clear         (LocalscanApplied *applied);
 
+/* Whether localscan_compensate_field() would accept table and options for
+ * field, with the same errors, without compensating it (continuous mode
+ * plans its resampling; work of the order of the rows, not the pixels). */
+gboolean     localscan_compensate_check      (GwyDataField *field,
+                                              const DriftTable *table,
+                                              const LocalscanOptions *options,
+                                              GError **error);
+
 /* A copy of a px table with dx, dy rounded to whole pixels by
  * drift_px_round(), as stripe_registration_to_table() rounds them, extra
  * columns kept: the paper-mode form of a measured table, made without
