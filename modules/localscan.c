@@ -49,6 +49,7 @@ enum {
     PARAM_MASK_COLOR,
     PARAM_REFERENCE_CHANNEL,
     PARAM_FORCE,
+    PARAM_ALL_CHANNELS,
     WIDGET_TABLE_FILE,
     WIDGET_REFERENCE,
     MESSAGE_STATUS,
@@ -78,9 +79,19 @@ typedef struct {
     LocalscanTimingFound timing_found;
     gint batch_reference;     /* reference-channel of an IMMEDIATE run, or -1 */
     MeasuredDrift measured;
+    GArray *siblings;         /* SiblingResult: the scan's other channels */
+    gboolean result_has_mask; /* the new channel gets args->mask */
     gboolean show_progress;   /* the final run in Gwyddion's wait dialog */
     gboolean cancelled;       /* the user cancelled it there */
 } ModuleArgs;
+
+/* One more channel of the scan compensated like the image. */
+typedef struct {
+    gint id;
+    GwyDataField *result;
+    GwyDataField *mask;       /* filled pixels and the channel's own mask */
+    gboolean has_mask;
+} SiblingResult;
 
 typedef struct {
     ModuleArgs *args;
@@ -120,6 +131,9 @@ static DriftTable*      load_drift_table    (ModuleArgs *args,
                                              GError **error);
 static gboolean         progress_stage      (ModuleArgs *args,
                                              const gchar *message);
+static gboolean         compensate_siblings (ModuleArgs *args,
+                                             GError **error);
+static void             siblings_clear      (ModuleArgs *args);
 static void             create_outputs      (ModuleArgs *args);
 static void             add_drift_graph     (ModuleArgs *args);
 static void             report_error        (ModuleArgs *args,
@@ -253,6 +267,8 @@ define_module_params(void)
     /* Batch callers only (gwy-localscan --force): the dialog asks instead. */
     gwy_param_def_add_boolean(paramdef, PARAM_FORCE, LOCALSCAN_KEY_FORCE, NULL,
                               LOCALSCAN_DEFAULT_FORCE);
+    gwy_param_def_add_boolean(paramdef, PARAM_ALL_CHANNELS, LOCALSCAN_KEY_ALL_CHANNELS,
+                              _("_All channels of the scan"), LOCALSCAN_DEFAULT_ALL_CHANNELS);
     return paramdef;
 }
 
@@ -297,14 +313,18 @@ localscan_drift(GwyContainer *data, GwyRunType runtype, G_GNUC_UNUSED const gcha
         gwy_app_wait_start(gwy_app_find_window_for_channel(data, args.id),
                            _("Local-scan drift compensation..."));
     ok = execute(&args, &error);
-    if (args.show_progress) {
-        ok = ok && progress_stage(&args, _("Creating the channel..."));
+    args.result_has_mask = (gwy_params_get_boolean(args.params, PARAM_ADD_MASK)
+                            && args.applied.n_filled > 0);
+    if (ok && gwy_params_get_boolean(args.params, PARAM_ALL_CHANNELS))
+        ok = compensate_siblings(&args, &error);
+    ok = ok && progress_stage(&args, _("Creating the channels..."));
+    if (args.show_progress)
         gwy_app_wait_finish();
-    }
     if (ok)
         create_outputs(&args);
     else if (!args.cancelled)
         report_error(&args, error);
+    siblings_clear(&args);
 
 end:
     g_clear_error(&error);
@@ -639,20 +659,21 @@ log_run(GwyContainer *data, gint id, gint newid, const gchar *description)
     g_date_time_unref(now);
 }
 
-/* The source channel is never touched: adding the new channel is the whole
- * (undoable) change. */
-static void
-create_outputs(ModuleArgs *args)
+/* A new channel made from channel id: titled after it, with its palette,
+ * range and metadata, the table used, the compensation marker and a log
+ * entry by name. */
+static gint
+add_result_channel(ModuleArgs *args, gint id, GwyDataField *result, GwyDataField *mask,
+                   const gchar *description)
 {
     GwyContainer *data = args->data;
-    gint id = args->id, newid;
-    gchar *title, *newtitle, *description;
+    gchar *title;
+    gint newid;
 
-    newid = gwy_app_data_browser_add_data_field(args->result, data, TRUE);
+    newid = gwy_app_data_browser_add_data_field(result, data, TRUE);
     title = gwy_app_get_data_field_title(data, id);
-    newtitle = localscan_channel_result_title(title);
     gwy_container_set_string(data, gwy_app_get_data_title_key_for_id(newid),
-                             (const guchar*)newtitle);
+                             (const guchar*)localscan_channel_result_title(title));
     g_free(title);
     gwy_app_sync_data_items(data, data, id, newid, FALSE,
                             GWY_DATA_ITEM_GRADIENT,
@@ -662,19 +683,152 @@ create_outputs(ModuleArgs *args)
                             GWY_DATA_ITEM_META,
                             GWY_DATA_ITEM_REAL_SQUARE,
                             0);
-    if (gwy_params_get_boolean(args->params, PARAM_ADD_MASK) && args->applied.n_filled > 0)
-        gwy_container_set_object(data, gwy_app_get_mask_key_for_id(newid), args->mask);
+    if (mask)
+        gwy_container_set_object(data, gwy_app_get_mask_key_for_id(newid), mask);
     /* The table as read, so the new channel can be compensated or inspected
      * again; the applied per-stripe values follow from it and the image. */
     localscan_channel_store_table(data, newid, args->table);
     localscan_channel_drop_source_meta(data, newid);
-    description = describe_run(args);
     compensation_marker_set(data, newid, description, args->table);
     log_run(data, id, newid, description);
-    g_free(description);
+    return newid;
+}
 
+/* The source channels are never touched: adding the new channels is the
+ * whole (undoable) change. */
+static void
+create_outputs(ModuleArgs *args)
+{
+    gchar *description = describe_run(args);
+    SiblingResult *sibling;
+    guint i;
+
+    add_result_channel(args, args->id, args->result, args->result_has_mask ? args->mask : NULL,
+                       description);
+    for (i = 0; args->siblings && i < args->siblings->len; i++) {
+        sibling = &g_array_index(args->siblings, SiblingResult, i);
+        add_result_channel(args, sibling->id, sibling->result,
+                           sibling->has_mask ? sibling->mask : NULL, description);
+    }
+    g_free(description);
     if (gwy_params_get_boolean(args->params, PARAM_PLOT_DRIFT))
         add_drift_graph(args);
+}
+
+/* The other channels of the image's scan: its own file, its pixels and
+ * physical size, its scan time (reference-choice.h's siblings), not
+ * compensated already. */
+static gint*
+find_siblings(ModuleArgs *args)
+{
+    gint *ids = gwy_app_data_browser_get_data_ids(args->data), i, n = 0;
+
+    for (i = 0; ids[i] >= 0; i++) {
+        if (reference_choice_rank(args->data, args->id, args->data, ids[i])
+            == REFERENCE_RANK_SIBLING
+            && !compensation_marker_get(args->data, ids[i]))
+            ids[n++] = ids[i];
+    }
+    ids[n] = -1;
+    return ids;
+}
+
+/* A mask moves with its channel: compensated with the nearest pixel, so it
+ * stays a mask, and joined with the filled pixels when those are masked. */
+static gboolean
+compensate_own_mask(ModuleArgs *args, gint id, const LocalscanOptions *options,
+                    SiblingResult *sibling, GError **error)
+{
+    GwyDataField *own = NULL, *moved, *filled;
+    LocalscanOptions mask_options = *options;
+    gboolean ok;
+
+    if (!gwy_container_gis_object(args->data, gwy_app_get_mask_key_for_id(id), &own))
+        return TRUE;
+    mask_options.interpolation = GWY_INTERPOLATION_ROUND;
+    mask_options.fill = LOCALSCAN_FILL_ZERO;
+    moved = gwy_data_field_new_alike(own, FALSE);
+    filled = gwy_data_field_new_alike(own, FALSE);
+    ok = localscan_compensate_field(own, args->table, &mask_options, moved, filled, NULL, error);
+    if (ok) {
+        if (sibling->has_mask)
+            gwy_data_field_max_of_fields(sibling->mask, sibling->mask, moved);
+        else
+            gwy_data_field_assign(sibling->mask, moved);
+        sibling->has_mask = TRUE;
+    }
+    g_object_unref(filled);
+    g_object_unref(moved);
+    return ok;
+}
+
+static gboolean
+compensate_sibling(ModuleArgs *args, gint id, const LocalscanOptions *options, GError **error)
+{
+    GwyDataField *field = gwy_container_get_object(args->data, gwy_app_get_data_key_for_id(id));
+    LocalscanApplied applied;
+    SiblingResult sibling;
+
+    sibling.id = id;
+    sibling.result = gwy_data_field_new_alike(field, FALSE);
+    sibling.mask = gwy_data_field_new_alike(field, FALSE);
+    if (!localscan_compensate_field(field, args->table, options, sibling.result, sibling.mask,
+                                    &applied, error)) {
+        g_object_unref(sibling.result);
+        g_object_unref(sibling.mask);
+        return FALSE;
+    }
+    sibling.has_mask = (gwy_params_get_boolean(args->params, PARAM_ADD_MASK)
+                        && applied.n_filled > 0);
+    localscan_applied_clear(&applied);
+    g_array_append_val(args->siblings, sibling);
+    return compensate_own_mask(args, id, options,
+                               &g_array_index(args->siblings, SiblingResult,
+                                              args->siblings->len - 1), error);
+}
+
+/* The image's drift applied to every other channel of its scan, as
+ * Gwyddion's own drift compensation offers; the image's own mask moves
+ * too.  Nothing is added until all are made. */
+static gboolean
+compensate_siblings(ModuleArgs *args, GError **error)
+{
+    gint *ids = find_siblings(args), i;
+    LocalscanOptions options;
+    SiblingResult main_mask;
+    gboolean ok = TRUE;
+
+    args->siblings = g_array_new(FALSE, FALSE, sizeof(SiblingResult));
+    gather_options(args, &options);
+    for (i = 0; ok && ids[i] >= 0; i++) {
+        ok = (progress_stage(args, _("Compensating the other channels..."))
+              && compensate_sibling(args, ids[i], &options, error));
+    }
+    g_free(ids);
+    if (!ok)
+        return FALSE;
+    main_mask.mask = args->mask;
+    main_mask.has_mask = args->result_has_mask;
+    if (!compensate_own_mask(args, args->id, &options, &main_mask, error))
+        return FALSE;
+    args->result_has_mask = main_mask.has_mask;
+    return TRUE;
+}
+
+static void
+siblings_clear(ModuleArgs *args)
+{
+    SiblingResult *sibling;
+    guint i;
+
+    for (i = 0; args->siblings && i < args->siblings->len; i++) {
+        sibling = &g_array_index(args->siblings, SiblingResult, i);
+        g_object_unref(sibling->result);
+        g_object_unref(sibling->mask);
+    }
+    if (args->siblings)
+        g_array_free(args->siblings, TRUE);
+    args->siblings = NULL;
 }
 
 /* The two curves, dx and dy over the stripes' y positions, in the image's
@@ -814,6 +968,10 @@ find_tooltip(const gchar *text)
           N_("Add a graph of the drift of every stripe (dx and dy against the stripe's "
              "position) to the file") },
         { N_("Mask color"), N_("The colour of the mask in the preview and the new channel") },
+        { N_("All channels of the scan"),
+          N_("Apply the same correction, from this channel's drift, to every other channel "
+             "of the same scan (Height, Amplitude, Phase...; same pixels and physical size, "
+             "same file, same scan time) and to their masks") },
     };
     guint i;
 
@@ -927,6 +1085,7 @@ run_gui(ModuleArgs *args)
     gwy_param_table_append_checkbox(table, PARAM_ADD_MASK);
     gwy_param_table_append_mask_color(table, PARAM_MASK_COLOR, gui.data, 0, args->data, args->id);
     gwy_param_table_append_checkbox(table, PARAM_PLOT_DRIFT);
+    gwy_param_table_append_checkbox(table, PARAM_ALL_CHANNELS);
     gwy_param_table_append_message(table, MESSAGE_STATUS, NULL);
 
     add_tooltips(gwy_param_table_widget(table));

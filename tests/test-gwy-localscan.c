@@ -747,6 +747,64 @@ START_TEST(test_no_double_correction)
 }
 END_TEST
 
+/* --all-channels: the first channel's table moves its sibling of the same
+ * size too; a channel of another size stays as it was. */
+START_TEST(test_all_channels)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 11);
+    GwyDataField *height = random_field(rng, 40, 30, 2e-9, 3e-9);
+    GwyDataField *phase = random_field(rng, 40, 30, 2e-9, 3e-9);
+    GwyDataField *other = random_field(rng, 33, 50, 2e-9, 3e-9);
+    DriftTable *table = random_table(rng, 7, 8, 30);
+    GwyContainer *data = gwy_container_new(), *out;
+    gchar *text = drift_table_to_string(table), *input = in_path("in.gwy");
+    gchar *output = out_path("out.gwy");
+    ToolRun run;
+    gint *ids, n, i;
+    gboolean phase_done = FALSE, other_done = FALSE;
+
+    add_channel(data, 0, height, "Height", text);
+    add_channel(data, 1, phase, "Phase", NULL);
+    add_channel(data, 2, other, "Other", NULL);
+    save_gwy(data, input);
+    run_tool(&run, (const gchar *const[]){ "--all-channels", "-o", output, input, NULL });
+    assert_success(&run);
+    tool_run_clear(&run);
+    out = load_gwy(output);
+    ids = gwy_app_data_browser_get_data_ids(out);
+    for (n = 0; ids[n] >= 0; n++) {
+        gchar key[40];
+
+        g_snprintf(key, sizeof(key), "/%d/data/title", ids[n]);
+        phase_done = phase_done || gwy_strequal(get_string(out, key), "Phase" TITLE_SUFFIX);
+        other_done = other_done || gwy_strequal(get_string(out, key), "Other" TITLE_SUFFIX);
+    }
+    printf("test-gwy-localscan: --all-channels wrote %d channels\n", n);
+    ck_assert_int_eq(n, 5);
+    ck_assert(phase_done && !other_done);
+    for (i = 0; ids[i] >= 0; i++) {
+        gchar key[40];
+
+        g_snprintf(key, sizeof(key), "/%d/data/title", ids[i]);
+        if (gwy_strequal(get_string(out, key), "Phase" TITLE_SUFFIX))
+            ck_assert(compensation_marker_get(out, ids[i]));
+    }
+
+    g_free(ids);
+    g_object_unref(out);
+    g_unlink(output);
+    g_free(output);
+    g_free(input);
+    g_free(text);
+    drift_table_free(table);
+    g_object_unref(data);
+    g_object_unref(other);
+    g_object_unref(phase);
+    g_object_unref(height);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* -d with a table in physical units on non-square pixels (2.5 nm by 4 nm);
  * values a third of a pixel off whole pixels must round.  The stored table
  * of the channel, different, must be ignored. */
@@ -2114,6 +2172,7 @@ gwy_localscan_suite(void)
     tcase_add_test(tc, test_stored_table_first_channel);
     tcase_add_test(tc, test_channel_option);
     tcase_add_test(tc, test_no_double_correction);
+    tcase_add_test(tc, test_all_channels);
     tcase_add_loop_test(tc, test_table_file_physical_units, 0, G_N_ELEMENTS(unit_names));
     tcase_add_loop_test(tc, test_random_cases, 0, N_RANDOM_CASES);
     tcase_add_test(tc, test_write_drift);

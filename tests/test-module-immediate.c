@@ -516,6 +516,108 @@ START_TEST(test_result_not_compensated_twice)
 }
 END_TEST
 
+/* The result of compensating field with the stored table as the module
+ * was told to (paper mode, image mean), for comparison. */
+static GwyDataField*
+expected_compensation(GwyDataField *field, const gchar *table_text, LocalscanFill fill,
+                      GwyInterpolationType interpolation, GwyDataField **filled)
+{
+    DriftTable *table = drift_table_parse(table_text, -1, "test", NULL);
+    LocalscanOptions options = { LOCALSCAN_MODE_PAPER, fill, interpolation, 1.0,
+                                 SCAN_DIRECTION_DOWN, 0.0 };
+    GwyDataField *result = gwy_data_field_new_alike(field, FALSE);
+
+    *filled = gwy_data_field_new_alike(field, FALSE);
+    ck_assert(localscan_compensate_field(field, table, &options, result, *filled, NULL, NULL));
+    drift_table_free(table);
+    return result;
+}
+
+static gint
+channel_titled(GwyContainer *data, const gchar *title)
+{
+    gint *ids = gwy_app_data_browser_get_data_ids(data), i, found = -1;
+    gchar key[40];
+
+    for (i = 0; ids[i] >= 0; i++) {
+        g_snprintf(key, sizeof(key), "/%d/data/title", ids[i]);
+        if (!g_strcmp0(get_string(data, key), title))
+            found = ids[i];
+    }
+    g_free(ids);
+    return found;
+}
+
+/* "All channels of the scan": the Height's drift moves the Amplitude of
+ * the same scan and the Height's mask too; a channel of another size is
+ * left alone. */
+START_TEST(test_all_channels)
+{
+    static const gchar table_text[] = "stripe,dx,dy\n0,2,2\n1,-2,0\n2,0,-2\n";
+    GwyDataField *height = make_worked_example(2, 1e-9, 1e-9, "m");
+    GwyContainer *data = make_container(height, table_text);
+    GwyDataField *amplitude = gwy_data_field_duplicate(height), *other, *own_mask;
+    GwyDataField *want, *filled, *want_mask, *mask_filled;
+    ModuleSettings ms = default_settings;
+    gint amp_id, height_id, i, before;
+
+    gwy_data_field_multiply(amplitude, -3.0);
+    gwy_data_field_add(amplitude, 7.0);
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(1), amplitude);
+    set_string(data, "/1/data/title", "Amplitude");
+    other = gwy_data_field_new(5, 5, 5e-9, 5e-9, TRUE);
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(2), other);
+    set_string(data, "/2/data/title", "Other size");
+    own_mask = gwy_data_field_new_alike(height, TRUE);
+    for (i = 0; i < 6; i++)
+        gwy_data_field_set_val(own_mask, i, 3, 1.0);
+    gwy_container_set_object(data, gwy_app_get_mask_key_for_id(0), own_mask);
+    gwy_app_data_browser_select_data_field(data, 0);
+    before = count_ids(gwy_app_data_browser_get_data_ids(data));
+
+    ms.source = LOCALSCAN_SOURCE_STORED;
+    set_module_settings(&ms);
+    gwy_container_set_boolean_by_name(gwy_app_settings_get(), LOCALSCAN_SETTINGS_KEY(ALL_CHANNELS), TRUE);
+    gwy_process_func_run(LOCALSCAN_FUNCTION_NAME, data, GWY_RUN_IMMEDIATE);
+    gwy_container_set_boolean_by_name(gwy_app_settings_get(), LOCALSCAN_SETTINGS_KEY(ALL_CHANNELS), FALSE);
+    ck_assert_int_eq(count_ids(gwy_app_data_browser_get_data_ids(data)), before + 2);
+
+    amp_id = channel_titled(data, "Amplitude" LOCALSCAN_TITLE_SUFFIX);
+    ck_assert_int_ge(amp_id, 0);
+    want = expected_compensation(amplitude, table_text, LOCALSCAN_FILL_MEAN,
+                                 LOCALSCAN_DEFAULT_INTERPOLATION, &filled);
+    assert_same_field_bits(get_field(data, gwy_app_get_data_key_for_id(amp_id)), want);
+    assert_same_field_bits(get_field(data, gwy_app_get_mask_key_for_id(amp_id)), filled);
+    ck_assert(compensation_marker_get(data, amp_id));
+    ck_assert_int_lt(channel_titled(data, "Other size" LOCALSCAN_TITLE_SUFFIX), 0);
+    g_object_unref(want);
+    g_object_unref(filled);
+
+    /* The Height's mask: its own mask moved by the same drift, joined
+     * with the filled pixels. */
+    height_id = channel_titled(data, TITLE LOCALSCAN_TITLE_SUFFIX);
+    ck_assert_int_ge(height_id, 0);
+    want_mask = expected_compensation(own_mask, table_text, LOCALSCAN_FILL_ZERO,
+                                      GWY_INTERPOLATION_ROUND, &mask_filled);
+    g_object_unref(mask_filled);
+    want = expected_compensation(height, table_text, LOCALSCAN_FILL_MEAN,
+                                 LOCALSCAN_DEFAULT_INTERPOLATION, &filled);
+    gwy_data_field_max_of_fields(want_mask, want_mask, filled);
+    ck_assert(gwy_data_field_get_max(want_mask) > 0.5);
+    assert_same_field_bits(get_field(data, gwy_app_get_mask_key_for_id(height_id)), want_mask);
+    assert_same_field_bits(get_field(data, gwy_app_get_data_key_for_id(height_id)), want);
+
+    g_object_unref(want);
+    g_object_unref(filled);
+    g_object_unref(want_mask);
+    g_object_unref(own_mask);
+    g_object_unref(other);
+    g_object_unref(amplitude);
+    g_object_unref(height);
+    drop_container(data);
+}
+END_TEST
+
 START_TEST(test_fill_values)
 {
     static const gint fills[3] = { LOCALSCAN_FILL_ZERO, LOCALSCAN_FILL_MINIMUM, LOCALSCAN_FILL_MAXIMUM };
@@ -1497,6 +1599,7 @@ main(void)
     tcase_add_test(tc, test_result_channel_items);
     tcase_add_test(tc, test_csv_file_source);
     tcase_add_test(tc, test_result_not_compensated_twice);
+    tcase_add_test(tc, test_all_channels);
     tcase_add_test(tc, test_fill_values);
     tcase_add_test(tc, test_mask_only_when_wanted);
     tcase_add_test(tc, test_drift_graph);

@@ -54,6 +54,7 @@ typedef struct {
     gchar *interpolation_name;
     gint interpolation;          /* -1: the user's setting */
     gboolean force;
+    gboolean all_channels;
     gboolean show_version;
     gchar **inputs;
 } Options;
@@ -112,6 +113,9 @@ static GOptionEntry option_table[] = {
       N_("Compensate a channel that is already local-scan compensated (it carries the "
          "metadata item 'Local-scan compensation'); without it such a channel is refused"),
       NULL },
+    { "all-channels", 0, 0, G_OPTION_ARG_NONE, &options.all_channels,
+      N_("Apply the channel's correction also to every other channel of the same scan (same "
+         "pixels and physical size, same scan time) and to their masks"), NULL },
     { "write-drift", 0, 0, G_OPTION_ARG_FILENAME, &options.write_drift,
       N_("Also write the drift table used to TABLE.csv"), N_("TABLE.csv") },
     { "version", 0, 0, G_OPTION_ARG_NONE, &options.show_version,
@@ -651,6 +655,7 @@ compensate_channel(GwyContainer *data, gint id, const gchar *table_file,
     params.frame_start = timing_fallback.frame_start;
     params.interpolation = options.interpolation;
     params.force = options.force;
+    params.all_channels = options.all_channels;
     localscan_settings_apply(&params);
     return headless_run_process(data, id, LOCALSCAN_FUNCTION_NAME, error) >= 0;
 }

@@ -34,4 +34,5 @@ localscan_settings_apply(const LocalscanBatchParams *params)
     if (params->interpolation >= 0)
         gwy_container_set_int32_by_name(settings, KEY(INTERPOLATION), params->interpolation);
     gwy_container_set_boolean_by_name(settings, KEY(FORCE), params->force);
+    gwy_container_set_boolean_by_name(settings, KEY(ALL_CHANNELS), params->all_channels);
 }

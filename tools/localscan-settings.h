@@ -26,6 +26,7 @@ typedef struct {
     gdouble frame_start;
     gint interpolation;          /* -1: the user's setting stays */
     gboolean force;              /* compensate a compensated channel again */
+    gboolean all_channels;       /* the scan's other channels too */
     /* Reference registration adds the reference image and stripe count. */
 } LocalscanBatchParams;
 

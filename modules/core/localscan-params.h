@@ -35,6 +35,7 @@
 #define LOCALSCAN_KEY_PLOT_DRIFT        "plot-drift"
 #define LOCALSCAN_KEY_REFERENCE_CHANNEL "reference-channel"
 #define LOCALSCAN_KEY_FORCE             "force"
+#define LOCALSCAN_KEY_ALL_CHANNELS      "all-channels"
 
 #define LOCALSCAN_DEFAULT_SOURCE        LOCALSCAN_SOURCE_STORED
 #define LOCALSCAN_DEFAULT_MODE          LOCALSCAN_MODE_PAPER
@@ -45,6 +46,8 @@
 #define LOCALSCAN_DEFAULT_PLOT_DRIFT    FALSE
 /* A compensated channel is compensated again only when forced. */
 #define LOCALSCAN_DEFAULT_FORCE         FALSE
+/* One correction, from the image's drift, for every channel of its scan. */
+#define LOCALSCAN_DEFAULT_ALL_CHANNELS  FALSE
 
 /* Stripes registered against a reference image. */
 #define LOCALSCAN_STRIPES_MIN           1
