@@ -101,6 +101,8 @@ typedef struct {
     GwyContainer *data;
     GwyGraphModel *drift_gmodel;
     GtkWidget *reference_combo;
+    GtkWidget *preview_status;   /* under the drift graph, empty for now */
+    GtkWidget *export_button;
     GtkListStore *references;
     LocalscanTimingFound timing_in_meta;
     guint stripes_settle_id;
@@ -140,6 +142,7 @@ static void             report_error        (ModuleArgs *args,
                                              const GError *error);
 static GwyDialogOutcome run_gui             (ModuleArgs *args);
 static GtkWidget*       create_drift_graph  (ModuleGUI *gui);
+static GtkWidget*       create_export_button(ModuleGUI *gui);
 static GtkWidget*       create_file_chooser (gpointer user_data);
 static void             table_file_chosen   (ModuleGUI *gui);
 static GtkWidget*       create_reference_chooser(gpointer user_data);
@@ -877,10 +880,15 @@ add_drift_graph(ModuleArgs *args)
     gint n = args->applied.n_stripes;
     GwyGraphModel *gmodel = new_drift_graph_model(args->field);
     gdouble *ypos = g_new(gdouble, 3*n), *dx = ypos + n, *dy = dx + n;
+    gchar *title, *gtitle;
 
     localscan_applied_to_physical(&args->applied, args->field, ypos, dx, dy);
     set_drift_curves(gmodel, ypos, dx, dy, n);
-    g_object_set(gmodel, "title", _("Local-scan drift"), NULL);
+    title = gwy_app_get_data_field_title(args->data, args->id);
+    gtitle = g_strdup_printf(_("Local-scan drift of %s"), title);
+    g_object_set(gmodel, "title", gtitle, NULL);
+    g_free(gtitle);
+    g_free(title);
     gwy_app_add_graph_or_curves(gmodel, args->data, &target, 1);
     g_object_unref(gmodel);
     g_free(ypos);
@@ -1062,6 +1070,15 @@ run_gui(ModuleArgs *args)
     gtk_container_add(GTK_CONTAINER(alignment), dataview);
     gtk_box_pack_start(GTK_BOX(vbox), alignment, FALSE, FALSE, 0);
     gtk_box_pack_start(GTK_BOX(vbox), create_drift_graph(&gui), TRUE, TRUE, 0);
+    /* What the drift source says about itself (registration: stripes
+     * measured, their scores, warnings) belongs here, beside the preview
+     * and the graph of the same drift. */
+    gui.preview_status = gtk_label_new(NULL);
+    gtk_misc_set_alignment(GTK_MISC(gui.preview_status), 0.0, 0.5);
+    gtk_label_set_line_wrap(GTK_LABEL(gui.preview_status), TRUE);
+    gtk_widget_set_no_show_all(gui.preview_status, TRUE);
+    gtk_box_pack_start(GTK_BOX(vbox), gui.preview_status, FALSE, FALSE, 0);
+    gtk_box_pack_start(GTK_BOX(vbox), create_export_button(&gui), FALSE, FALSE, 0);
 
     table = gui.table = gwy_param_table_new(args->params);
     gwy_param_table_append_header(table, -1, _("Drift"));
@@ -1153,6 +1170,56 @@ update_drift_graph(ModuleGUI *gui, gboolean ok)
         count = stated_drift(args, ypos, dx, dy);
     set_drift_curves(gui->drift_gmodel, ypos, dx, dy, count);
     g_free(ypos);
+}
+
+/* The table the result will be made with (of the whole image, even when
+ * the preview is of a reduced copy), to a CSV file of the user's choice. */
+static void
+export_drift_table(ModuleGUI *gui)
+{
+    ModuleArgs *args = gui->args;
+    GtkWidget *chooser;
+    GError *error = NULL;
+    DriftTable *table;
+    gchar *filename = NULL;
+
+    chooser = gtk_file_chooser_dialog_new(_("Export Drift Table"), GTK_WINDOW(gui->dialog),
+                                          GTK_FILE_CHOOSER_ACTION_SAVE,
+                                          GTK_STOCK_CANCEL, GTK_RESPONSE_CANCEL,
+                                          GTK_STOCK_SAVE, GTK_RESPONSE_ACCEPT,
+                                          NULL);
+    gtk_file_chooser_set_do_overwrite_confirmation(GTK_FILE_CHOOSER(chooser), TRUE);
+    gtk_file_chooser_set_current_name(GTK_FILE_CHOOSER(chooser), "drift.csv");
+    if (gtk_dialog_run(GTK_DIALOG(chooser)) == GTK_RESPONSE_ACCEPT)
+        filename = gtk_file_chooser_get_filename(GTK_FILE_CHOOSER(chooser));
+    gtk_widget_destroy(chooser);
+    if (!filename)
+        return;
+    gwy_app_wait_cursor_start(GTK_WINDOW(gui->dialog));
+    table = load_drift_table(args, &error);
+    gwy_app_wait_cursor_finish(GTK_WINDOW(gui->dialog));
+    if (!table || !drift_table_save(table, filename, &error)) {
+        gwy_param_table_message_set_type(gui->table, MESSAGE_STATUS, GTK_MESSAGE_ERROR);
+        gwy_param_table_set_label(gui->table, MESSAGE_STATUS, error->message);
+        g_clear_error(&error);
+    }
+    if (table)
+        drift_table_free(table);
+    g_free(filename);
+}
+
+static GtkWidget*
+create_export_button(ModuleGUI *gui)
+{
+    GtkWidget *hbox = gtk_hbox_new(FALSE, 6);
+
+    gui->export_button = gtk_button_new_with_mnemonic(_("_Export Drift Table..."));
+    gtk_widget_set_tooltip_text(gui->export_button,
+                                _("Save the drift table the result is made with (stripe,dx,dy "
+                                  "and the measurement's extra columns) as CSV"));
+    g_signal_connect_swapped(gui->export_button, "clicked", G_CALLBACK(export_drift_table), gui);
+    gtk_box_pack_end(GTK_BOX(hbox), gui->export_button, FALSE, FALSE, 0);
+    return hbox;
 }
 
 static GtkWidget*
@@ -1547,6 +1614,7 @@ preview(gpointer user_data)
     gwy_param_table_set_label(gui->table, MESSAGE_STATUS, text);
     g_free(text);
     gtk_dialog_set_response_sensitive(GTK_DIALOG(gui->dialog), GTK_RESPONSE_OK, ok);
+    gtk_widget_set_sensitive(gui->export_button, ok);
     gwy_data_field_data_changed(preview_field_result(gui->preview));
     gwy_data_field_data_changed(preview_field_mask(gui->preview));
     if (ok)

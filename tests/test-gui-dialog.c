@@ -25,6 +25,12 @@
 
 #define SCREENSHOT TEST_BUILDDIR "/tests/gui-dialog.png"
 #define SCREENSHOT_DE TEST_BUILDDIR "/tests/gui-dialog-de.png"
+#define SCREENSHOT_AGAIN TEST_BUILDDIR "/tests/gui-compensate-again.png"
+#define SCREENSHOT_REFERENCE TEST_BUILDDIR "/tests/gui-reference.png"
+#define SCREENSHOT_LARGE TEST_BUILDDIR "/tests/gui-large-preview.png"
+#define SCREENSHOT_WAIT TEST_BUILDDIR "/tests/gui-cancel-wait.png"
+/* A large image: previewed on a reduced copy, made in the wait dialog. */
+#define LARGE_RES 2048
 #define TEST_LOCALEDIR TEST_BUILDDIR "/tests/locale"
 #define TICK_MS 50
 #define MAX_TICKS 200
@@ -47,6 +53,10 @@ typedef struct {
     gboolean saved;
     gint width, height;
     gint response;
+    gboolean keep_reference;     /* keep the reference chooser's model */
+    GtkTreeModel *reference_model;
+    gchar *reference_active;     /* its preselected label */
+    GString *missing_tooltips;   /* when set: settings without a tooltip */
 } DialogProbe;
 
 /************************************************************************
@@ -191,6 +201,39 @@ save_screenshot(GtkWidget *dialog, const gchar *filename, gint *width, gint *hei
     return ok;
 }
 
+static GtkWidget*
+find_named_widget(GtkWidget *widget, const gchar *name)
+{
+    GList *children, *l;
+    GtkWidget *found = NULL;
+
+    if (!g_strcmp0(gtk_widget_get_name(widget), name))
+        return widget;
+    if (!GTK_IS_CONTAINER(widget))
+        return NULL;
+    children = gtk_container_get_children(GTK_CONTAINER(widget));
+    for (l = children; l && !found; l = g_list_next(l))
+        found = find_named_widget(GTK_WIDGET(l->data), name);
+    g_list_free(children);
+    return found;
+}
+
+static void
+inspect_reference(GtkWidget *dialog, DialogProbe *probe)
+{
+    GtkWidget *chooser = find_named_widget(dialog, LOCALSCAN_REFERENCE_WIDGET_NAME);
+    GtkTreeIter iter;
+
+    if (!chooser || !GTK_IS_COMBO_BOX(chooser))
+        return;
+    probe->reference_model = g_object_ref(gtk_combo_box_get_model(GTK_COMBO_BOX(chooser)));
+    if (gtk_combo_box_get_active_iter(GTK_COMBO_BOX(chooser), &iter))
+        gtk_tree_model_get(probe->reference_model, &iter,
+                           LOCALSCAN_REFERENCE_COLUMN_LABEL, &probe->reference_active, -1);
+}
+
+static void collect_missing_tooltips(GtkWidget *widget, GString *missing);
+
 /* Waits until the preview has computed (its status line is up), then
  * records what the dialog shows, photographs it and answers. */
 static gboolean
@@ -212,18 +255,21 @@ probe_dialog(gpointer user_data)
     probe->title = g_strdup(gtk_window_get_title(GTK_WINDOW(dialog)));
     ok_button = gtk_dialog_get_widget_for_response(GTK_DIALOG(dialog), GTK_RESPONSE_OK);
     probe->ok_sensitive = ok_button && gtk_widget_is_sensitive(ok_button);
+    if (probe->keep_reference)
+        inspect_reference(dialog, probe);
+    if (probe->missing_tooltips)
+        collect_missing_tooltips(dialog, probe->missing_tooltips);
     probe->saved = save_screenshot(dialog, probe->screenshot, &probe->width, &probe->height);
     gtk_dialog_response(GTK_DIALOG(dialog), probe->response);
     return FALSE;
 }
 
 static void
-run_dialog(GwyContainer *data, DialogProbe *probe)
+run_dialog_on(GwyContainer *data, gint id, DialogProbe *probe)
 {
     guint timeout;
 
-    gwy_app_data_browser_add(data);
-    gwy_app_data_browser_select_data_field(data, 0);
+    gwy_app_data_browser_select_data_field(data, id);
     probe->texts = g_string_new(NULL);
     timeout = g_timeout_add(TICK_MS, probe_dialog, probe);
     gwy_process_func_run(LOCALSCAN_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
@@ -231,6 +277,13 @@ run_dialog(GwyContainer *data, DialogProbe *probe)
      * never got ready leaves it behind. */
     if (!probe->dialog)
         g_source_remove(timeout);
+}
+
+static void
+run_dialog(GwyContainer *data, DialogProbe *probe)
+{
+    gwy_app_data_browser_add(data);
+    run_dialog_on(data, 0, probe);
 }
 
 static gint
@@ -360,6 +413,262 @@ START_TEST(test_dialog_in_german)
 }
 END_TEST
 
+static gint
+count_channels(GwyContainer *data)
+{
+    gint *ids = gwy_app_data_browser_get_data_ids(data), n = 0;
+
+    while (ids[n] >= 0)
+        n++;
+    g_free(ids);
+    return n;
+}
+
+/* Every widget a user sets something with says what it does. */
+static void
+collect_missing_tooltips(GtkWidget *widget, GString *missing)
+{
+    GList *children, *l;
+    gboolean settable;
+    gchar *tip;
+
+    if (!gtk_widget_get_visible(widget))
+        return;
+    settable = (GTK_IS_TOGGLE_BUTTON(widget) || GTK_IS_COMBO_BOX(widget)
+                || GTK_IS_SPIN_BUTTON(widget) || GTK_IS_FILE_CHOOSER_BUTTON(widget)
+                || GWY_IS_COLOR_BUTTON(widget) || (GTK_IS_ENTRY(widget)
+                                                   && !GTK_IS_SPIN_BUTTON(widget)));
+    /* A combo box's or file button's inner widgets share its tooltip. */
+    if (settable && !(tip = gtk_widget_get_tooltip_text(widget))) {
+        GtkWidget *parent = gtk_widget_get_parent(widget);
+
+        if (!parent || !(tip = gtk_widget_get_tooltip_text(parent)))
+            g_string_append_printf(missing, "%s \"%s\"; ", G_OBJECT_TYPE_NAME(widget),
+                                   GTK_IS_BUTTON(widget) && gtk_button_get_label(GTK_BUTTON(widget))
+                                   ? gtk_button_get_label(GTK_BUTTON(widget)) : "");
+        else
+            g_free(tip);
+    }
+    else if (settable)
+        g_free(tip);
+    if (!GTK_IS_CONTAINER(widget) || GTK_IS_COMBO_BOX(widget) || GTK_IS_FILE_CHOOSER_BUTTON(widget))
+        return;
+    children = gtk_container_get_children(GTK_CONTAINER(widget));
+    for (l = children; l; l = g_list_next(l))
+        collect_missing_tooltips(GTK_WIDGET(l->data), missing);
+    g_list_free(children);
+}
+
+/* Repeat last (an IMMEDIATE run with the last settings) on the result
+ * must not compensate it again; the dialog on the result asks first, and
+ * its Cancel adds nothing. */
+START_TEST(test_no_double_correction)
+{
+    DialogProbe probe;
+    DriftTable *table;
+    GwyContainer *data;
+    gint n;
+
+    init_application();
+    set_batch_like_settings();
+    data = make_data(&table);
+    gwy_clear(&probe, 1);
+    probe.ready_text = "filled pixels.";
+    probe.screenshot = SCREENSHOT;
+    probe.response = GTK_RESPONSE_OK;
+    run_dialog(data, &probe);
+    ck_assert_msg(probe.ready, "the first dialog never got ready:\n%s", probe.texts->str);
+    ck_assert_int_eq(count_channels(data), 2);
+    g_string_free(probe.texts, TRUE);
+    g_free(probe.title);
+
+    /* Repeat last on the new channel 1. */
+    gwy_app_data_browser_select_data_field(data, 1);
+    gwy_process_func_run(LOCALSCAN_FUNCTION_NAME, data, GWY_RUN_IMMEDIATE);
+    n = count_channels(data);
+    printf("test-gui-dialog: Repeat last on the result: %d channels (2 before)\n", n);
+    ck_assert_int_eq(n, 2);
+
+    /* The dialog on the result asks; Cancel leaves it at that. */
+    gwy_clear(&probe, 1);
+    probe.ready_text = "already local-scan compensated";
+    probe.screenshot = SCREENSHOT_AGAIN;
+    probe.response = GTK_RESPONSE_CANCEL;
+    run_dialog_on(data, 1, &probe);
+    ck_assert_msg(probe.ready, "no question on the compensated channel; shown:\n%s", probe.texts->str);
+    ck_assert_msg(probe.saved, "no screenshot");
+    printf("test-gui-dialog: the question on the result (%s):\n%s", SCREENSHOT_AGAIN, probe.texts->str);
+    ck_assert_int_eq(count_channels(data), 2);
+
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+    drift_table_free(table);
+    g_string_free(probe.texts, TRUE);
+    g_free(probe.title);
+}
+END_TEST
+
+/* Two files: scan-a.gwy with Topography (the image) and its Amplitude
+ * (same scan), scan-b.gwy with a Topography of the same area scanned
+ * later, and scan-c.gwy with an image of another size.  The chooser names
+ * "file — channel", offers the two fitting channels, never the image, and
+ * preselects the other scan. */
+START_TEST(test_reference_chooser)
+{
+    GwyContainer *a, *b, *c;
+    GwyDataField *field, *other;
+    GtkTreeModel *model;
+    GtkTreeIter iter;
+    DialogProbe probe;
+    DriftTable *table;
+    GString *labels = g_string_new(NULL);
+    gchar *label, *active = NULL;
+    gboolean more;
+
+    init_application();
+    set_batch_like_settings();
+    gwy_container_set_int32_by_name(gwy_app_settings_get(), LOCALSCAN_SETTINGS_KEY(SOURCE),
+                                    LOCALSCAN_SOURCE_REFERENCE);
+    a = make_data(&table);
+    drift_table_free(table);
+    b = make_data(&table);
+    drift_table_free(table);
+    gwy_container_set_const_string_by_name(a, "/filename", (const guchar*)"/data/scan-a.gwy");
+    gwy_container_set_const_string_by_name(b, "/filename", (const guchar*)"/data/scan-b.gwy");
+    field = gwy_container_get_object(a, gwy_app_get_data_key_for_id(0));
+    other = gwy_data_field_duplicate(field);
+    gwy_container_set_object(a, gwy_app_get_data_key_for_id(1), other);
+    gwy_container_set_const_string_by_name(a, "/1/data/title", (const guchar*)"Amplitude");
+    g_object_unref(other);
+    c = gwy_container_new();
+    other = gwy_data_field_new(XRES/2, YRES, XRES*1e-9, YRES*2e-9, TRUE);
+    gwy_container_set_object(c, gwy_app_get_data_key_for_id(0), other);
+    g_object_unref(other);
+    gwy_app_data_browser_add(b);
+    gwy_app_data_browser_add(c);
+    gwy_app_data_browser_add(a);
+
+    gwy_clear(&probe, 1);
+    probe.ready_text = "Registered";
+    probe.screenshot = SCREENSHOT_REFERENCE;
+    probe.response = GTK_RESPONSE_CANCEL;
+    probe.keep_reference = TRUE;
+    run_dialog_on(a, 0, &probe);
+    ck_assert_msg(probe.dialog, "no dialog");
+    ck_assert_msg(probe.reference_model, "no reference chooser");
+    model = probe.reference_model;
+    for (more = gtk_tree_model_get_iter_first(model, &iter); more;
+         more = gtk_tree_model_iter_next(model, &iter)) {
+        gtk_tree_model_get(model, &iter, LOCALSCAN_REFERENCE_COLUMN_LABEL, &label, -1);
+        g_string_append_printf(labels, "%s\n", label);
+        g_free(label);
+    }
+    active = probe.reference_active;
+    printf("test-gui-dialog: the reference chooser (%s) offers:\n%sand preselects: %s\n",
+           SCREENSHOT_REFERENCE, labels->str, active);
+    ck_assert_str_eq(labels->str, "scan-a.gwy \342\200\224 Amplitude (same scan)\n"
+                                  "scan-b.gwy \342\200\224 Topography\n");
+    ck_assert_str_eq(active, "scan-b.gwy \342\200\224 Topography");
+
+    g_object_unref(probe.reference_model);
+    g_free(active);
+    g_string_free(labels, TRUE);
+    gwy_app_data_browser_remove(a);
+    gwy_app_data_browser_remove(b);
+    gwy_app_data_browser_remove(c);
+    g_object_unref(a);
+    g_object_unref(b);
+    g_object_unref(c);
+    g_string_free(probe.texts, TRUE);
+    g_free(probe.title);
+}
+END_TEST
+
+/* The wait dialog of the final run: photographed once it says it is
+ * creating the channels (the result is computed), then cancelled. */
+typedef struct {
+    gboolean seen;
+    gboolean cancelled;
+    gboolean saved;
+    gint width, height;
+    GString *texts;
+} WaitProbe;
+
+static gboolean
+probe_wait_dialog(gpointer user_data)
+{
+    WaitProbe *probe = (WaitProbe*)user_data;
+    GtkWidget *dialog = find_dialog();
+
+    if (!dialog || g_strcmp0(gtk_window_get_title(GTK_WINDOW(dialog)), "Please wait"))
+        return TRUE;
+    probe->seen = TRUE;
+    g_string_truncate(probe->texts, 0);
+    collect_texts(dialog, probe->texts);
+    if (!strstr(probe->texts->str, "Creating the channels"))
+        return TRUE;
+    probe->saved = save_screenshot(dialog, SCREENSHOT_WAIT, &probe->width, &probe->height);
+    gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
+    probe->cancelled = TRUE;
+    return FALSE;
+}
+
+/* A large image: the dialog previews a reduced copy; OK runs the whole
+ * compensation in Gwyddion's wait dialog, whose Cancel leaves no channel. */
+START_TEST(test_cancel_large_image)
+{
+    GwyContainer *data = gwy_container_new();
+    GwyDataField *field = gwy_data_field_new(LARGE_RES, LARGE_RES, LARGE_RES*1e-9, LARGE_RES*1e-9,
+                                             FALSE);
+    WaitProbe wait;
+    DialogProbe probe;
+    GString *missing = g_string_new(NULL);
+    GRand *rng;
+    gint64 start;
+    guint timeout;
+
+    init_application();
+    set_batch_like_settings();
+    rng = g_rand_new_with_seed(seed);
+    gwy_data_field_synth_gaussian_displacement(field, 40.0, 1.0, rng);
+    g_rand_free(rng);
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(0), field);
+    gwy_container_set_const_string_by_name(data, "/0/data/title", (const guchar*)"Large");
+    localscan_channel_store_table_text(data, 0, "stripe,dx,dy\n0,-3,0\n1,-6,-1\n2,-9,-2\n");
+    gwy_clear(&probe, 1);
+    gwy_clear(&wait, 1);
+    wait.texts = g_string_new(NULL);
+    probe.ready_text = "Preview of a";
+    probe.screenshot = SCREENSHOT_LARGE;
+    probe.response = GTK_RESPONSE_OK;
+    probe.missing_tooltips = missing;
+    timeout = g_timeout_add(1, probe_wait_dialog, &wait);
+    start = g_get_monotonic_time();
+    run_dialog(data, &probe);
+    if (!wait.cancelled)
+        g_source_remove(timeout);
+    printf("test-gui-dialog: %d x %d image: dialog, OK and cancel took %.2f s; the dialog shows:\n%s",
+           LARGE_RES, LARGE_RES, (g_get_monotonic_time() - start)/1e6, probe.texts->str);
+    ck_assert_msg(probe.ready, "no reduced preview; the dialog shows:\n%s", probe.texts->str);
+    ck_assert_msg(!missing->len, "settings without a tooltip: %s", missing->str);
+    ck_assert_msg(wait.seen, "no wait dialog during the final run");
+    ck_assert_msg(wait.cancelled, "the wait dialog never said it was creating the channels: %s",
+                  wait.texts->str);
+    printf("test-gui-dialog: the wait dialog (%s, %d x %d) said:\n%s", SCREENSHOT_WAIT,
+           wait.width, wait.height, wait.texts->str);
+    ck_assert_int_eq(count_channels(data), 1);
+
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+    g_object_unref(field);
+    g_string_free(wait.texts, TRUE);
+    g_string_free(missing, TRUE);
+    g_string_free(probe.texts, TRUE);
+    g_free(probe.title);
+}
+END_TEST
+
 int
 main(void)
 {
@@ -382,6 +691,9 @@ main(void)
     tcase_set_timeout(tc, 60);
     tcase_add_test(tc, test_dialog_ok_makes_channel);
     tcase_add_test(tc, test_dialog_in_german);
+    tcase_add_test(tc, test_no_double_correction);
+    tcase_add_test(tc, test_reference_chooser);
+    tcase_add_test(tc, test_cancel_large_image);
     suite_add_tcase(suite, tc);
     sr = srunner_create(suite);
     srunner_run_all(sr, CK_NORMAL);
