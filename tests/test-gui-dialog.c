@@ -585,7 +585,8 @@ START_TEST(test_reference_chooser)
 END_TEST
 
 /* The wait dialog of the final run: photographed once it says it is
- * creating the channels (the result is computed), then cancelled. */
+ * compensating, then cancelled (the run sees the cancel when it next
+ * reports, before it would create the channels). */
 typedef struct {
     gboolean seen;
     gboolean cancelled;
@@ -605,7 +606,7 @@ probe_wait_dialog(gpointer user_data)
     probe->seen = TRUE;
     g_string_truncate(probe->texts, 0);
     collect_texts(dialog, probe->texts);
-    if (!strstr(probe->texts->str, "Creating the channels"))
+    if (!strstr(probe->texts->str, "Compensating"))
         return TRUE;
     probe->saved = save_screenshot(dialog, SCREENSHOT_WAIT, &probe->width, &probe->height);
     gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
@@ -653,7 +654,7 @@ START_TEST(test_cancel_large_image)
     ck_assert_msg(probe.ready, "no reduced preview; the dialog shows:\n%s", probe.texts->str);
     ck_assert_msg(!missing->len, "settings without a tooltip: %s", missing->str);
     ck_assert_msg(wait.seen, "no wait dialog during the final run");
-    ck_assert_msg(wait.cancelled, "the wait dialog never said it was creating the channels: %s",
+    ck_assert_msg(wait.cancelled, "the wait dialog never said it was compensating: %s",
                   wait.texts->str);
     printf("test-gui-dialog: the wait dialog (%s, %d x %d) said:\n%s", SCREENSHOT_WAIT,
            wait.width, wait.height, wait.texts->str);
