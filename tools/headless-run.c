@@ -14,12 +14,10 @@
 #include <app/gwyapp.h>
 #include "headless-run.h"
 #include "localscan-channel.h"
+#include "gwy-stream-save.h"
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
-
-/* Gwyddion's native file format module. */
-#define GWY_NATIVE_SAVER "gwyfile"
 
 GQuark
 headless_run_error_quark(void)
@@ -211,8 +209,9 @@ headless_run_add_gwy(OutputFiles *files, GwyContainer *data,
 
     if (!(tmpname = output_files_reserve(files, filename, error)))
         return FALSE;
-    if (!gwy_file_func_run_save(GWY_NATIVE_SAVER, data, tmpname,
-                                GWY_RUN_NONINTERACTIVE, &err)) {
+    /* Not Gwyddion's own .gwy writer (file module "gwyfile"), which builds
+     * the whole file in memory first (gwy-stream-save.h). */
+    if (!gwy_stream_save(data, tmpname, &err)) {
         set_save_error(error, filename,
                        err ? err->message : _("the .gwy writer failed"));
         g_clear_error(&err);
