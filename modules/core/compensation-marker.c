@@ -9,23 +9,6 @@
 #include "localscan-channel.h"
 #include "localscan-intl.h"
 
-static GwyContainer*
-channel_meta(GwyContainer *data, gint id, gboolean create)
-{
-    GwyContainer *meta = NULL;
-    gchar key[32];
-
-    g_snprintf(key, sizeof(key), "/%d/meta", id);
-    if (gwy_container_gis_object_by_name(data, key, &meta) && GWY_IS_CONTAINER(meta))
-        return meta;
-    if (!create)
-        return NULL;
-    meta = gwy_container_new();
-    gwy_container_set_object_by_name(data, key, meta);
-    g_object_unref(meta);
-    return meta;
-}
-
 /* The table is kept beside the description so the marker alone says
  * what was done, even after the drift table item is replaced. */
 void
@@ -34,7 +17,7 @@ compensation_marker_set(GwyContainer *data, gint id, const gchar *description,
 {
     gchar *text = drift_table_to_string(table);
 
-    gwy_container_set_string_by_name(channel_meta(data, id, TRUE), LOCALSCAN_META_COMPENSATED,
+    gwy_container_set_string_by_name(localscan_channel_meta(data, id, TRUE), LOCALSCAN_META_COMPENSATED,
                                      (const guchar*)g_strconcat(description, "\n", text, NULL));
     g_free(text);
 }
@@ -42,7 +25,7 @@ compensation_marker_set(GwyContainer *data, gint id, const gchar *description,
 const gchar*
 compensation_marker_get(GwyContainer *data, gint id)
 {
-    GwyContainer *meta = channel_meta(data, id, FALSE);
+    GwyContainer *meta = localscan_channel_meta(data, id, FALSE);
     const guchar *text = NULL;
 
     if (meta && gwy_container_gis_string_by_name(meta, LOCALSCAN_META_COMPENSATED, &text))

@@ -38,8 +38,8 @@ localscan_channel_table_label(const gchar *filename, gint id)
     return g_strdup_printf(_("channel %d drift table"), id);
 }
 
-static GwyContainer*
-channel_meta(GwyContainer *data, gint id, gboolean create)
+GwyContainer*
+localscan_channel_meta(GwyContainer *data, gint id, gboolean create)
 {
     GwyContainer *meta = NULL;
     gchar key[32];
@@ -58,7 +58,7 @@ channel_meta(GwyContainer *data, gint id, gboolean create)
 const gchar*
 localscan_channel_stored_table_text(GwyContainer *data, gint id)
 {
-    GwyContainer *meta = channel_meta(data, id, FALSE);
+    GwyContainer *meta = localscan_channel_meta(data, id, FALSE);
     const guchar *text = NULL;
 
     if (meta && gwy_container_gis_string_by_name(meta, DRIFT_TABLE_META_KEY, &text))
@@ -154,14 +154,14 @@ localscan_reference_check(GwyDataField *image, const gchar *image_name,
 void
 localscan_channel_store_table_text(GwyContainer *data, gint id, const gchar *text)
 {
-    gwy_container_set_string_by_name(channel_meta(data, id, TRUE), DRIFT_TABLE_META_KEY,
+    gwy_container_set_string_by_name(localscan_channel_meta(data, id, TRUE), DRIFT_TABLE_META_KEY,
                                      (const guchar*)g_strdup(text));
 }
 
 void
 localscan_channel_store_table(GwyContainer *data, gint id, const DriftTable *table)
 {
-    gwy_container_set_string_by_name(channel_meta(data, id, TRUE), DRIFT_TABLE_META_KEY,
+    gwy_container_set_string_by_name(localscan_channel_meta(data, id, TRUE), DRIFT_TABLE_META_KEY,
                                      (const guchar*)drift_table_to_string(table));
 }
 
@@ -213,7 +213,7 @@ void
 localscan_channel_drop_source_meta(GwyContainer *data, gint id)
 {
     static const gchar *const source_only[] = { LOCALSCAN_META_SIMULATED_PARTICLES, };
-    GwyContainer *meta = channel_meta(data, id, FALSE);
+    GwyContainer *meta = localscan_channel_meta(data, id, FALSE);
     guint i;
 
     for (i = 0; meta && i < G_N_ELEMENTS(source_only); i++)

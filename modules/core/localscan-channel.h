@@ -233,6 +233,11 @@ gint*        localscan_channel_ids           (GwyContainer *data);
 gpointer     localscan_channel_item          (GwyContainer *data,
                                               gint id,
                                               const gchar *item);
+/* The channel's metadata container ("/ID/meta"), created when absent if
+ * create, else NULL when absent; no reference is added. */
+GwyContainer* localscan_channel_meta         (GwyContainer *data,
+                                              gint id,
+                                              gboolean create);
 /* The channel's title ("/ID/data/title"), or NULL. */
 const gchar* localscan_channel_title         (GwyContainer *data,
                                               gint id);

@@ -18,13 +18,9 @@
 static GwyDataField*
 channel_field(GwyContainer *data, gint id)
 {
-    GwyDataField *field = NULL;
-    gchar key[32];
+    gpointer field = localscan_channel_item(data, id, "data");
 
-    g_snprintf(key, sizeof(key), "/%d/data", id);
-    if (gwy_container_gis_object_by_name(data, key, &field) && GWY_IS_DATA_FIELD(field))
-        return field;
-    return NULL;
+    return GWY_IS_DATA_FIELD(field) ? field : NULL;
 }
 
 static gboolean
@@ -65,14 +61,14 @@ reference_choice_rank(GwyContainer *image_data, gint image_id,
 gchar*
 reference_choice_label(GwyContainer *data, gint id, const gchar *untitled_name)
 {
-    const guchar *filename = NULL, *title = NULL;
-    gchar key[40], *base, *label;
+    const gchar *title = localscan_channel_title(data, id);
+    const guchar *filename = NULL;
+    gchar *base, *label;
 
     gwy_container_gis_string_by_name(data, "/filename", &filename);
     base = filename ? g_path_get_basename((const gchar*)filename) : g_strdup(untitled_name);
-    g_snprintf(key, sizeof(key), "/%d/data/title", id);
-    if (gwy_container_gis_string_by_name(data, key, &title) && *title)
-        label = g_strdup_printf("%s \342\200\224 %s", base, (const gchar*)title);
+    if (title && *title)
+        label = g_strdup_printf("%s \342\200\224 %s", base, title);
     else
         label = g_strdup_printf("%s \342\200\224 channel %d", base, id);
     g_free(base);
