@@ -1274,7 +1274,6 @@ reference_filter(GwyContainer *data, gint id, gpointer user_data)
     return reference_choice_rank(args->data, args->id, data, id) != REFERENCE_RANK_UNFIT;
 }
 
-
 static void
 add_reference_candidates(GwyContainer *data, gpointer user_data)
 {
