@@ -183,8 +183,9 @@ fit_trajectory(const ScanTiming *tm, const DriftFit *fit, gdouble xstep,
 /* Drift-free image of a frame by the product's compensation: with stripes
  * > 0 paper mode (paper_compensate) with each stripe's drift the fit's at
  * the stripe's centre time, rounded to whole pixels by drift_px_round;
- * else continuous mode (continuous_compensate_trajectory, the module's
- * default interpolation) along the fit.  fit NULL: no compensation.  NaN
+ * else continuous mode (continuous_compensate_trajectory with B-spline,
+ * the sub-pixel kernel: the study is about positions, and the module's
+ * default nearest pixel keeps heights instead) along the fit.  fit NULL: no compensation.  NaN
  * where the frame has no data. */
 static gdouble*
 compensate(const SeriesFrame *frame, const gdouble *data, const DriftFit *fit,
@@ -221,7 +222,7 @@ compensate(const SeriesFrame *frame, const gdouble *data, const DriftFit *fit,
     trajectory = fit_trajectory(tm, fit, xstep, ystep);
     if (!trajectory
         || !continuous_compensate_trajectory(data, xres, yres, trajectory, tm,
-                                             LOCALSCAN_DEFAULT_INTERPOLATION,
+                                             GWY_INTERPOLATION_BSPLINE,
                                              NAN, out, NULL, NULL)) {
         for (s = 0; s < xres*yres; s++)
             out[s] = NAN;
@@ -1513,8 +1514,8 @@ write_header(GString *md)
         "p' = v + u exp(-t/tau), continuous and sub-pixel.  Frames are "
         "compensated by the product's own code: paper mode "
         "(paper_compensate, drift rounded by drift_px_round) and "
-        "continuous mode (continuous_compensate_trajectory, the module's "
-        "default B-spline interpolation).\n",
+        "continuous mode (continuous_compensate_trajectory with the "
+        "module's sub-pixel B-spline interpolation).\n",
         dopt.n_blocks, 100.0*dopt.smooth, dopt.min_score,
         fopt.outlier_sigmas, fopt.n_folds, fopt.bic_margin,
         100.0*fopt.cv_gain, fopt.min_explained, fopt.min_cycles);

@@ -35,6 +35,12 @@
 #define N_RANDOM_CASES 24
 
 static guint32 seed;
+/* Continuous mode's accuracy (against paper mode, against a reference) is
+ * judged with a sub-pixel kernel; the default nearest pixel keeps heights
+ * instead (tests/test-height-keeping). */
+#define SIMSCAN_KERNEL GWY_INTERPOLATION_BSPLINE
+#define SIMSCAN_KERNEL_NAME "bspline"
+
 static gchar *scratch;      /* per test: in/, out/, home/ */
 static gchar *in_dir;
 static gchar *out_dir;
@@ -1900,7 +1906,8 @@ START_TEST(test_reference_continuous)
     add_channel(data, 1, rf.reference, "Reference", NULL);
     save_gwy(data, input);
     run_reference_case(data, input, 0, &rf,
-                       (const gchar *const[]){ "-m", "continuous", "--reference", ":1", "--stripes", "8",
+                       (const gchar *const[]){ "-m", "continuous", "--interpolation", SIMSCAN_KERNEL_NAME,
+                                               "--reference", ":1", "--stripes", "8",
                                                "--write-drift", used, "-o", output, input, NULL },
                        FALSE, 6.0);
 
@@ -2023,11 +2030,6 @@ END_TEST
 #define CONTINUOUS_VS_PAPER 0.85
 
 static const SimscanFileCase *const simscan_cases[] = { &simscan_file_default, &simscan_file_up };
-
-/* Continuous mode is judged against paper mode for its sub-pixel
- * positions, so with a sub-pixel kernel (the default keeps heights). */
-#define SIMSCAN_KERNEL GWY_INTERPOLATION_BSPLINE
-#define SIMSCAN_KERNEL_NAME "bspline"
 
 /* Runs gwy-localscan in a mode; the loaded output, or NULL when the tool
  * refused (its one line in *message). */
