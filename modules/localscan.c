@@ -400,11 +400,11 @@ check_not_compensated(ModuleArgs *args, GwyRunType runtype)
 
     if (!compensation_marker_get(args->data, args->id))
         return TRUE;
-    /* Repeat last in Gwyddion (IMMEDIATE with a main window) asks too;
-     * only batch callers, which cannot answer, need the parameter. */
+    /* Repeat last in Gwyddion (IMMEDIATE with a main window) asks too,
+     * whatever a script left in the force parameter; only batch callers,
+     * which cannot answer, need it. */
     if (runtype == GWY_RUN_INTERACTIVE || gwy_app_main_window_get())
-        return (gwy_params_get_boolean(args->params, PARAM_FORCE)
-                || ask_compensate_again(args));
+        return ask_compensate_again(args);
     name = g_strdup_printf(_("channel %d"), args->id);
     ok = compensation_marker_check(args->data, args->id, name,
                                    gwy_params_get_boolean(args->params, PARAM_FORCE),
