@@ -11,6 +11,7 @@
 #include <string.h>
 #include <glib/gstdio.h>
 #include "drift-table.h"
+#include "quoted-input.h"
 #include "stripe-geometry.h"
 #include "localscan-intl.h"
 
@@ -21,6 +22,11 @@
 /* Whole-pixel tolerance for px tables: values written by other tools may
  * carry a last-digit error, but a real fraction is a wrong table. */
 #define WHOLE_PIXEL_TOLERANCE 1e-9
+
+/* A table has a row per stripe and a stripe at least a row of the image:
+ * 64 MiB hold a million rows of 64 bytes, more than any image has.  A
+ * larger file is not read into memory. */
+#define DRIFT_TABLE_MAX_BYTES (64 << 20)
 
 #define DEFAULT_SOURCE_NAME N_("drift table")
 
@@ -280,6 +286,8 @@ static gboolean
 parse_drift_value(DriftTableParser *parser, gint line, const gchar *name,
                   const gchar *field, gdouble *value, GError **error)
 {
+    gchar *quoted;
+
     if (is_nan_or_infinity(field)) {
         set_line_error(error, DRIFT_TABLE_ERROR_VALUE, parser->source_name,
                        line, _("%s = %s: NaN or infinity is not a drift"),
@@ -287,14 +295,16 @@ parse_drift_value(DriftTableParser *parser, gint line, const gchar *name,
         return FALSE;
     }
     if (!parse_decimal(field, value)) {
+        quoted = quoted_input_excerpt(field, -1);
         if (errno == ERANGE)
             set_line_error(error, DRIFT_TABLE_ERROR_VALUE,
                            parser->source_name, line,
-                           _("%s = %s is out of range"), name, field);
+                           _("%s = %s is out of range"), name, quoted);
         else
             set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX,
                            parser->source_name, line,
-                           _("bad number '%s' for %s"), field, name);
+                           _("bad number '%s' for %s"), quoted, name);
+        g_free(quoted);
         return FALSE;
     }
     return TRUE;
@@ -339,7 +349,7 @@ parse_units_comment(DriftTableParser *parser, gint line, const gchar *text,
                     GError **error)
 {
     DriftTable *table = parser->table;
-    gchar *unit_text = NULL;
+    gchar *unit_text = NULL, *quoted;
     DriftUnit unit;
 
     if (!is_units_comment(text, &unit_text))
@@ -351,9 +361,11 @@ parse_units_comment(DriftTableParser *parser, gint line, const gchar *text,
         return FALSE;
     }
     if (!drift_unit_from_name(unit_text, &unit)) {
+        quoted = quoted_input_excerpt(unit_text, -1);
         set_line_error(error, DRIFT_TABLE_ERROR_UNIT, parser->source_name,
                        line, _("unknown unit '%s' (known: px, m, nm, um)"),
-                       unit_text);
+                       quoted);
+        g_free(quoted);
         g_free(unit_text);
         return FALSE;
     }
@@ -373,38 +385,50 @@ parse_header(DriftTableParser *parser, gint line, const gchar *text,
              GError **error)
 {
     DriftTable *table = parser->table;
-    gchar **fields;
-    gint n_fields, i, j;
+    GHashTable *seen;
+    gchar **fields, *quoted;
+    gint n_fields, i;
+    gboolean ok = TRUE;
 
     fields = split_fields(text, &n_fields);
     if (n_fields < 3
         || !g_str_equal(fields[0], "stripe")
         || !g_str_equal(fields[1], "dx")
         || !g_str_equal(fields[2], "dy")) {
+        quoted = quoted_input_excerpt(text, -1);
         set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX, parser->source_name,
                        line, _("missing header: expected a line starting "
-                       "'stripe,dx,dy', got '%s'"), text);
+                       "'stripe,dx,dy', got '%s'"), quoted);
+        g_free(quoted);
         g_strfreev(fields);
         return FALSE;
     }
-    for (i = 3; i < n_fields; i++) {
+    /* A hash of the names seen keeps the check linear in the columns: a
+     * header of a million columns is refused in moments. */
+    seen = g_hash_table_new(g_str_hash, g_str_equal);
+    for (i = 0; i < 3; i++)
+        g_hash_table_add(seen, fields[i]);
+    for (i = 3; ok && i < n_fields; i++) {
         if (!*fields[i]) {
             set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX,
                            parser->source_name, line,
                            _("column %d of the header has no name"), i + 1);
-            g_strfreev(fields);
-            return FALSE;
+            ok = FALSE;
         }
-        for (j = 0; j < i; j++) {
-            if (g_str_equal(fields[i], fields[j])) {
-                set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX,
-                               parser->source_name, line,
-                               _("column '%s' appears twice in the header"),
-                               fields[i]);
-                g_strfreev(fields);
-                return FALSE;
-            }
+        else if (!g_hash_table_add(seen, fields[i])) {
+            quoted = quoted_input_excerpt(fields[i], -1);
+            set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX,
+                           parser->source_name, line,
+                           _("column '%s' appears twice in the header"),
+                           quoted);
+            g_free(quoted);
+            ok = FALSE;
         }
+    }
+    g_hash_table_destroy(seen);
+    if (!ok) {
+        g_strfreev(fields);
+        return FALSE;
     }
     table->header_line = line;
     parser->n_columns = n_fields;
@@ -475,7 +499,7 @@ parse_row(DriftTableParser *parser, gint index, const gchar *text,
           GError **error)
 {
     DriftTableRow row;
-    gchar **fields;
+    gchar **fields, *quoted;
     gint n_fields, i, line = index + 1;
     gboolean ok = FALSE;
 
@@ -489,8 +513,10 @@ parse_row(DriftTableParser *parser, gint index, const gchar *text,
         goto end;
     }
     if (!parse_stripe(fields[0], &row.stripe)) {
+        quoted = quoted_input_excerpt(fields[0], -1);
         set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX, parser->source_name,
-                       line, _("stripe '%s' is not an integer"), fields[0]);
+                       line, _("stripe '%s' is not an integer"), quoted);
+        g_free(quoted);
         goto end;
     }
     if (!check_stripe_order(parser, index, row.stripe, error))
@@ -650,8 +676,17 @@ drift_table_load(const gchar *filename, GError **error)
         return NULL;
     }
     contents = g_string_new(NULL);
-    while ((n = fread(buf, 1, sizeof(buf), fh)) > 0)
+    while ((n = fread(buf, 1, sizeof(buf), fh)) > 0
+           && contents->len <= DRIFT_TABLE_MAX_BYTES)
         g_string_append_len(contents, buf, n);
+    if (contents->len > DRIFT_TABLE_MAX_BYTES) {
+        fclose(fh);
+        g_set_error(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_IO,
+                    _("%s: larger than %d MiB: not a drift table"),
+                    filename, DRIFT_TABLE_MAX_BYTES >> 20);
+        g_string_free(contents, TRUE);
+        return NULL;
+    }
     if (ferror(fh))
         saved_errno = errno ? errno : EIO;
     fclose(fh);
