@@ -54,22 +54,33 @@ stripe_drift_nearest_source(gint s, gint n, const gboolean *has_drift)
     return -1;
 }
 
+/* Two sweeps keep the fill linear in the stripe count: the nearest source
+ * at or below each stripe, then the nearest at or above, the lower winning
+ * a tie as stripe_drift_nearest_source() does.  Sources are stripes that
+ * had drift originally, so one filled value never chains into another. */
 gboolean
 stripe_drift_fill_missing(gint n, const gboolean *has_drift,
                           gdouble *dx, gdouble *dy)
 {
-    gint s, src;
+    gint *below = g_new(gint, MAX(n, 1));
+    gint s, src, above = -1;
+    gboolean any = FALSE;
 
-    if (stripe_drift_nearest_source(0, n, has_drift) < 0)
-        return FALSE;
-    /* Sources are stripes that had drift originally, so filling in place
-     * cannot chain one filled value into another. */
     for (s = 0; s < n; s++) {
-        if (has_drift[s])
+        below[s] = has_drift[s] ? s : (s ? below[s-1] : -1);
+        any = any || has_drift[s];
+    }
+    for (s = n-1; any && s >= 0; s--) {
+        if (has_drift[s]) {
+            above = s;
             continue;
-        src = stripe_drift_nearest_source(s, n, has_drift);
+        }
+        src = below[s];
+        if (src < 0 || (above >= 0 && above - s < s - src))
+            src = above;
         dx[s] = dx[src];
         dy[s] = dy[src];
     }
-    return TRUE;
+    g_free(below);
+    return any;
 }
