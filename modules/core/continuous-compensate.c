@@ -12,6 +12,7 @@
 #include "prefilter-rows.h"
 #include "row-combine.h"
 #include "row-resample.h"
+#include "missing-data.h"
 #include "localscan-intl.h"
 
 /*
@@ -475,6 +476,45 @@ rebuild_image(const gdouble *a, const OutputImage *output,
     row_resampler_clear(&resampler);
 }
 
+/* Missing input pixels (docs/missing-data.md): the image is resampled with
+ * them set to the fill value, so that no NaN spreads through a kernel (or
+ * along a whole row through the B-spline prefilter); output pixels whose
+ * nearest source pixel is missing are then filled and marked as pixels with
+ * no source are.  Which ones those are comes from resampling the image of
+ * missing pixels with the nearest-neighbour kernel along the same plan.
+ * Images with no missing pixel take the plain path. */
+static void
+rebuild_image_with_missing(const gdouble *a, const OutputImage *output,
+                           GwyInterpolationType interpolation)
+{
+    gsize n = (gsize)output->xres*output->yres, i;
+    OutputImage marks = *output;
+    gdouble *filled, *nearest;
+
+    if (!missing_data_count(a, n)) {
+        rebuild_image(a, output, interpolation);
+        return;
+    }
+    filled = missing_data_filled_copy(a, n, output->fill_value);
+    rebuild_image(filled, output, interpolation);
+    for (i = 0; i < n; i++)
+        filled[i] = isfinite(a[i]) ? 0.0 : 1.0;
+    nearest = g_new(gdouble, n);
+    marks.fill_value = 0.0;
+    marks.result = nearest;
+    marks.mask = NULL;
+    rebuild_image(filled, &marks, GWY_INTERPOLATION_ROUND);
+    for (i = 0; i < n; i++) {
+        if (nearest[i] > 0.5) {
+            output->result[i] = output->fill_value;
+            if (output->mask)
+                output->mask[i] = 1.0;
+        }
+    }
+    g_free(nearest);
+    g_free(filled);
+}
+
 /* NULL timing means frame start 0, 1 s per line, scanning down. */
 static const ScanTiming*
 timing_or_default(const ScanTiming *timing, gint xres, gint yres,
@@ -510,7 +550,7 @@ continuous_compensate_trajectory(const gdouble *a, gint xres, gint yres,
     ok = (plan_columns(trajectory, timing, &plan, error)
           && plan_rows(trajectory, timing, &plan, error));
     if (ok)
-        rebuild_image(a, &output, interpolation);
+        rebuild_image_with_missing(a, &output, interpolation);
     resample_plan_clear(&plan);
     return ok;
 }

@@ -30,7 +30,8 @@ GQuark   continuous_compensate_error_quark(void);
  * present, else each stripe's centre line and the end of the frame), every
  * pixel is moved back by the drift at the moment it was scanned, with
  * sub-pixel interpolation.  Pixels with no source get fill_value and 1.0 in
- * mask (may be NULL).  The table's exact dx_exact/dy_exact columns are used in
+ * mask (may be NULL), and so do those whose nearest source pixel is missing
+ * (NaN or infinite; the kernel sees fill_value there, docs/missing-data.md).  The table's exact dx_exact/dy_exact columns are used in
  * preference to the rounded dx/dy when present.
  *
  * The result shows the sample as it was at the earliest local scan

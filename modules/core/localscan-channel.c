@@ -16,6 +16,7 @@
 #include "continuous-compensate.h"
 #include "stripe-geometry.h"
 #include "scan-timing-meta.h"
+#include "missing-data.h"
 #include "localscan-intl.h"
 
 GQuark
@@ -225,13 +226,16 @@ localscan_fill_value(GwyDataField *field, LocalscanFill fill)
 {
     gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
 
+    const gdouble *a = gwy_data_field_get_data_const(field);
+    gdouble min, max;
+
     if (fill == LOCALSCAN_FILL_ZERO)
         return 0.0;
-    if (fill == LOCALSCAN_FILL_MINIMUM)
-        return gwy_data_field_get_min(field);
-    if (fill == LOCALSCAN_FILL_MAXIMUM)
-        return gwy_data_field_get_max(field);
-    return paper_image_mean(gwy_data_field_get_data_const(field), xres, yres);
+    if (fill == LOCALSCAN_FILL_MEAN)
+        return paper_image_mean(a, xres, yres);
+    /* Of the pixels present (docs/missing-data.md). */
+    missing_data_finite_range(a, (gsize)xres*yres, &min, &max);
+    return (fill == LOCALSCAN_FILL_MINIMUM) ? min : max;
 }
 
 gboolean
@@ -356,7 +360,10 @@ localscan_compensate_field(GwyDataField *field, const DriftTable *table,
     local.dx_px = g_new0(gdouble, table->n_stripes);
     local.dy_px = g_new0(gdouble, table->n_stripes);
     local.n_filled = 0;
-    if (!localscan_table_to_field_pixels(table, field, paper, local.dx_px, local.dy_px, error)) {
+    if (!missing_data_check(gwy_data_field_get_data_const(field), gwy_data_field_get_xres(field),
+                            gwy_data_field_get_yres(field), _("the image"), error)
+        || !localscan_table_to_field_pixels(table, field, paper, local.dx_px, local.dy_px,
+                                            error)) {
         localscan_applied_clear(&local);
         return FALSE;
     }
@@ -525,4 +532,20 @@ localscan_channel_title(GwyContainer *data, gint id)
     g_snprintf(key, sizeof(key), "/%d/data/title", id);
     gwy_container_gis_string_by_name(data, key, &title);
     return (const gchar*)title;
+}
+
+/* GObject data, not a container item: it must never reach a saved file. */
+#define RUN_ERROR_DATA "localscan-run-error"
+
+void
+localscan_run_error_set(GwyContainer *data, const GError *error)
+{
+    g_object_set_data_full(G_OBJECT(data), RUN_ERROR_DATA, error ? g_error_copy(error) : NULL,
+                           (GDestroyNotify)g_error_free);
+}
+
+GError*
+localscan_run_error_take(GwyContainer *data)
+{
+    return g_object_steal_data(G_OBJECT(data), RUN_ERROR_DATA);
 }

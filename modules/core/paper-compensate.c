@@ -9,6 +9,7 @@
 #include <string.h>
 #include "paper-compensate.h"
 #include "stripe-geometry.h"
+#include "missing-data.h"
 
 static void
 fill_doubles(gdouble *dest, gint64 count, gdouble value)
@@ -77,6 +78,9 @@ paper_compensate(const gdouble *a, gint xres, gint yres, gint n,
                            fill_value, result_row, mask_row);
         }
     }
+    /* Missing input pixels (docs/missing-data.md) were copied like any
+     * other; finite images are left exactly as the rules made them. */
+    missing_data_fill_result(result, mask, (gsize)xres*yres, fill_value);
 }
 
 /* Neumaier's compensated summation: the error stays at a few ulp of the sum
@@ -85,14 +89,20 @@ paper_compensate(const gdouble *a, gint xres, gint yres, gint n,
 gdouble
 paper_image_mean(const gdouble *a, gint xres, gint yres)
 {
-    gsize i, count;
+    gsize i, n, count;
     gdouble sum = 0.0, compensation = 0.0, t;
 
     g_return_val_if_fail(a, 0.0);
     g_return_val_if_fail(xres >= 1 && yres >= 1, 0.0);
 
-    count = (gsize)xres*yres;
-    for (i = 0; i < count; i++) {
+    /* Missing pixels (docs/missing-data.md) are left out; with none the
+     * sum is the plain one. */
+    n = (gsize)xres*yres;
+    count = 0;
+    for (i = 0; i < n; i++) {
+        if (G_UNLIKELY(!isfinite(a[i])))
+            continue;
+        count++;
         t = sum + a[i];
         if (fabs(sum) >= fabs(a[i]))
             compensation += (sum - t) + a[i];
@@ -100,5 +110,5 @@ paper_image_mean(const gdouble *a, gint xres, gint yres)
             compensation += (a[i] - t) + sum;
         sum = t;
     }
-    return (sum + compensation)/count;
+    return count ? (sum + compensation)/count : 0.0;
 }
