@@ -897,8 +897,9 @@ add_drift_graph(ModuleArgs *args)
     g_free(ypos);
 }
 
-/* Without a GUI (batch, pygwy, the command-line tool) the message is the
- * one line on stderr that callers show; with a GUI, a message box. */
+/* Without a GUI (batch, pygwy, the command-line tool) the error goes with
+ * the data to the caller (localscan_run_error_take()) and is the one line
+ * on stderr a script shows; with a GUI, a message box. */
 static void
 report_error(ModuleArgs *args, const GError *error)
 {
@@ -906,6 +907,7 @@ report_error(ModuleArgs *args, const GError *error)
     GtkWindow *parent;
 
     if (!main_window) {
+        localscan_run_error_set(args->data, error);
         g_printerr("%s: %s\n", LOCALSCAN_FUNCTION_NAME, error->message);
         return;
     }

@@ -5,7 +5,9 @@
  */
 #include "config.h"
 #include <math.h>
+#include <stdio.h>
 #include "option-values.h"
+#include "quoted-input.h"
 #include "simscan-i18n.h"
 
 gboolean
@@ -76,4 +78,13 @@ option_value_parse_int(const gchar *text, gint min, gint max,
     }
     *value = (gint)v;
     return TRUE;
+}
+
+void
+simscan_print_error(const gchar *prefix, const GError *error)
+{
+    gchar *line = quoted_input_message_line(error->message);
+
+    fprintf(stderr, "%s: %s\n", prefix, line);
+    g_free(line);
 }

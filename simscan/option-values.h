@@ -42,6 +42,11 @@ gboolean  option_value_parse_int     (const gchar *text,
                                       gint *value,
                                       GError **error);
 
+/* Prints error as "PREFIX: message", one printable line of bounded length
+ * whatever the message quotes (quoted-input.h). */
+void     simscan_print_error          (const gchar *prefix,
+                                       const GError *error);
+
 G_END_DECLS
 
 #endif

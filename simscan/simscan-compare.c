@@ -22,6 +22,9 @@
 #include "simscan-report.h"
 #include "channel-png.h"
 #include "simscan-compare.h"
+#include "file-screening.h"
+#include "library-log.h"
+#include "option-values.h"
 #include "simscan-i18n.h"
 
 /* Particles this close to the border are left out, px. */
@@ -243,11 +246,17 @@ compare_file(const gchar *filename, const CompareOptions *options,
     GwyContainer *data;
     gdouble *truth = NULL, *shown = NULL, radius;
     CentreError before, after;
-    gint n, comp_id;
+    gint n, comp_id, saved_stderr;
     gboolean ok = FALSE;
 
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
-    if (!(data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, error)))
+    library_log_capture(g_get_prgname(), library_log_verbose());
+    if (!file_screening_check(filename, error))
+        return FALSE;
+    saved_stderr = library_log_divert_stderr();
+    data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, error);
+    library_log_restore_stderr(saved_stderr);
+    if (!data)
         return FALSE;
     comp_id = find_compensated(data);
     n = read_particles(data, &truth, &shown);
@@ -325,7 +334,7 @@ simscan_compare_main(int argc, char **argv)
     ok = ok && check_files(&options, &error);
     ok = ok && compare_file(options.inputs[0], &options, &error);
     if (!ok) {
-        fprintf(stderr, "simscan compare: %s\n", error->message);
+        simscan_print_error("simscan compare", error);
         g_error_free(error);
     }
     g_option_context_free(context);

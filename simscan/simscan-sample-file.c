@@ -5,10 +5,15 @@
  */
 #include "config.h"
 #include <stdlib.h>
+#include <string.h>
 #include <libgwymodule/gwymodule-file.h>
 #include <app/gwyapp.h>
 #include "simscan-sample-file.h"
 #include "localscan-channel.h"
+#include "file-screening.h"
+#include "missing-data.h"
+#include "paper-compensate.h"
+#include "library-log.h"
 #include "simscan-i18n.h"
 
 static GQuark
@@ -29,6 +34,30 @@ channel_field(GwyContainer *data, gint id)
     return NULL;
 }
 
+/* Missing pixels (NaN, infinite; docs/missing-data.md) of a measured
+ * sample are filled with the mean of the others: the simulated scan sees a
+ * flat patch there, never a NaN.  A sample mostly missing is refused.
+ * Returns a new reference, or NULL with error set. */
+static GwyDataField*
+sample_without_missing(GwyDataField *field, const gchar *filename, GError **error)
+{
+    gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
+    const gdouble *a = gwy_data_field_get_data_const(field);
+    GwyDataField *filled;
+    gdouble *copy;
+
+    if (!missing_data_check(a, xres, yres, filename, error))
+        return NULL;
+    if (!missing_data_count(a, (gsize)xres*yres))
+        return g_object_ref(field);
+    copy = missing_data_filled_copy(a, (gsize)xres*yres, paper_image_mean(a, xres, yres));
+    filled = gwy_data_field_new_alike(field, FALSE);
+    memcpy(gwy_data_field_get_data(filled), copy, (gsize)xres*yres*sizeof(gdouble));
+    gwy_data_field_invalidate(filled);
+    g_free(copy);
+    return filled;
+}
+
 GwyDataField*
 simscan_load_channel(const gchar *filename, gint id, GError **error)
 {
@@ -36,13 +65,23 @@ simscan_load_channel(const gchar *filename, gint id, GError **error)
     GwyContainer *data;
     GwyDataField *field = NULL;
     GError *err = NULL;
+    gint saved_stderr;
     gint *ids;
 
     if (!initialised) {
         gwy_app_init_nongui("enable-threads", FALSE, NULL);
+        library_log_capture(g_get_prgname(), library_log_verbose());
         initialised = TRUE;
     }
-    if (!(data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, &err))) {
+    if (!file_screening_check(filename, &err)) {
+        g_set_error(error, simscan_sample_error_quark(), 0, _("cannot read %s"), err->message);
+        g_clear_error(&err);
+        return NULL;
+    }
+    saved_stderr = library_log_divert_stderr();
+    data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, &err);
+    library_log_restore_stderr(saved_stderr);
+    if (!data) {
         g_set_error(error, simscan_sample_error_quark(), 0,
                     _("cannot read %s: %s"), filename,
                     err ? err->message : _("unknown format"));
@@ -58,7 +97,7 @@ simscan_load_channel(const gchar *filename, gint id, GError **error)
     else
         field = channel_field(data, id);
     if (field)
-        g_object_ref(field);
+        field = sample_without_missing(field, filename, error);
     else if (id >= 0)
         g_set_error(error, simscan_sample_error_quark(), 0,
                     _("%s has no channel %d"), filename, id);

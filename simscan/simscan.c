@@ -11,10 +11,36 @@
 #include "simscan-compare.h"
 #include "fit-command.h"
 #include "simscan-i18n.h"
+#include "library-log.h"
+
+/* --verbose, anywhere before "--", shows what libraries logged
+ * (library-log.h); it is taken out before a subcommand parses the rest. */
+static gboolean
+take_verbose(int *argc, char **argv)
+{
+    gboolean verbose = FALSE;
+    int i, j;
+
+    for (i = j = 1; i < *argc; i++) {
+        if (g_str_equal(argv[i], "--"))
+            break;
+        if (g_str_equal(argv[i], "--verbose"))
+            verbose = TRUE;
+        else
+            argv[j++] = argv[i];
+    }
+    for (; i < *argc; i++)
+        argv[j++] = argv[i];
+    argv[j] = NULL;
+    *argc = j;
+    return verbose;
+}
 
 int
 main(int argc, char **argv)
 {
+    g_set_prgname("simscan");
+    library_log_capture("simscan", take_verbose(&argc, argv));
     setlocale(LC_ALL, "");
     bindtextdomain(GETTEXT_PACKAGE, LOCALEDIR);
     bind_textdomain_codeset(GETTEXT_PACKAGE, "UTF-8");

@@ -5,6 +5,7 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include <errno.h>
 #include <locale.h>
 #include <math.h>
 #include <stdio.h>
@@ -23,6 +24,9 @@
 #include "localscan-settings.h"
 #include "compensation-marker.h"
 #include "run-description.h"
+#include "library-log.h"
+#include "quoted-input.h"
+#include "safe-output.h"
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -56,6 +60,7 @@ typedef struct {
     gboolean force;
     gboolean all_channels;
     gboolean show_version;
+    gboolean verbose;
     gchar **inputs;
 } Options;
 
@@ -118,6 +123,9 @@ static GOptionEntry option_table[] = {
          "pixels and physical size, same scan time) and to their masks"), NULL },
     { "write-drift", 0, 0, G_OPTION_ARG_FILENAME, &options.write_drift,
       N_("Also write the drift table used to TABLE.csv"), N_("TABLE.csv") },
+    { "verbose", 'v', 0, G_OPTION_ARG_NONE, &options.verbose,
+      N_("Also show what Gwyddion and its libraries logged (kept from the output "
+         "otherwise)"), NULL },
     { "version", 0, 0, G_OPTION_ARG_NONE, &options.show_version,
       N_("Print the version and exit"), NULL },
     { G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &options.inputs,
@@ -151,17 +159,13 @@ static const CompensationMode compensation_modes[] = {
     { "continuous", LOCALSCAN_MODE_CONTINUOUS, FALSE, },
 };
 
-/* Messages must stay one line, whatever a library put into them. */
+/* Messages must stay one printable line, whatever a file or a library put
+ * into them. */
 static void
 print_error(const gchar *message)
 {
-    gchar *line = g_strstrip(g_strdup(message));
-    gchar *p;
+    gchar *line = quoted_input_message_line(message);
 
-    for (p = line; *p; p++) {
-        if (*p == '\n' || *p == '\r')
-            *p = ' ';
-    }
     fprintf(stderr, "%s: %s\n", PROGRAM_NAME, line);
     g_free(line);
 }
@@ -667,21 +671,22 @@ static gboolean
 compensate_with_measured(GwyContainer *data, gint id, const DriftTable *table,
                          const CompensationMode *mode, GError **error)
 {
-    GError *err = NULL;
     gchar *dir, *csv;
     gboolean ok;
 
-    if (!(dir = g_dir_make_tmp("gwy-localscan-XXXXXX", &err))) {
+    /* Both registered, so that a signal removes them too (safe-output.h). */
+    if (!(dir = safe_output_temp_dir_new(PROGRAM_NAME))) {
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_SAVE,
-                    _("cannot make a temporary folder: %s"), err->message);
-        g_error_free(err);
+                    _("cannot make a temporary folder: %s"), g_strerror(errno));
         return FALSE;
     }
     csv = g_build_filename(dir, "measured-drift.csv", NULL);
+    safe_output_register(csv);
     ok = (drift_table_save(table, csv, error)
           && compensate_channel(data, id, csv, mode, error));
-    g_unlink(csv);
+    safe_output_discard(csv);
     g_rmdir(dir);
+    safe_output_forget(dir);
     g_free(csv);
     g_free(dir);
     return ok;
@@ -834,10 +839,12 @@ main(int argc, char *argv[])
     gint status = EXIT_OK;
 
     init_i18n();
+    library_log_capture(PROGRAM_NAME, FALSE);
     if (!parse_options(&argc, &argv, &error)) {
         status = EXIT_USAGE;
         goto end;
     }
+    library_log_capture(PROGRAM_NAME, options.verbose);
     if (options.show_version) {
         printf("%s %s\n", PROGRAM_NAME, PACKAGE_VERSION);
         goto end;

@@ -6,6 +6,7 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <glib/gstdio.h>
@@ -13,6 +14,8 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "headless-run.h"
+#include "file-screening.h"
+#include "library-log.h"
 #include "localscan-channel.h"
 #include "gwy-stream-save.h"
 
@@ -54,6 +57,8 @@ headless_run_init(const gchar *module_file, GError **error)
         g_free(name);
     }
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
+    /* Again: Gwyddion may have installed handlers of its own. */
+    library_log_capture(g_get_prgname(), library_log_verbose());
     if (!module_file)
         return TRUE;
 
@@ -97,18 +102,17 @@ headless_run_load(const gchar *filename, GError **error)
 {
     GwyContainer *data;
     GError *err = NULL;
+    gint saved_stderr;
 
-    if (g_file_test(filename, G_FILE_TEST_IS_DIR)) {
+    if (!file_screening_check(filename, &err)) {
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_LOAD,
-                    _("cannot read %s: it is a directory"), filename);
+                    _("cannot read %s"), err->message);
+        g_clear_error(&err);
         return NULL;
     }
-    if (!g_file_test(filename, G_FILE_TEST_IS_REGULAR)) {
-        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_LOAD,
-                    _("cannot read %s: no such file"), filename);
-        return NULL;
-    }
+    saved_stderr = library_log_divert_stderr();
     data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, &err);
+    library_log_restore_stderr(saved_stderr);
     if (!data) {
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_LOAD,
                     _("cannot read %s: %s"), filename,
@@ -145,14 +149,15 @@ first_new_id(const gint *before, const gint *after)
     return -1;
 }
 
-/* Without a main window a process function reports its errors with
- * g_printerr(); they are collected so that a failure is one message. */
-static GString *function_output = NULL;
-
+/* What a process function prints with g_printerr() without a main window
+ * is its message for a script's user; the tool has the error itself
+ * (localscan_run_error_take()) and says it once, so the text is kept from
+ * the terminal, shown only with --verbose. */
 static void
-collect_function_output(const gchar *text)
+keep_function_output(const gchar *text)
 {
-    g_string_append(function_output, text);
+    if (library_log_verbose())
+        fputs(text, stderr);
 }
 
 gint
@@ -161,13 +166,16 @@ headless_run_process(GwyContainer *data, gint id, const gchar *funcname,
 {
     gint *before, *after;
     GPrintFunc printerr;
+    GError *err;
     gint newid;
 
     before = localscan_channel_ids(data);
+    /* Whatever an earlier run left is not this run's error. */
+    err = localscan_run_error_take(data);
+    g_clear_error(&err);
     gwy_app_data_browser_add(data);
     gwy_app_data_browser_select_data_field(data, id);
-    function_output = g_string_new(NULL);
-    printerr = g_set_printerr_handler(collect_function_output);
+    printerr = g_set_printerr_handler(keep_function_output);
     gwy_process_func_run(funcname, data, GWY_RUN_IMMEDIATE);
     g_set_printerr_handler(printerr);
     after = localscan_channel_ids(data);
@@ -176,20 +184,17 @@ headless_run_process(GwyContainer *data, gint id, const gchar *funcname,
     newid = first_new_id(before, after);
     g_free(before);
     g_free(after);
-    g_strstrip(function_output->str);
-    if (newid < 0 && *function_output->str) {
-        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_RUN,
-                    "%s", function_output->str);
+    err = localscan_run_error_take(data);
+    if (newid < 0 && err) {
+        g_propagate_error(error, err);
+        err = NULL;
     }
     else if (newid < 0) {
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_RUN,
                     _("process function %s created no new channel"),
                     funcname);
     }
-    else if (*function_output->str)
-        g_printerr("%s\n", function_output->str);
-    g_string_free(function_output, TRUE);
-    function_output = NULL;
+    g_clear_error(&err);
     return newid;
 }
 

@@ -46,8 +46,8 @@ gboolean      headless_run_has_channel     (GwyContainer *data, gint id);
 
 /* Runs funcname on channel id with GWY_RUN_IMMEDIATE and returns the id of
  * the channel it created, or -1 with error set when none appeared: the
- * function's own message (what it printed with g_printerr()) when it gave
- * one. */
+ * function's own error when it left one with localscan_run_error_set().
+ * What it prints is shown only with --verbose (library-log.h). */
 gint          headless_run_process         (GwyContainer *data,
                                             gint id,
                                             const gchar *funcname,

@@ -241,6 +241,13 @@ GwyContainer* localscan_channel_meta         (GwyContainer *data,
 /* The channel's title ("/ID/data/title"), or NULL. */
 const gchar* localscan_channel_title         (GwyContainer *data,
                                               gint id);
+/* Why a run without a GUI failed, handed from the process function to its
+ * caller (gwy-localscan) through the data container it ran on: object data,
+ * never saved with the file.  set keeps a copy of error; take returns it
+ * (NULL when the run left none) and removes it. */
+void         localscan_run_error_set         (GwyContainer *data,
+                                              const GError *error);
+GError*      localscan_run_error_take        (GwyContainer *data);
 
 G_END_DECLS
 

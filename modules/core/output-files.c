@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 #include <glib/gstdio.h>
 #include "output-files.h"
+#include "safe-output.h"
 #include "localscan-intl.h"
 
 typedef struct {
@@ -121,22 +122,12 @@ output_files_new(void)
     return files;
 }
 
-/* A new empty file with a unique name beside filename; NULL on failure
- * (errno says why). */
+/* A new empty file with a unique name beside filename, removed should the
+ * program be stopped (safe-output.h); NULL on failure (errno says why). */
 static gchar*
 make_temp_beside(const gchar *filename, const gchar *what, gint *fd)
 {
-    gchar *dir = g_path_get_dirname(filename);
-    gchar *base = g_path_get_basename(filename);
-    gchar *name = g_strdup_printf("%s%c.%s.%sXXXXXX", dir, G_DIR_SEPARATOR,
-                                  base, what);
-
-    g_free(dir);
-    g_free(base);
-    if ((*fd = g_mkstemp(name)) >= 0)
-        return name;
-    g_free(name);
-    return NULL;
+    return safe_output_temp_new(filename, what, fd);
 }
 
 static gboolean
@@ -222,7 +213,7 @@ drop_last_pending(OutputFiles *files)
     PendingOutput *p = &g_array_index(files->pending, PendingOutput,
                                       files->pending->len - 1);
 
-    g_unlink(p->tmpname);
+    safe_output_discard(p->tmpname);
     g_free(p->tmpname);
     g_free(p->filename);
     g_array_set_size(files->pending, files->pending->len - 1);
@@ -299,6 +290,8 @@ keep_old_contents(PendingOutput *p)
         p->linked = TRUE;
         return TRUE;
     }
+    /* The only copy of the old contents now: a signal must not remove it. */
+    safe_output_forget(p->backup);
     if (g_rename(p->filename, p->backup) == 0)
         return TRUE;
     g_free(p->backup);
@@ -316,6 +309,7 @@ replace_target(PendingOutput *p, GError **error)
         return FALSE;
     }
     if (g_rename(p->tmpname, p->filename) == 0) {
+        safe_output_forget(p->tmpname);
         p->renamed = TRUE;
         return TRUE;
     }
@@ -323,7 +317,7 @@ replace_target(PendingOutput *p, GError **error)
     if (p->backup && !p->linked)
         g_rename(p->backup, p->filename);
     else if (p->backup)
-        g_unlink(p->backup);
+        safe_output_discard(p->backup);
     g_free(p->backup);
     p->backup = NULL;
     set_errno_error(error, saved_errno, p->filename);
@@ -333,8 +327,10 @@ replace_target(PendingOutput *p, GError **error)
 static void
 undo_replace(PendingOutput *p)
 {
-    if (p->backup)
+    if (p->backup) {
         g_rename(p->backup, p->filename);
+        safe_output_forget(p->backup);
+    }
     else
         g_unlink(p->filename);
     g_free(p->backup);
@@ -358,7 +354,7 @@ output_files_commit(OutputFiles *files, GError **error)
         if (!ok && p->renamed)
             undo_replace(p);
         else if (p->backup) {
-            g_unlink(p->backup);
+            safe_output_discard(p->backup);
             g_free(p->backup);
             p->backup = NULL;
         }
@@ -377,7 +373,7 @@ output_files_free(OutputFiles *files)
         PendingOutput *p = &g_array_index(files->pending, PendingOutput, i);
 
         if (!p->renamed)
-            g_unlink(p->tmpname);
+            safe_output_discard(p->tmpname);
         g_free(p->tmpname);
         g_free(p->filename);
         g_free(p->backup);
