@@ -15,6 +15,9 @@
 #include "output-files.h"
 #include "frame-series-load.h"
 #include "fit-command.h"
+#include "quoted-input.h"
+
+#define FIT_MAX_FRAMES 400
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -107,8 +110,11 @@ parse_frame_times(const gchar *text, FrameSeriesOptions *options,
 
         options->frame_times[i] = g_ascii_strtod(parts[i], &end);
         if (end == parts[i] || *end || !isfinite(options->frame_times[i])) {
+            gchar *quoted = quoted_input_excerpt(parts[i], -1);
+
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
-                        _("--frame-times: '%s' is not a number"), parts[i]);
+                        _("--frame-times: '%s' is not a number"), quoted);
+            g_free(quoted);
             g_strfreev(parts);
             return FALSE;
         }
@@ -192,6 +198,22 @@ write_output(const gchar *filename, const gchar *text, GError **error)
                                   strlen(text), error);
 }
 
+/* The fit's period search refits the model per trial period over every
+ * measurement of every frame, and the trial periods grow with the span of
+ * the series: the work grows roughly with the cube of the frame count, so
+ * the count is bounded (checked before any frame is read, and again for the
+ * channels of one file). */
+static gboolean
+check_frame_count(gint n, GError **error)
+{
+    if (n <= FIT_MAX_FRAMES)
+        return TRUE;
+    g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                _("%d frames are too many to fit: from 1 to %d (fit a part of the series, or "
+                  "every n-th frame)"), n, FIT_MAX_FRAMES);
+    return FALSE;
+}
+
 static gboolean
 run_fit(const FitArgs *args, gchar **files, gint n_files, GError **error)
 {
@@ -207,7 +229,8 @@ run_fit(const FitArgs *args, gchar **files, gint n_files, GError **error)
     memset(&report, 0, sizeof(report));
     if (!args_to_options(args, &soptions, &numbers, error))
         goto end;
-    if (!(series = frame_series_load(files, n_files, &soptions, error)))
+    if (!(series = frame_series_load(files, n_files, &soptions, error))
+        || !check_frame_count(series->n_frames, error))
         goto end;
     displacement_options_init(&doptions);
     if (!choose_blocks(series, numbers.blocks, &doptions.n_blocks, error))
@@ -316,7 +339,7 @@ simscan_fit_main(int argc, char **argv)
                       "channel per frame)"));
         goto end;
     }
-    if (!check_files(args.json, files, &error))
+    if (!check_frame_count(g_strv_length(files), &error) || !check_files(args.json, files, &error))
         goto end;
     ensure_gwyddion();
     if (run_fit(&args, files, g_strv_length(files), &error))
@@ -324,7 +347,7 @@ simscan_fit_main(int argc, char **argv)
 
 end:
     if (error)
-        g_printerr("simscan fit: %s\n", error->message);
+        simscan_print_error("simscan fit", error);
     g_clear_error(&error);
     g_option_context_free(context);
     g_strfreev(files);

@@ -13,9 +13,11 @@
 #include "simscan-sample-file.h"
 #include "sweep-plot.h"
 #include "n-sweep.h"
+#include "option-values.h"
 #include "simscan-i18n.h"
 
 #define DEFAULT_N_LIST "1,2,4,8,16,32,64"
+#define MAX_N_LIST 64
 
 static gboolean
 parse_n_list(const gchar *text, gint yres, GArray *list, GError **error)
@@ -34,6 +36,13 @@ parse_n_list(const gchar *text, gint yres, GArray *list, GError **error)
             g_array_append_val(list, value);
     }
     g_strfreev(parts);
+    /* Each count is a whole simulation of local scans. */
+    if (list->len > MAX_N_LIST) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("--n-list: %u stripe counts are too many (from 1 to %d)"),
+                    list->len, MAX_N_LIST);
+        return FALSE;
+    }
     if (!ok || !list->len)
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
                     _("--n-list: expected stripe counts from 1 to %d "
@@ -172,7 +181,7 @@ simscan_sweep_main(int argc, char **argv)
                             list, &error);
     ok = ok && run_sweep(&config, list, plot, &error);
     if (!ok) {
-        fprintf(stderr, "simscan sweep: %s\n", error->message);
+        simscan_print_error("simscan sweep", error);
         g_error_free(error);
     }
     g_array_free(list, TRUE);

@@ -12,12 +12,13 @@
 #include "simscan-report.h"
 #include "simscan-sample-file.h"
 #include "simscan-generate.h"
+#include "option-values.h"
 #include "simscan-i18n.h"
 
 static int
 fail(GError *error)
 {
-    fprintf(stderr, "simscan: %s\n", error->message);
+    simscan_print_error("simscan", error);
     g_error_free(error);
     return EXIT_FAILURE;
 }

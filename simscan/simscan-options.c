@@ -9,6 +9,7 @@
 #include <stdarg.h>
 #include "channel-spec.h"
 #include "simscan-presets.h"
+#include "local-scan.h"
 #include "simscan-sample-file.h"
 #include "option-values.h"
 #include "output-files.h"
@@ -25,6 +26,17 @@
 #define MAX_RES        16384
 #define MAX_PIXELS     (4096*4096)
 #define MAX_PARTICLES  1000000
+/* A local scan's search moves its line by 1.5 R up to r_max + R each way:
+ * so many lines at most per search keep a run within seconds. */
+#define MAX_SEARCH_LINES 2000
+/* Samples of all local scans together (stripes x lines x points). */
+#define MAX_LOCAL_SAMPLES 2e7
+/* The drift may carry the sample at most this many scan sizes away over
+ * the simulated time; beyond, no particle is ever found again and the
+ * numbers only exercise overflow. */
+#define MAX_DRIFT_SCANS 100.0
+/* Components of the two-number drift options, nm or nm/s. */
+#define MAX_DRIFT_NM    1e9
 
 /* The options as the user writes them (nm, um, s). */
 typedef struct {
@@ -233,21 +245,25 @@ bad_value_printf(GError **error, const gchar *option, const gchar *format,
     return FALSE;
 }
 
-/* "A" or "A,B" (single: both the same when allow_single). */
+/* "A" or "A,B" (single: both the same when allow_single); each number
+ * from -MAX_DRIFT_NM to MAX_DRIFT_NM before scale. */
 static gboolean
 parse_pair(const gchar *text, const gchar *option, gboolean allow_single,
            gdouble scale, gdouble *v, GError **error)
 {
     gchar **parts = g_strsplit(text, ",", -1);
     guint n = g_strv_length(parts), i;
-    gboolean ok = (n == 2 || (n == 1 && allow_single));
+    gboolean ok = (n == 2 || (n == 1 && allow_single)), in_range = TRUE;
+    gchar *msg;
 
     for (i = 0; ok && i < n; i++) {
         gchar *end;
 
         g_strstrip(parts[i]);
-        v[i] = g_ascii_strtod(parts[i], &end)*scale;
+        v[i] = g_ascii_strtod(parts[i], &end);
         ok = (*parts[i] && !*end && isfinite(v[i]));
+        in_range = in_range && fabs(v[i]) <= MAX_DRIFT_NM;
+        v[i] *= scale;
     }
     if (ok && n == 1)
         v[1] = v[0];
@@ -258,6 +274,12 @@ parse_pair(const gchar *text, const gchar *option, gboolean allow_single,
                                           "separated by a comma")
                                       : _("expected two numbers separated "
                                           "by a comma"));
+    if (!in_range) {
+        msg = g_strdup_printf(_("each number must be from %g to %g"), -MAX_DRIFT_NM, MAX_DRIFT_NM);
+        bad_value(error, option, msg);
+        g_free(msg);
+        return FALSE;
+    }
     return TRUE;
 }
 
@@ -504,6 +526,74 @@ check_scene_limits(const SimscanConfig *config, GError **error)
     return TRUE;
 }
 
+/* Lines of one search (local-scan.c): from the centre out by 1.5 R to
+ * r_max + R on both sides, and the lines through the chord. */
+static gdouble
+search_lines(const LocalScanParams *lp)
+{
+    return 4.0 + 2.0*ceil((lp->r_max + lp->radius)/(1.5*lp->radius));
+}
+
+/* How far the drift can carry the sample over time t at most: every term
+ * of every model at its largest, the random walk at five sigma. */
+static gdouble
+drift_reach(const DriftModel *m, gdouble t)
+{
+    gdouble reach = hypot(m->p0[0], m->p0[1]) + hypot(m->v[0], m->v[1])*t;
+
+    reach += hypot(m->u[0], m->u[1])*m->tau + hypot(m->a[0], m->a[1])
+             + hypot(m->step[0], m->step[1]);
+    if (m->type == DRIFT_MODEL_RANDOM_WALK)
+        reach += 5.0*m->walk_sigma*t*sqrt(t);
+    return reach;
+}
+
+/* Options that are each within range may still ask for endless work
+ * together: a search over a radius of metres, millions of samples per
+ * line, a drift that leaves the sample behind.  Checked once the sample
+ * (measured or not) has set the scale. */
+static gboolean
+check_work_limits(const SimscanConfig *config, GError **error)
+{
+    const LocalScanParams *lp = &config->local;
+    gdouble lines = search_lines(lp), size = MAX(config->xreal, config->yreal);
+    gdouble rmax_limit = (1.5*(MAX_SEARCH_LINES - 4)/2.0 - 1.0)*lp->radius, samples, t, reach;
+    gchar *msg;
+
+    if (lines > MAX_SEARCH_LINES || lp->r_max > size) {
+        msg = g_strdup_printf(_("%g nm is out of range (from 0 to %g nm: at most the scan size "
+                                "and %d search lines of particles of radius %g nm)"),
+                              lp->r_max/NM, MIN(rmax_limit, size)/NM, MAX_SEARCH_LINES,
+                              lp->radius/NM);
+        bad_value(error, "ls-rmax", msg);
+        g_free(msg);
+        return FALSE;
+    }
+    samples = (gdouble)config->n_stripes*lines*lp->points;
+    if (samples > MAX_LOCAL_SAMPLES) {
+        msg = g_strdup_printf(_("%d points per line are too many: %d stripes of up to %g lines "
+                                "allow from 3 to %d"), lp->points, config->n_stripes, lines,
+                              (gint)MAX(3, floor(MAX_LOCAL_SAMPLES/(config->n_stripes*lines))));
+        bad_value(error, "ls-points", msg);
+        g_free(msg);
+        return FALSE;
+    }
+    t = config->local_delay + config->yres*config->line_time
+        + config->n_stripes*lines*local_scan_line_time(lp);
+    reach = drift_reach(&config->drift, t);
+    if (!(reach <= MAX_DRIFT_SCANS*size)) {
+        msg = g_strdup_printf(_("the drift would carry the sample %g um over the %g s simulated, "
+                                "more than %g times the scan size of %g um: lower --velocity, "
+                                "--offset, --settle-velocity, --amplitude, --jump-step or "
+                                "--walk-sigma, or the times"),
+                              reach/UM, t, MAX_DRIFT_SCANS, size/UM);
+        bad_value(error, "drift", msg);
+        g_free(msg);
+        return FALSE;
+    }
+    return TRUE;
+}
+
 /* No output may replace the sample or another output. */
 static gboolean
 check_files(const SimscanConfig *config, GError **error)
@@ -599,6 +689,7 @@ simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
     ok = ok && check_files(config, error);
     ok = ok && (!config->sample_file || adopt_sample(config, &raw, given, error));
     ok = ok && check_scene_limits(config, error);
+    ok = ok && check_work_limits(config, error);
     g_strfreev(args);
     raw_clear(&raw);
     g_free(entries);

@@ -9,6 +9,10 @@
 #include <libprocess/interpolation.h>
 #include "spline-grid.h"
 
+/* Node coordinates beyond this are reduced by whole periods before they
+ * are made indices (far below G_MAXINT, far above any real image). */
+#define SPLINE_GRID_INDEX_BOUND 1e8
+
 SplineGrid*
 spline_grid_new(gint nx, gint ny, gdouble x0, gdouble y0,
                 gdouble dx, gdouble dy, SplineGridBoundary boundary)
@@ -75,10 +79,28 @@ bspline_weights(gdouble t, gdouble *w)
     w[3] = t3/6.0;
 }
 
+/* Both boundaries repeat: a periodic grid every n nodes, a mirrored one
+ * every 2n.  A coordinate far outside (a sample drifted by metres, a
+ * position of 1e12 nodes) is brought back by whole periods before it
+ * becomes an index, so the index always fits a gint; fmod() is exact, and
+ * coordinates within the bound are used as they are. */
+static inline gdouble
+within_index_range(gdouble u, gint n, SplineGridBoundary boundary)
+{
+    gdouble period = (boundary == SPLINE_GRID_PERIODIC ? 1.0 : 2.0)*n;
+
+    if (fabs(u) < SPLINE_GRID_INDEX_BOUND)
+        return u;
+    if (!isfinite(u))
+        return 0.0;
+    return fmod(u, period);
+}
+
 gdouble
 spline_grid_eval(const SplineGrid *grid, gdouble x, gdouble y)
 {
-    gdouble u = (x - grid->x0)/grid->dx, v = (y - grid->y0)/grid->dy;
+    gdouble u = within_index_range((x - grid->x0)/grid->dx, grid->nx, grid->boundary);
+    gdouble v = within_index_range((y - grid->y0)/grid->dy, grid->ny, grid->boundary);
     gdouble fu = floor(u), fv = floor(v), wx[4], wy[4], z = 0.0, zrow;
     gint i = (gint)fv, j = (gint)fu, k, l, cols[4];
     const gdouble *row;
