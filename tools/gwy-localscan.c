@@ -701,6 +701,8 @@ save_results(GwyContainer *data, const DriftTable *table, GError **error)
     gchar *text;
     gboolean ok;
 
+    /* The channels copied from INPUT too hold no NaN (docs/missing-data.md). */
+    localscan_channels_fill_missing(data);
     ok = headless_run_add_gwy(files, data, options.output, error);
     if (ok && options.write_drift) {
         text = drift_table_to_string(table);

@@ -549,3 +549,54 @@ localscan_run_error_take(GwyContainer *data)
 {
     return g_object_steal_data(G_OBJECT(data), RUN_ERROR_DATA);
 }
+
+static gsize
+fill_missing_of_channel(GwyContainer *data, gint id)
+{
+    GwyDataField *field = localscan_channel_item(data, id, "data");
+    GwyDataField *mask = localscan_channel_item(data, id, "mask");
+    gchar *mask_key = g_strdup_printf("/%d/mask", id);
+    gdouble *a, *m, fill;
+    gsize i, n, filled = 0;
+
+    if (field) {
+        a = gwy_data_field_get_data(field);
+        n = (gsize)gwy_data_field_get_xres(field)*gwy_data_field_get_yres(field);
+        if (missing_data_count(a, n)) {
+            if (!GWY_IS_DATA_FIELD(mask)
+                || gwy_data_field_check_compatibility(field, mask, GWY_DATA_COMPATIBILITY_RES)) {
+                mask = gwy_data_field_new_alike(field, TRUE);
+                gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(mask), NULL);
+                gwy_container_set_object_by_name(data, mask_key, mask);
+                g_object_unref(mask);
+            }
+            fill = paper_image_mean(a, gwy_data_field_get_xres(field), gwy_data_field_get_yres(field));
+            m = gwy_data_field_get_data(mask);
+            for (i = 0; i < n; i++) {
+                if (!isfinite(a[i])) {
+                    a[i] = fill;
+                    m[i] = 1.0;
+                    filled++;
+                }
+            }
+            gwy_data_field_invalidate(field);
+            gwy_data_field_invalidate(mask);
+            gwy_data_field_data_changed(field);
+        }
+    }
+    g_free(mask_key);
+    return filled;
+}
+
+gsize
+localscan_channels_fill_missing(GwyContainer *data)
+{
+    gint *ids = localscan_channel_ids(data);
+    gsize filled = 0;
+    guint i;
+
+    for (i = 0; ids[i] != -1; i++)
+        filled += fill_missing_of_channel(data, ids[i]);
+    g_free(ids);
+    return filled;
+}

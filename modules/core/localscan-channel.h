@@ -241,6 +241,12 @@ GwyContainer* localscan_channel_meta         (GwyContainer *data,
 /* The channel's title ("/ID/data/title"), or NULL. */
 const gchar* localscan_channel_title         (GwyContainer *data,
                                               gint id);
+/* Missing pixels (NaN, infinite; docs/missing-data.md) of every image
+ * channel of data are replaced by the mean of the channel's present pixels
+ * and marked in its mask (made, or added to), as Gwyddion's importers do:
+ * a file the tools write holds no NaN.  Returns how many were filled. */
+gsize        localscan_channels_fill_missing (GwyContainer *data);
+
 /* Why a run without a GUI failed, handed from the process function to its
  * caller (gwy-localscan) through the data container it ran on: object data,
  * never saved with the file.  set keeps a copy of error; take returns it

@@ -346,6 +346,8 @@ output_files_commit(OutputFiles *files, GError **error)
 
     g_return_val_if_fail(!files->committed, FALSE);
     files->committed = TRUE;
+    /* A signal meets all outputs in place or none (safe-output.h). */
+    safe_output_hold_signals();
     for (n = 0; ok && n < pending->len; n++)
         ok = replace_target(&g_array_index(pending, PendingOutput, n), error);
     for (i = 0; i < n; i++) {
@@ -359,6 +361,7 @@ output_files_commit(OutputFiles *files, GError **error)
             p->backup = NULL;
         }
     }
+    safe_output_release_signals();
     return ok;
 }
 

@@ -61,6 +61,26 @@ install_handlers(void)
     }
 }
 
+static sigset_t held_before;
+
+void
+safe_output_hold_signals(void)
+{
+    sigset_t caught;
+    guint i;
+
+    sigemptyset(&caught);
+    for (i = 0; i < G_N_ELEMENTS(caught_signals); i++)
+        sigaddset(&caught, caught_signals[i]);
+    sigprocmask(SIG_BLOCK, &caught, &held_before);
+}
+
+void
+safe_output_release_signals(void)
+{
+    sigprocmask(SIG_SETMASK, &held_before, NULL);
+}
+
 void
 safe_output_register(const gchar *path)
 {

@@ -40,6 +40,12 @@ void     safe_output_forget       (const gchar *path);
 /* Removes path and forgets it. */
 void     safe_output_discard      (const gchar *path);
 
+/* Holds back the signals the handlers catch while a set of outputs is
+ * renamed into place, so that a signal finds either none or all of them
+ * committed; release delivers what came meanwhile.  Not nested. */
+void     safe_output_hold_signals   (void);
+void     safe_output_release_signals(void);
+
 /* Removes the temporaries of target whose run is dead; returns how many. */
 guint    safe_output_sweep        (const gchar *target);
 
