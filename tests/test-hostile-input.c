@@ -107,14 +107,25 @@ remove_tree(const gchar *path)
         g_unlink(path);
 }
 
-/* An image as Gwyddion serialises it: a container with one channel. */
+/* An image as Gwyddion serialises it: a container with one channel, of
+ * the given physical size (any value: the struct is written directly) and
+ * with one metadata item when meta_key is not NULL. */
 static GByteArray*
-serialised_image(gint xres, gint yres, const gdouble *data)
+serialised_image_full(gint xres, gint yres, const gdouble *data, gdouble xreal, gdouble yreal,
+                      const gchar *meta_key, const gchar *meta_value)
 {
-    GwyContainer *container = gwy_container_new();
-    GwyDataField *field = gwy_data_field_new(xres, yres, xres*1e-8, yres*1e-8, FALSE);
+    GwyContainer *container = gwy_container_new(), *meta;
+    GwyDataField *field = gwy_data_field_new(xres, yres, 1.0, 1.0, FALSE);
     GByteArray *bytes = g_byte_array_new();
 
+    field->xreal = xreal;
+    field->yreal = yreal;
+    if (meta_key) {
+        meta = gwy_container_new();
+        gwy_container_set_const_string_by_name(meta, meta_key, (const guchar*)meta_value);
+        gwy_container_set_object_by_name(container, "/0/meta", meta);
+        g_object_unref(meta);
+    }
     memcpy(gwy_data_field_get_data(field), data, (gsize)xres*yres*sizeof(gdouble));
     gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
     gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(field), "m");
@@ -125,6 +136,12 @@ serialised_image(gint xres, gint yres, const gdouble *data)
     g_object_unref(field);
     g_object_unref(container);
     return bytes;
+}
+
+static GByteArray*
+serialised_image(gint xres, gint yres, const gdouble *data)
+{
+    return serialised_image_full(xres, yres, data, xres*1e-8, yres*1e-8, NULL, NULL);
 }
 
 /* A rough surface with bumps, some pixels missing when missing > 0. */
@@ -411,6 +428,47 @@ make_bad_table(HostileCase *hc, GRand *rng)
     g_free(table);
 }
 
+/* Damaged geometry or timing in an otherwise valid file or table: a NaN
+ * or infinite pixel size, a line time no instrument has, table times of
+ * 1e308 s. */
+static void
+make_bad_geometry(HostileCase *hc, GRand *rng)
+{
+    static const gdouble sizes[] = { NAN, INFINITY, -INFINITY };
+    static const gchar *const timings[][2] = {
+        { "Line time (s)", "1e300" }, { "Scan rate", "1e-300 Hz" }, { "Line time", "1e-30 s" },
+        { "Frame time (s)", "nan" },
+    };
+    gint kind = g_rand_int_range(rng, 0, 3), t;
+    gdouble *data = surface(rng, 32, 32, 0.0), size = sizes[g_rand_int_range(rng, 0, 3)];
+    gchar *input = case_file(hc, "image.gwy"), *table = case_file(hc, "t.csv"), *text;
+    GByteArray *bytes;
+
+    t = g_rand_int_range(rng, 0, G_N_ELEMENTS(timings));
+    if (kind == 0)
+        bytes = serialised_image_full(32, 32, data, g_rand_boolean(rng) ? size : 3e-7, size, NULL, NULL);
+    else
+        bytes = serialised_image_full(32, 32, data, 3e-7, 3e-7, timings[t][0], timings[t][1]);
+    write_bytes(input, bytes->data, bytes->len);
+    g_ptr_array_add(hc->inputs, g_strdup(input));
+    if (kind == 2)
+        text = g_strdup_printf("stripe,dx,dy,t_image,t_local\n0,1,0,%g,5\n1,1,0,9,%g\n",
+                               log_uniform(rng, 1e11, 1e308), -log_uniform(rng, 1e11, 1e308));
+    else
+        text = g_strdup("# units: nm\nstripe,dx,dy,t_image,t_local\n0,10,0,1,40\n1,12,0,20,41\n");
+    write_bytes(table, text, strlen(text));
+    g_ptr_array_add(hc->inputs, g_strdup(table));
+    hc->expect = (kind == 1) ? EXPECT_SUCCESS : EXPECT_FAILURE;
+    hc->must_say = (kind == 0) ? "pixel size" : "t.csv";
+    add_output(hc, "-o", "out.gwy");
+    add_args(hc, "-d", table, "-m", "continuous", input, NULL);
+    g_byte_array_free(bytes, TRUE);
+    g_free(text);
+    g_free(data);
+    g_free(input);
+    g_free(table);
+}
+
 /* Outputs that are inputs, in missing folders, or replace an older file
  * that must survive the failure. */
 static void
@@ -510,6 +568,7 @@ static const struct {
     { "missing pixels",            TOOL_PATH,    make_missing_pixels, },
     { "bad drift table",           TOOL_PATH,    make_bad_table,      },
     { "bad output",                TOOL_PATH,    make_bad_output,     },
+    { "bad geometry or timing",    TOOL_PATH,    make_bad_geometry,   },
     { "option out of range",       TOOL_PATH,    make_bad_option,     },
     { "simscan",                   SIMSCAN_PATH, make_simscan_case,   },
 };
@@ -590,7 +649,7 @@ check_finite_output(const gchar *path, gboolean needs_mask, const gchar *what)
     gsize length = 0, pos = 0;
     GObject *object;
     GwyDataField *field;
-    gint id, n, i;
+    gint id, n, i, channels = 0;
     gchar key[32];
 
     ck_assert_msg(g_file_get_contents(path, &contents, &length, NULL), "%s: no output %s", what, path);
@@ -601,11 +660,13 @@ check_finite_output(const gchar *path, gboolean needs_mask, const gchar *what)
         g_snprintf(key, sizeof(key), "/%d/data", id);
         if (!gwy_container_gis_object_by_name(GWY_CONTAINER(object), key, &field))
             continue;
+        channels++;
         n = gwy_data_field_get_xres(field)*gwy_data_field_get_yres(field);
         for (i = 0; i < n; i++)
             ck_assert_msg(isfinite(gwy_data_field_get_data_const(field)[i]),
                           "%s: channel %d of %s has a non-finite value at %d", what, id, path, i);
     }
+    ck_assert_msg(channels > 0, "%s: %s holds no image channel", what, path);
     ck_assert_msg(!needs_mask || gwy_container_contains_by_name(GWY_CONTAINER(object), "/1/mask"),
                   "%s: the missing pixels are not masked in the result", what);
     g_object_unref(object);
@@ -887,6 +948,8 @@ int
 main(void)
 {
     gwy_type_init();
+    /* Data fields must deserialise, or outputs would be judged empty. */
+    gwy_process_type_init();
     seed = test_seed_from_env("test-hostile-input");
     return test_run_suite(hostile_suite());
 }

@@ -863,6 +863,12 @@ main(int argc, char *argv[])
         bind_catalogue();
     if (error || !run_batch(mode, &error))
         status = EXIT_ERROR;
+    /* A failure never goes unexplained, even when a library only logged
+     * why (library-log.h). */
+    if (status == EXIT_ERROR && !error)
+        error = g_error_new(HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_RUN, _("failed: %s"),
+                            library_log_last() ? library_log_last()
+                            : _("no reason given (try --verbose)"));
     gwy_app_settings_free();
 
 end:

@@ -976,16 +976,30 @@ check_timing(const DriftTable *table, const ScanTiming *timing,
     return drift_table_check_image(table, timing->yres, error);
 }
 
+/* Table times, s: a date in seconds since 1970 fits, 1e308 does not. */
+#define DRIFT_TRAJECTORY_TIME_MAX 1e10
+
 /* The value of an extra column, or fallback when the column is blank or
- * absent; FALSE when it holds anything but a finite number. */
+ * absent; FALSE when it holds anything but a finite number (a time, one
+ * within DRIFT_TRAJECTORY_TIME_MAX). */
 static gboolean
 extra_or_default(const DriftTable *table, gint s, const gchar *name,
                  gdouble fallback, gdouble *value, GError **error)
 {
     gint j = drift_table_find_column(table, name);
 
-    if (drift_table_get_extra(table, s, name, value) && isfinite(*value))
-        return TRUE;
+    if (drift_table_get_extra(table, s, name, value) && isfinite(*value)) {
+        /* Times beyond centuries are no clock's: 1e308 s would overflow the
+         * trajectory's arithmetic into NaN. */
+        if (fabs(*value) <= DRIFT_TRAJECTORY_TIME_MAX)
+            return TRUE;
+        g_set_error(error, DRIFT_TRAJECTORY_ERROR, DRIFT_TRAJECTORY_ERROR_VALUE,
+                    _("%s:%d: %s = %g s is out of range (from %g to %g s)"),
+                    table->source_name ? table->source_name : _("drift table"),
+                    table->rows[s].line, name, *value, -DRIFT_TRAJECTORY_TIME_MAX,
+                    DRIFT_TRAJECTORY_TIME_MAX);
+        return FALSE;
+    }
     if (j < 0 || !*table->extra_values[s*table->n_extra + j]) {
         *value = fallback;
         return TRUE;

@@ -243,8 +243,16 @@ localscan_table_to_field_pixels(const DriftTable *table, GwyDataField *field, gb
                                 gdouble *dx_px, gdouble *dy_px, GError **error)
 {
     GwySIUnit *xyunit = gwy_data_field_get_si_unit_xy(field);
+    gdouble xstep = gwy_data_field_get_dx(field), ystep = gwy_data_field_get_dy(field);
     gchar *unitstr;
 
+    /* Gwyddion mends a zero or negative size when it loads a file, not a NaN
+     * or infinite one. */
+    if (!(isfinite(xstep) && xstep > 0.0 && isfinite(ystep) && ystep > 0.0)) {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_UNITS,
+                    _("the image's pixel size (%g x %g) is not a positive number"), xstep, ystep);
+        return FALSE;
+    }
     if (table->unit != DRIFT_UNIT_PX && !gwy_si_unit_equal_string(xyunit, "m")) {
         unitstr = gwy_si_unit_get_string(xyunit, GWY_SI_UNIT_FORMAT_PLAIN);
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_UNITS,
@@ -253,8 +261,7 @@ localscan_table_to_field_pixels(const DriftTable *table, GwyDataField *field, gb
         g_free(unitstr);
         return FALSE;
     }
-    return drift_table_to_pixels(table, gwy_data_field_get_yres(field),
-                                 gwy_data_field_get_dx(field), gwy_data_field_get_dy(field),
+    return drift_table_to_pixels(table, gwy_data_field_get_yres(field), xstep, ystep,
                                  whole_pixels, dx_px, dy_px, error);
 }
 

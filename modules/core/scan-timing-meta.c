@@ -11,6 +11,7 @@
 #include <libgwyddion/gwysiunit.h>
 #include <libprocess/datafield.h>
 #include "scan-timing-meta.h"
+#include "localscan-params.h"
 
 /* A metadata value such as "2.325 Hz", "0.5 s" or "0.413": the number in
  * base SI units of the given unit, or the bare number when no unit follows.
@@ -84,19 +85,23 @@ meta_line_time(GwyContainer *meta, gint yres, gdouble *line_time)
     };
     static const gchar *const line_rate_keys[] = { "Scan rate", "Scan Rate", "ScanRate", NULL };
     static const gchar *const frame_time_keys[] = { "Frame time (s)", NULL };
-    gdouble v;
+    gdouble v, t;
 
-    if (meta_positive(meta, line_time_keys, "s", line_time))
-        return TRUE;
-    if (meta_positive(meta, line_rate_keys, "Hz", &v)) {
-        *line_time = 1.0/v;
-        return TRUE;
-    }
-    if (yres > 0 && meta_positive(meta, frame_time_keys, "s", &v)) {
-        *line_time = v/yres;
-        return TRUE;
-    }
-    return FALSE;
+    if (meta_positive(meta, line_time_keys, "s", &v))
+        t = v;
+    else if (meta_positive(meta, line_rate_keys, "Hz", &v))
+        t = 1.0/v;
+    else if (yres > 0 && meta_positive(meta, frame_time_keys, "s", &v))
+        t = v/yres;
+    else
+        return FALSE;
+    /* A line time no instrument has (1e300 s, a rate of 1e-300 Hz) is a
+     * damaged file: it counts as absent, so the fallback is used and the
+     * tools say they assumed it. */
+    if (!(t >= LOCALSCAN_LINE_TIME_MIN && t <= LOCALSCAN_LINE_TIME_MAX))
+        return FALSE;
+    *line_time = t;
+    return TRUE;
 }
 
 /* The text begins with the word (any case), perhaps followed by more. */

@@ -44,8 +44,8 @@ typedef struct {
  *   (s)" (HS-AFM), "Relative frame time" (Nanoscope), else the dates
  *   "TimeStamp" (Anasys, ISO 8601, when the image was stored: its end) and
  *   "Date" (Nanoscope, "04:06:25 PM Thu Sep 26 2019").
- * Values that do not parse (or a line time that is not positive) count as
- * absent.  meta may be NULL.  Returns what was found. */
+ * Values that do not parse (or a line time outside LOCALSCAN_LINE_TIME_MIN
+ * to LOCALSCAN_LINE_TIME_MAX) count as absent.  meta may be NULL.  Returns what was found. */
 ScanMetaFound scan_timing_meta_read        (GwyContainer *meta,
                                             gint yres,
                                             ScanMetaTiming *timing);
