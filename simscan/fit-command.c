@@ -17,7 +17,7 @@
 #include "fit-command.h"
 #include "quoted-input.h"
 
-#define FIT_MAX_FRAMES 400
+#define FIT_MAX_FRAMES 16
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -198,11 +198,13 @@ write_output(const gchar *filename, const gchar *text, GError **error)
                                   strlen(text), error);
 }
 
-/* The fit's period search refits the model per trial period over every
- * measurement of every frame, and the trial periods grow with the span of
- * the series: the work grows roughly with the cube of the frame count, so
- * the count is bounded (checked before any frame is read, and again for the
- * channels of one file). */
+/* Every pair of frames is registered, and the oscillation search refits
+ * the model over all those measurements at every trial period and again
+ * around every local minimum; the trial periods grow with the series'
+ * span.  Measured on 128 x 128 frames 200 s apart: 10 frames 3 s, 16
+ * frames 6 s, 18 frames 9 s, 19 frames 19 s, 20 frames 61 s.  The count is
+ * bounded where a run still takes seconds (checked before any frame is
+ * read, and again for the channels of one file). */
 static gboolean
 check_frame_count(gint n, GError **error)
 {

@@ -557,6 +557,30 @@ make_simscan_case(HostileCase *hc, GRand *rng)
     g_free(value);
 }
 
+/* simscan fit given damaged frames or more frames than it can fit in
+ * bounded time (refused before any is read). */
+static void
+make_fit_case(HostileCase *hc, GRand *rng)
+{
+    gint i, n = g_rand_int_range(rng, 17, 3000);
+    gchar *frame;
+
+    add_args(hc, "fit", NULL);
+    add_output(hc, "--json", "fit.json");
+    if (g_rand_boolean(rng)) {
+        hc->must_say = "too many";
+        for (i = 0; i < n; i++)
+            g_ptr_array_add(hc->argv, g_strdup_printf("frame%d.gwy", i));
+        return;
+    }
+    for (i = 0; i < 3; i++) {
+        frame = g_strdup_printf("frame%d.gwy", i);
+        g_free(write_random_bytes(hc, rng, frame, i ? "GWYP" : "GWYO", g_rand_int_range(rng, 4, 300)));
+        g_ptr_array_add(hc->argv, frame);
+    }
+    hc->must_say = "frame0.gwy";
+}
+
 typedef void (*CaseMaker)(HostileCase *hc, GRand *rng);
 
 static const struct {
@@ -571,6 +595,7 @@ static const struct {
     { "bad geometry or timing",    TOOL_PATH,    make_bad_geometry,   },
     { "option out of range",       TOOL_PATH,    make_bad_option,     },
     { "simscan",                   SIMSCAN_PATH, make_simscan_case,   },
+    { "simscan fit",               SIMSCAN_PATH, make_fit_case,       },
 };
 
 /* Running and judging. */
