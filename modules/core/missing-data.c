@@ -35,7 +35,7 @@ missing_data_check(const gdouble *a, gint xres, gint yres, const gchar *what, GE
     g_set_error(error, MISSING_DATA_ERROR, MISSING_DATA_ERROR_TOO_MANY,
                 _("%s: %" G_GSIZE_FORMAT " of its %" G_GSIZE_FORMAT " pixels are missing "
                   "(NaN or infinite), more than %g%%: too little of the image is left "
-                  "to compensate"),
+                  "to work with"),
                 what, missing, n, 100.0*MISSING_DATA_MAX_FRACTION);
     return FALSE;
 }
