@@ -8,10 +8,40 @@
 #include <string.h>
 #include <math.h>
 #include <libgwyddion/gwymacros.h>
-#include <libgwyddion/gwysiunit.h>
 #include <libprocess/datafield.h>
 #include "scan-timing-meta.h"
 #include "localscan-params.h"
+
+/* The SI prefixes a time or rate is written with. */
+static const struct {
+    const gchar *prefix;
+    gint power10;
+} si_prefixes[] = {
+    { "", 0 }, { "k", 3 }, { "M", 6 }, { "G", 9 }, { "m", -3 }, { "u", -6 },
+    { "\xc2\xb5", -6 }, { "\xce\xbc", -6 }, { "n", -9 }, { "p", -12 },
+};
+
+/* The power of ten of a unit written as an SI prefix and unit ("ms",
+ * "kHz", "µs"); FALSE for anything else.  Matched against the table, not
+ * parsed by Gwyddion, which keeps every unit name it ever parsed for the
+ * life of the process: hostile metadata would grow that without bound. */
+static gboolean
+unit_power10(const gchar *text, const gchar *unit, gint *power10)
+{
+    gsize len = strlen(text), ulen = strlen(unit);
+    guint i;
+
+    if (len < ulen || strcmp(text + len - ulen, unit) != 0)
+        return FALSE;
+    for (i = 0; i < G_N_ELEMENTS(si_prefixes); i++) {
+        if (strlen(si_prefixes[i].prefix) == len - ulen
+            && strncmp(text, si_prefixes[i].prefix, len - ulen) == 0) {
+            *power10 = si_prefixes[i].power10;
+            return TRUE;
+        }
+    }
+    return FALSE;
+}
 
 /* A metadata value such as "2.325 Hz", "0.5 s" or "0.413": the number in
  * base SI units of the given unit, or the bare number when no unit follows.
@@ -19,7 +49,6 @@
 static gboolean
 parse_meta_quantity(const gchar *text, const gchar *unit, gdouble *value)
 {
-    GwySIUnit *siunit;
     gchar *end, *rest;
     gint power10 = 0;
     gboolean ok;
@@ -29,14 +58,7 @@ parse_meta_quantity(const gchar *text, const gchar *unit, gdouble *value)
     if (end == text || !isfinite(v))
         return FALSE;
     rest = g_strstrip(g_strdup(end));
-    if (!*rest) {
-        g_free(rest);
-        *value = v;
-        return TRUE;
-    }
-    siunit = gwy_si_unit_new_parse(rest, &power10);
-    ok = gwy_si_unit_equal_string(siunit, unit);
-    g_object_unref(siunit);
+    ok = (!*rest || unit_power10(rest, unit, &power10));
     g_free(rest);
     if (ok)
         *value = v*pow(10.0, power10);
