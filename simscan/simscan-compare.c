@@ -22,7 +22,7 @@
 #include "simscan-report.h"
 #include "channel-png.h"
 #include "simscan-compare.h"
-#include "file-screening.h"
+#include "isolated-load.h"
 #include "library-log.h"
 #include "option-values.h"
 #include "simscan-i18n.h"
@@ -246,17 +246,13 @@ compare_file(const gchar *filename, const CompareOptions *options,
     GwyContainer *data;
     gdouble *truth = NULL, *shown = NULL, radius;
     CentreError before, after;
-    gint n, comp_id, saved_stderr;
+    gint n, comp_id;
     gboolean ok = FALSE;
 
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     library_log_capture(g_get_prgname(), library_log_verbose());
-    if (!file_screening_check(filename, error))
-        return FALSE;
-    saved_stderr = library_log_divert_stderr();
-    data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, error);
-    library_log_restore_stderr(saved_stderr);
-    if (!data)
+    /* Screened, then loaded in a child process (isolated-load.h). */
+    if (!(data = isolated_load(filename, error)))
         return FALSE;
     comp_id = find_compensated(data);
     n = read_particles(data, &truth, &shown);

@@ -9,8 +9,8 @@
 #include <libgwymodule/gwymodule-file.h>
 #include <app/gwyapp.h>
 #include "simscan-sample-file.h"
+#include "isolated-load.h"
 #include "localscan-channel.h"
-#include "file-screening.h"
 #include "missing-data.h"
 #include "paper-compensate.h"
 #include "library-log.h"
@@ -65,7 +65,6 @@ simscan_load_channel(const gchar *filename, gint id, GError **error)
     GwyContainer *data;
     GwyDataField *field = NULL;
     GError *err = NULL;
-    gint saved_stderr;
     gint *ids;
 
     if (!initialised) {
@@ -73,18 +72,9 @@ simscan_load_channel(const gchar *filename, gint id, GError **error)
         library_log_capture(g_get_prgname(), library_log_verbose());
         initialised = TRUE;
     }
-    if (!file_screening_check(filename, &err)) {
+    /* Screened, then loaded in a child process (isolated-load.h). */
+    if (!(data = isolated_load(filename, &err))) {
         g_set_error(error, simscan_sample_error_quark(), 0, _("cannot read %s"), err->message);
-        g_clear_error(&err);
-        return NULL;
-    }
-    saved_stderr = library_log_divert_stderr();
-    data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, &err);
-    library_log_restore_stderr(saved_stderr);
-    if (!data) {
-        g_set_error(error, simscan_sample_error_quark(), 0,
-                    _("cannot read %s: %s"), filename,
-                    err ? err->message : _("unknown format"));
         g_clear_error(&err);
         return NULL;
     }

@@ -8,8 +8,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "frame-series-load.h"
-#include "file-screening.h"
-#include "library-log.h"
+#include "isolated-load.h"
 #include "localscan-intl.h"
 
 static void
@@ -31,23 +30,15 @@ frame_series_load(gchar **filenames, gint n_files,
     GwyContainer **datas = g_new0(GwyContainer*, MAX(n_files, 1));
     FrameSeries *series = NULL;
     GError *err = NULL;
-    gint k, saved_stderr;
+    gint k;
 
     for (k = 0; k < n_files; k++) {
-        /* Screened first: a damaged frame gets one line, not an abort or
-         * criticals inside a loader (file-screening.h). */
-        if (!file_screening_check(filenames[k], &err)) {
-            g_propagate_error(error, err);
-            free_datas(datas, n_files);
-            return NULL;
-        }
-        saved_stderr = library_log_divert_stderr();
-        datas[k] = gwy_file_load(filenames[k], GWY_RUN_NONINTERACTIVE, &err);
-        library_log_restore_stderr(saved_stderr);
+        /* Screened, then loaded in a child process: a damaged frame gets
+         * one line, not an abort or a hang inside a loader (isolated-load.h). */
+        datas[k] = isolated_load(filenames[k], &err);
         if (!datas[k]) {
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_LOAD,
-                        _("%s: cannot load: %s"), filenames[k],
-                        err ? err->message : _("unknown format"));
+                        "%s", err->message);
             g_clear_error(&err);
             free_datas(datas, n_files);
             return NULL;

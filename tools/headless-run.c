@@ -14,7 +14,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "headless-run.h"
-#include "file-screening.h"
+#include "isolated-load.h"
 #include "library-log.h"
 #include "localscan-channel.h"
 #include "gwy-stream-save.h"
@@ -102,21 +102,11 @@ headless_run_load(const gchar *filename, GError **error)
 {
     GwyContainer *data;
     GError *err = NULL;
-    gint saved_stderr;
 
-    if (!file_screening_check(filename, &err)) {
+    /* Screened, then loaded in a child process (isolated-load.h). */
+    if (!(data = isolated_load(filename, &err))) {
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_LOAD,
                     _("cannot read %s"), err->message);
-        g_clear_error(&err);
-        return NULL;
-    }
-    saved_stderr = library_log_divert_stderr();
-    data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, &err);
-    library_log_restore_stderr(saved_stderr);
-    if (!data) {
-        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_LOAD,
-                    _("cannot read %s: %s"), filename,
-                    err ? err->message : _("not a file Gwyddion can read"));
         g_clear_error(&err);
     }
     return data;
