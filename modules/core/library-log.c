@@ -5,7 +5,6 @@
  */
 #include "config.h"
 #include <stdio.h>
-#include <unistd.h>
 #include "library-log.h"
 #include "quoted-input.h"
 
@@ -25,7 +24,6 @@ static gchar *program_name = NULL;
 static gboolean print_them = FALSE;
 static gboolean installed = FALSE;
 static GPtrArray *kept = NULL;
-static guint n_logged = 0;
 
 static void
 keep(const gchar *domain, GLogLevelFlags level, const gchar *message)
@@ -37,7 +35,6 @@ keep(const gchar *domain, GLogLevelFlags level, const gchar *message)
     gchar *text = g_strdup_printf("%s %s: %s", domain ? domain : "", what, line);
 
     g_free(line);
-    n_logged++;
     if (print_them)
         fprintf(stderr, "%s: library %s\n", program_name ? program_name : g_get_prgname(), text);
     if (!kept)
@@ -106,46 +103,9 @@ library_log_verbose(void)
     return print_them;
 }
 
-guint
-library_log_count(void)
-{
-    return n_logged;
-}
-
 const gchar*
 library_log_last(void)
 {
     return (kept && kept->len) ? g_ptr_array_index(kept, kept->len - 1) : NULL;
 }
 
-gint
-library_log_divert_stderr(void)
-{
-    FILE *sink;
-    gint saved;
-
-    if (print_them)
-        return -1;
-    fflush(stderr);
-    if ((saved = dup(STDERR_FILENO)) < 0)
-        return -1;
-    /* tmpfile() is unlinked at once: nothing is left whatever happens. */
-    if (!(sink = tmpfile()) || dup2(fileno(sink), STDERR_FILENO) < 0) {
-        if (sink)
-            fclose(sink);
-        close(saved);
-        return -1;
-    }
-    fclose(sink);
-    return saved;
-}
-
-void
-library_log_restore_stderr(gint saved)
-{
-    if (saved < 0)
-        return;
-    fflush(stderr);
-    dup2(saved, STDERR_FILENO);
-    close(saved);
-}

@@ -23,16 +23,8 @@ void         library_log_capture (const gchar *program,
 /* Whether the last library_log_capture() asked for them printed. */
 gboolean     library_log_verbose (void);
 
-/* How many messages were logged, and the last one kept (NULL if none). */
-guint        library_log_count   (void);
+/* The last message kept (NULL if none). */
 const gchar* library_log_last    (void);
-
-/* What libraries write straight to stderr, past GLib (libxml2's parser
- * warnings while a loader reads a file), is diverted from divert to
- * restore into an unnamed temporary file and dropped; nothing is diverted
- * at --verbose.  Returns what restore needs (-1: nothing diverted). */
-gint         library_log_divert_stderr (void);
-void         library_log_restore_stderr(gint saved);
 
 G_END_DECLS
 
