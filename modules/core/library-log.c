@@ -16,8 +16,8 @@ static const gchar *const known_domains[] = {
     "Gtk", "Gdk", "GdkPixbuf", "Pango", "Json",
 };
 
-/* At most this many are kept (the count goes on): a loader complaining
- * about every one of a million pixels must not fill memory. */
+/* At most this many are kept, the last always: a loader complaining about
+ * every one of a million pixels must not fill memory. */
 #define KEPT_MAX 64
 
 static gchar *program_name = NULL;
@@ -41,8 +41,10 @@ keep(const gchar *domain, GLogLevelFlags level, const gchar *message)
         kept = g_ptr_array_new_with_free_func(g_free);
     if (kept->len < KEPT_MAX)
         g_ptr_array_add(kept, text);
-    else
-        g_free(text);
+    else {
+        g_free(g_ptr_array_index(kept, KEPT_MAX - 1));
+        g_ptr_array_index(kept, KEPT_MAX - 1) = text;
+    }
 }
 
 static void
