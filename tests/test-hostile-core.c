@@ -1,0 +1,329 @@
+/*
+ *  The core pieces of the hostile-input defence, on seeded random input:
+ *  missing pixels in both compensation modes, the linear stripe fill
+ *  against the nearest-stripe rule, message excerpts, the .gwy screening
+ *  on every truncation of a real file, and the sweep of dead runs'
+ *  temporaries.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <math.h>
+#include <string.h>
+#include <unistd.h>
+#include <sys/wait.h>
+#include <glib/gstdio.h>
+#include <libgwyddion/gwyddion.h>
+#include <libprocess/gwyprocess.h>
+#include "stripe-geometry.h"
+#include "paper-compensate.h"
+#include "continuous-compensate.h"
+#include "drift-table.h"
+#include "missing-data.h"
+#include "quoted-input.h"
+#include "file-screening.h"
+#include "safe-output.h"
+#include "test-seed.h"
+
+static guint32 seed;
+
+/* The fill is the nearest-stripe rule, stripe by stripe. */
+START_TEST(test_stripe_fill_is_nearest_rule)
+{
+    GRand *rng = g_rand_new_with_seed(seed);
+    gint trial, n, s, src;
+
+    for (trial = 0; trial < 300; trial++) {
+        gdouble p = g_rand_double(rng);
+        gboolean *has, any = FALSE;
+        gdouble *dx, *dy;
+
+        n = g_rand_int_range(rng, 1, 200);
+        has = g_new(gboolean, n);
+        dx = g_new(gdouble, n);
+        dy = g_new(gdouble, n);
+        for (s = 0; s < n; s++) {
+            has[s] = (g_rand_double(rng) < p);
+            any = any || has[s];
+            dx[s] = has[s] ? s + 0.5 : NAN;
+            dy[s] = has[s] ? -s : NAN;
+        }
+        ck_assert_int_eq(stripe_drift_fill_missing(n, has, dx, dy), any);
+        for (s = 0; any && s < n; s++) {
+            src = stripe_drift_nearest_source(s, n, has);
+            ck_assert_msg(dx[s] == src + 0.5 && dy[s] == -src,
+                          "seed %u, trial %d: stripe %d of %d took %g, nearest is %d", seed, trial,
+                          s, n, dx[s], src);
+        }
+        g_free(has);
+        g_free(dx);
+        g_free(dy);
+    }
+    g_rand_free(rng);
+}
+END_TEST
+
+static gdouble*
+random_image(GRand *rng, gint n, gdouble missing)
+{
+    static const gdouble specials[3] = { NAN, INFINITY, -INFINITY };
+    gdouble *a = g_new(gdouble, n);
+    gint i;
+
+    for (i = 0; i < n; i++)
+        a[i] = g_rand_double(rng) < missing ? specials[g_rand_int_range(rng, 0, 3)]
+                                            : g_rand_double_range(rng, -1, 1);
+    return a;
+}
+
+/* Paper mode: missing sources give the fill value and the mask; every
+ * other pixel is what the image without them gives, bit for bit. */
+START_TEST(test_paper_missing_pixels)
+{
+    GRand *rng = g_rand_new_with_seed(seed ^ 1);
+    gint trial;
+
+    for (trial = 0; trial < 100; trial++) {
+        gint xres = g_rand_int_range(rng, 1, 40), yres = g_rand_int_range(rng, 1, 40);
+        gint n = g_rand_int_range(rng, 1, yres + 1), s, i, npx = xres*yres;
+        gint *dx = g_new(gint, n), *dy = g_new(gint, n);
+        gdouble *a = random_image(rng, npx, g_rand_double_range(rng, 0, 0.4));
+        gdouble *clean = missing_data_filled_copy(a, npx, 0.0);
+        gdouble *r = g_new(gdouble, npx), *m = g_new(gdouble, npx);
+        gdouble *rc = g_new(gdouble, npx), *mc = g_new(gdouble, npx);
+        gdouble *marks = g_new(gdouble, npx), *mr = g_new(gdouble, npx), *mm = g_new(gdouble, npx);
+        gdouble fill = paper_image_mean(a, xres, yres);
+
+        for (s = 0; s < n; s++) {
+            dx[s] = g_rand_int_range(rng, -5, 6);
+            dy[s] = g_rand_int_range(rng, -5, 6);
+        }
+        for (i = 0; i < npx; i++)
+            marks[i] = isfinite(a[i]) ? 0.0 : 1.0;
+        ck_assert(isfinite(fill));
+        paper_compensate(a, xres, yres, n, dx, dy, fill, r, m);
+        paper_compensate(clean, xres, yres, n, dx, dy, fill, rc, mc);
+        /* Where each output pixel's source was missing. */
+        paper_compensate(marks, xres, yres, n, dx, dy, 0.0, mr, mm);
+        for (i = 0; i < npx; i++) {
+            ck_assert_msg(isfinite(r[i]), "seed %u: a non-finite result", seed);
+            if (mr[i] > 0.5)
+                ck_assert(r[i] == fill && m[i] == 1.0);
+            else {
+                ck_assert(memcmp(r + i, rc + i, sizeof(gdouble)) == 0);
+                ck_assert(m[i] == mc[i]);
+            }
+        }
+        g_free(dx);
+        g_free(dy);
+        g_free(a);
+        g_free(clean);
+        g_free(r);
+        g_free(m);
+        g_free(rc);
+        g_free(mc);
+        g_free(marks);
+        g_free(mr);
+        g_free(mm);
+    }
+    g_rand_free(rng);
+}
+END_TEST
+
+/* Continuous mode with constant whole-pixel drift is paper mode: the
+ * missing pixels land where paper mode puts them, filled and masked, and
+ * every value is finite for every kernel. */
+START_TEST(test_continuous_missing_pixels)
+{
+    static const GwyInterpolationType kernels[] = {
+        GWY_INTERPOLATION_ROUND, GWY_INTERPOLATION_LINEAR, GWY_INTERPOLATION_KEY,
+        GWY_INTERPOLATION_BSPLINE, GWY_INTERPOLATION_OMOMS,
+    };
+    GRand *rng = g_rand_new_with_seed(seed ^ 2);
+    gint trial;
+
+    for (trial = 0; trial < 20; trial++) {
+        gint xres = g_rand_int_range(rng, 8, 40), yres = g_rand_int_range(rng, 8, 40), i;
+        gint npx = xres*yres, vx = g_rand_int_range(rng, -3, 4), vy = g_rand_int_range(rng, -3, 4);
+        GwyInterpolationType kernel = kernels[g_rand_int_range(rng, 0, G_N_ELEMENTS(kernels))];
+        gdouble *a = random_image(rng, npx, g_rand_double_range(rng, 0, 0.4));
+        gdouble *r = g_new(gdouble, npx), *m = g_new(gdouble, npx);
+        gdouble *pr = g_new(gdouble, npx), *pm = g_new(gdouble, npx);
+        gchar *text = g_strdup_printf("stripe,dx,dy\n0,%d,%d\n1,%d,%d\n", vx, vy, vx, vy);
+        DriftTable *table = drift_table_parse(text, -1, "constant.csv", NULL);
+        gint dx[1] = { vx }, dy[1] = { vy };
+        GError *error = NULL;
+
+        ck_assert_ptr_nonnull(table);
+        ck_assert_msg(continuous_compensate_table(a, xres, yres, table, 1.0, 1.0, NULL, kernel, 0.25,
+                                                  r, m, &error),
+                      "seed %u: %s", seed, error ? error->message : "?");
+        paper_compensate(a, xres, yres, 1, dx, dy, 0.25, pr, pm);
+        for (i = 0; i < npx; i++) {
+            ck_assert_msg(isfinite(r[i]), "seed %u, kernel %d: non-finite at %d", seed, kernel, i);
+            if (pm[i] > 0.5)
+                ck_assert_msg(m[i] == 1.0 && r[i] == 0.25, "seed %u: pixel %d not filled", seed, i);
+        }
+        drift_table_free(table);
+        g_free(text);
+        g_free(a);
+        g_free(r);
+        g_free(m);
+        g_free(pr);
+        g_free(pm);
+    }
+    g_rand_free(rng);
+}
+END_TEST
+
+START_TEST(test_missing_refused_past_half)
+{
+    gdouble a[4] = { 1.0, NAN, INFINITY, 2.0 }, b[4] = { NAN, NAN, -INFINITY, 2.0 };
+    GError *error = NULL;
+
+    ck_assert(missing_data_check(a, 2, 2, "a", NULL));
+    ck_assert(!missing_data_check(b, 2, 2, "b", &error));
+    ck_assert(strstr(error->message, "3 of its 4 pixels are missing"));
+    g_error_free(error);
+    ck_assert(paper_image_mean(a, 2, 2) == 1.5);
+}
+END_TEST
+
+/* Whatever the bytes, an excerpt is short, valid and printable. */
+START_TEST(test_excerpts)
+{
+    GRand *rng = g_rand_new_with_seed(seed ^ 3);
+    gchar *text, *q, *line;
+    gint trial, length, i;
+    const gchar *p;
+
+    q = quoted_input_excerpt("1.5x", -1);
+    ck_assert_str_eq(q, "1.5x");
+    g_free(q);
+    for (trial = 0; trial < 200; trial++) {
+        length = trial < 5 ? 10 << 20 : g_rand_int_range(rng, 0, 5000);
+        text = g_new(gchar, length + 1);
+        for (i = 0; i < length; i++)
+            text[i] = (gchar)g_rand_int_range(rng, 1, 256);
+        text[length] = '\0';
+        q = quoted_input_excerpt(text, length);
+        line = quoted_input_message_line(text);
+        ck_assert(g_utf8_validate(q, -1, NULL) && g_utf8_validate(line, -1, NULL));
+        /* 40 characters, each at most \uXXXX, and "...". */
+        ck_assert_int_le(strlen(q), QUOTED_INPUT_EXCERPT_CHARS*6 + 3);
+        ck_assert_int_le(strlen(line), QUOTED_INPUT_MESSAGE_CHARS*6 + 3);
+        for (p = q; *p; p++)
+            ck_assert((guchar)*p >= 0x20 && *p != 0x7f);
+        ck_assert(!strchr(line, '\n') && !strchr(line, '\r'));
+        g_free(q);
+        g_free(line);
+        g_free(text);
+    }
+    g_rand_free(rng);
+}
+END_TEST
+
+/* A real .gwy passes; every shorter prefix of it is refused, and random
+ * damage is refused or passed without reading outside the bytes. */
+START_TEST(test_screening_truncations)
+{
+    GwyContainer *container = gwy_container_new();
+    GwyDataField *field = gwy_data_field_new(5, 3, 5e-9, 3e-9, TRUE);
+    GByteArray *bytes = g_byte_array_new();
+    GRand *rng = g_rand_new_with_seed(seed ^ 4);
+    GError *error = NULL;
+    guint8 *copy;
+    guint len, i;
+
+    gwy_container_set_object_by_name(container, "/0/data", field);
+    gwy_container_set_const_string_by_name(container, "/0/data/title", (const guchar*)"Height");
+    g_byte_array_append(bytes, (const guint8*)"GWYP", 4);
+    gwy_serializable_serialize(G_OBJECT(container), bytes);
+    ck_assert(file_screening_check_bytes("x.gwy", bytes->data, bytes->len, NULL));
+    for (len = 0; len < bytes->len; len++) {
+        copy = g_memdup2(bytes->data, MAX(len, 1));
+        ck_assert_msg(!file_screening_check_bytes("x.gwy", copy, len, &error),
+                      "a %u of %u byte prefix passed", len, bytes->len);
+        ck_assert(g_str_has_prefix(error->message, "x.gwy: ") && !strchr(error->message, '\n'));
+        g_clear_error(&error);
+        g_free(copy);
+    }
+    for (i = 0; i < 2000; i++) {
+        copy = g_memdup2(bytes->data, bytes->len);
+        copy[g_rand_int_range(rng, 4, bytes->len)] = (guint8)g_rand_int_range(rng, 0, 256);
+        file_screening_check_bytes("x.gwy", copy, bytes->len, NULL);
+        g_free(copy);
+    }
+    ck_assert(!file_screening_check_bytes("x.gwy", (const guint8*)"not gwy", 7, NULL));
+    ck_assert(file_screening_check_bytes("x.txt", (const guint8*)"1 2\n3 4\n", 8, NULL));
+    g_rand_free(rng);
+    g_byte_array_free(bytes, TRUE);
+    g_object_unref(field);
+    g_object_unref(container);
+}
+END_TEST
+
+/* A dead run's temporary is swept, a live run's and other files stay. */
+START_TEST(test_sweep)
+{
+    gchar *dir = g_strdup(TEST_BUILDDIR "/tests/scratch-hostile-core-XXXXXX");
+    gchar *target, *dead, *live, *other, *mine;
+    const gchar *argv[] = { "true", NULL };
+    gint status, fd;
+    GPid pid;
+
+    ck_assert_ptr_nonnull(g_mkdtemp(dir));
+    ck_assert(g_spawn_async(NULL, (gchar**)argv, NULL, G_SPAWN_SEARCH_PATH | G_SPAWN_DO_NOT_REAP_CHILD,
+                            NULL, NULL, &pid, NULL));
+    waitpid(pid, &status, 0);
+    target = g_build_filename(dir, "out.gwy", NULL);
+    dead = g_strdup_printf("%s/.out.gwy.%d.aBcDeF" SAFE_OUTPUT_SUFFIX, dir, (gint)pid);
+    live = g_strdup_printf("%s/.out.gwy.%d.gHiJkL" SAFE_OUTPUT_SUFFIX, dir, (gint)getppid());
+    other = g_strdup_printf("%s/.other.gwy.%d.mNoPqR" SAFE_OUTPUT_SUFFIX, dir, (gint)pid);
+    g_file_set_contents(dead, "x", 1, NULL);
+    g_file_set_contents(live, "x", 1, NULL);
+    g_file_set_contents(other, "x", 1, NULL);
+    mine = safe_output_temp_new(target, "", &fd);
+    ck_assert_ptr_nonnull(mine);
+    close(fd);
+    ck_assert(!g_file_test(dead, G_FILE_TEST_EXISTS));
+    ck_assert(g_file_test(live, G_FILE_TEST_EXISTS) && g_file_test(other, G_FILE_TEST_EXISTS));
+    ck_assert(safe_output_is_temp_name(strrchr(mine, '/') + 1));
+    safe_output_discard(mine);
+    ck_assert(!g_file_test(mine, G_FILE_TEST_EXISTS));
+    g_unlink(live);
+    g_unlink(other);
+    g_rmdir(dir);
+    g_free(mine);
+    g_free(target);
+    g_free(dead);
+    g_free(live);
+    g_free(other);
+    g_free(dir);
+}
+END_TEST
+
+static Suite*
+hostile_core_suite(void)
+{
+    Suite *suite = suite_create("hostile-core");
+    TCase *tc = tcase_create("core");
+
+    tcase_add_test(tc, test_stripe_fill_is_nearest_rule);
+    tcase_add_test(tc, test_paper_missing_pixels);
+    tcase_add_test(tc, test_continuous_missing_pixels);
+    tcase_add_test(tc, test_missing_refused_past_half);
+    tcase_add_test(tc, test_excerpts);
+    tcase_add_test(tc, test_screening_truncations);
+    tcase_add_test(tc, test_sweep);
+    suite_add_tcase(suite, tc);
+    return suite;
+}
+
+int
+main(void)
+{
+    gwy_process_type_init();
+    seed = test_seed_from_env("test-hostile-core");
+    return test_run_suite(hostile_core_suite());
+}
