@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <glib/gstdio.h>
 #include <libgwyddion/gwyddion.h>
@@ -412,7 +413,7 @@ static void
 make_bad_table(HostileCase *hc, GRand *rng)
 {
     gchar *input = write_image(hc, rng, "image.gwy", 32, 32, 0.0), *table = case_file(hc, "t.csv");
-    gint kind = g_rand_int_range(rng, 0, 5), i;
+    gint kind = g_rand_int_range(rng, 0, 6), i;
     GString *text = g_string_new("stripe,dx,dy\n0,1,0\n");
     gsize length;
 
@@ -433,6 +434,18 @@ make_bad_table(HostileCase *hc, GRand *rng)
     else if (kind == 3) {
         for (i = 1; i < 100000; i++)
             g_string_append_printf(text, "%d,0,0\n", i);
+    }
+    else if (kind == 5) {
+        /* A FIFO nobody writes to: reading it would wait for ever. */
+        ck_assert_int_eq(mkfifo(table, 0600), 0);
+        g_ptr_array_add(hc->kept, g_strdup(table));
+        hc->must_say = "t.csv";
+        add_output(hc, "-o", "out.gwy");
+        add_args(hc, "-d", table, input, NULL);
+        g_string_free(text, TRUE);
+        g_free(input);
+        g_free(table);
+        return;
     }
     else {
         g_string_assign(text, "stripe,dx,dy");

@@ -661,6 +661,7 @@ drift_table_load(const gchar *filename, GError **error)
 {
     GString *contents;
     DriftTable *table;
+    GStatBuf st;
     gchar buf[65536];
     gsize n;
     FILE *fh;
@@ -669,6 +670,13 @@ drift_table_load(const gchar *filename, GError **error)
     g_return_val_if_fail(filename, NULL);
     g_return_val_if_fail(!error || !*error, NULL);
 
+    /* A FIFO or a device would block or never end. */
+    if (g_stat(filename, &st) == 0 && !S_ISREG(st.st_mode)) {
+        g_set_error(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_IO,
+                    S_ISDIR(st.st_mode) ? _("%s: cannot read: it is a directory")
+                                        : _("%s: cannot read: not a regular file"), filename);
+        return NULL;
+    }
     if (!(fh = g_fopen(filename, "rb"))) {
         saved_errno = errno;
         g_set_error(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_IO,
