@@ -50,9 +50,9 @@ if [ $# -eq 0 ]; then
         test-simscan-measured-sample test-continuous-compensate \
         test-drift-trajectory test-drift-fit-creep test-continuous-blocks \
         test-continuous-simscan test-stripe-registration \
-        test-paper-compensate test-module-immediate test-hidden-effects \
-        test-simscan-cli.sh test-gwy-localscan test-module-dialog \
-        test-gui-dialog.sh
+        test-paper-compensate test-module-immediate test-simscan-cli.sh \
+        test-module-dialog test-gui-dialog.sh test-hidden-effects \
+        test-gwy-localscan
 fi
 
 # What AM_TESTS_ENVIRONMENT (tests/Makefile.inc) sets.

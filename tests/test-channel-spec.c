@@ -8,6 +8,7 @@
 #include <check.h>
 #include <glib.h>
 #include "channel-spec.h"
+#include "test-common.h"
 
 static void
 assert_parses(const gchar *text, const gchar *filename, gint id)
@@ -89,19 +90,12 @@ END_TEST
 int
 main(void)
 {
-    Suite *suite = suite_create("channel-spec");
-    TCase *tc = tcase_create("core");
-    SRunner *sr;
-    gint failed;
+    TCase *tc;
+    Suite *suite = test_suite_new("channel-spec", "core", &tc);
 
     tcase_add_test(tc, test_file_only);
     tcase_add_test(tc, test_file_and_id);
     tcase_add_test(tc, test_colons_in_names);
     tcase_add_test(tc, test_id_range);
-    suite_add_tcase(suite, tc);
-    sr = srunner_create(suite);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(suite);
 }

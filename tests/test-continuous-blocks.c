@@ -15,6 +15,7 @@
 #include <glib.h>
 #include <libprocess/interpolation.h>
 #include "continuous-compensate.h"
+#include "test-common.h"
 
 static guint32 test_seed;
 
@@ -182,19 +183,6 @@ continuous_blocks_suite(void)
 int
 main(void)
 {
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    SRunner *runner;
-    gint failed;
-
-    test_seed = (env
-                 ? (guint32)strtoul(env, NULL, 10)
-                 : (guint32)g_random_int());
-    printf("test-continuous-blocks: seed %u (set LOCALSCAN_TEST_SEED to "
-           "repeat)\n", test_seed);
-    fflush(stdout);
-    runner = srunner_create(continuous_blocks_suite());
-    srunner_run_all(runner, CK_NORMAL);
-    failed = srunner_ntests_failed(runner);
-    srunner_free(runner);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    test_seed = test_seed_from_env("test-continuous-blocks");
+    return test_run_suite(continuous_blocks_suite());
 }

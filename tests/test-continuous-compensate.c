@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <check.h>
-#include "test-seed.h"
+#include "test-common.h"
 #include <glib.h>
 #include <libprocess/interpolation.h>
 #include "continuous-compensate.h"

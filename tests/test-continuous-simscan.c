@@ -12,6 +12,7 @@
 #include <glib.h>
 #include "simscan-presets.h"
 #include "continuous-simscan-case.h"
+#include "test-common.h"
 
 /* Continuous mode's bound, px RMS.  The study (bench/study-accuracy,
  * docs/accuracy.md) finds 0.152 px on average over seeds 1-100, 0.19 at
@@ -62,25 +63,17 @@ END_TEST
 int
 main(void)
 {
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    Suite *suite = suite_create("continuous-simscan");
-    TCase *tc = tcase_create("core");
-    SRunner *sr;
-    gint failed;
+    TCase *tc;
+    Suite *suite = test_suite_new("continuous-simscan", "core", &tc);
 
     /* Small and non-zero, as simscan seeds are given. */
-    base_seed = env ? (guint32)strtoul(env, NULL, 10) : g_random_int();
+    base_seed = test_seed_from_env("test-continuous-simscan");
     base_seed = MAX(base_seed % 1000000u, 1u);
-    printf("test-continuous-simscan: simscan seeds %u-%u (set "
-           "LOCALSCAN_TEST_SEED to repeat)\n", base_seed, base_seed + 3);
+    printf("test-continuous-simscan: simscan seeds %u-%u\n",
+           base_seed, base_seed + 3);
     fflush(stdout);
 
     tcase_add_loop_test(tc, test_paper_scenario, 0, 4);
     tcase_set_timeout(tc, 120);
-    suite_add_tcase(suite, tc);
-    sr = srunner_create(suite);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(suite);
 }

@@ -14,6 +14,7 @@
 #include <check.h>
 #include "drift-fit.h"
 #include "sim-random.h"
+#include "test-common.h"
 
 #define N_FRAMES 4
 #define N_BLOCKS 16
@@ -267,18 +268,6 @@ drift_fit_creep_suite(void)
 int
 main(void)
 {
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    SRunner *sr;
-    gint failed;
-
-    base_seed = env ? (guint32)strtoul(env, NULL, 10)
-                    : (guint32)g_get_real_time();
-    printf("drift-fit-creep: seed %u (set LOCALSCAN_TEST_SEED to repeat)\n",
-           base_seed);
-    fflush(stdout);
-    sr = srunner_create(drift_fit_creep_suite());
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    base_seed = test_seed_from_env("test-drift-fit-creep");
+    return test_run_suite(drift_fit_creep_suite());
 }

@@ -11,6 +11,7 @@
 #include <check.h>
 #include "drift-fit.h"
 #include "sim-random.h"
+#include "test-common.h"
 
 /* Three frames of 16 blocks, 100 s each, every later block measured against
  * every earlier frame, the way displacement-measure.c ties blocks to times. */
@@ -325,11 +326,5 @@ drift_fit_suite(void)
 int
 main(void)
 {
-    SRunner *sr = srunner_create(drift_fit_suite());
-    gint failed;
-
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(drift_fit_suite());
 }

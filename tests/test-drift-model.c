@@ -10,6 +10,7 @@
 #include <check.h>
 #include <glib.h>
 #include "drift-model.h"
+#include "test-common.h"
 
 #define N_TIMES 200
 #define T_MAX 900.0
@@ -384,16 +385,6 @@ drift_model_suite(void)
 int
 main(void)
 {
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    SRunner *sr;
-    gint failed;
-
-    test_seed = env ? (guint32)g_ascii_strtoull(env, NULL, 10) : g_random_int();
-    g_printerr("test-drift-model: seed %u (LOCALSCAN_TEST_SEED overrides)\n",
-               test_seed);
-    sr = srunner_create(drift_model_suite());
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    test_seed = test_seed_from_env("test-drift-model");
+    return test_run_suite(drift_model_suite());
 }

@@ -14,6 +14,7 @@
 #include "localscan-channel.h"
 #include "paper-compensate.h"
 #include "stripe-registration.h"
+#include "test-common.h"
 
 /* The halves that two rules (floor(v + 0.5) and round()) used to split, and
  * neighbours that must not move. */
@@ -126,20 +127,13 @@ END_TEST
 int
 main(void)
 {
-    Suite *s = suite_create("drift-px-round");
-    TCase *tc = tcase_create("halves away from zero");
-    SRunner *sr;
-    gint failed;
+    TCase *tc;
+    Suite *s = test_suite_new("drift-px-round", "halves away from zero", &tc);
 
     tcase_add_test(tc, test_function);
     tcase_add_test(tc, test_physical_table);
     tcase_add_test(tc, test_measured_table_made_whole);
     tcase_add_test(tc, test_registration_table);
     tcase_add_test(tc, test_paper_channel);
-    suite_add_tcase(s, tc);
-    sr = srunner_create(s);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(s);
 }

@@ -11,6 +11,7 @@
 #include <check.h>
 #include <json-glib/json-glib.h>
 #include "fit-report.h"
+#include "test-common.h"
 
 /* Three fitted models, every number of the first one not finite. */
 static void
@@ -126,17 +127,10 @@ END_TEST
 int
 main(void)
 {
-    Suite *suite = suite_create("fit-report-json");
-    TCase *tc = tcase_create("core");
-    SRunner *sr;
-    gint failed;
+    TCase *tc;
+    Suite *suite = test_suite_new("fit-report-json", "core", &tc);
 
     tcase_add_test(tc, test_nan_is_null);
     tcase_add_test(tc, test_infinity_is_null);
-    suite_add_tcase(suite, tc);
-    sr = srunner_create(suite);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(suite);
 }

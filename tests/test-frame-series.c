@@ -16,6 +16,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "frame-series-load.h"
+#include "test-common.h"
 
 static const gchar *measured;
 
@@ -267,35 +268,25 @@ END_TEST
 int
 main(void)
 {
-    Suite *s = suite_create("frame-series");
-    TCase *tc = tcase_create("measured"), *tc_simscan = tcase_create("simscan");
-    gboolean have_measured;
+    TCase *tc, *tc_simscan;
+    Suite *s = test_suite_new("frame-series", "simscan", &tc_simscan);
     gchar *probe;
-    SRunner *sr;
-    gint failed;
 
-    measured = g_getenv("LOCALSCAN_MEASURED_DIR");
-    if (!measured)
-        measured = TEST_SRCDIR "/../shared/data/measured";
-    probe = g_build_filename(measured, "fastscan-series", "09261606.001", NULL);
-    have_measured = g_file_test(probe, G_FILE_TEST_EXISTS);
-    g_free(probe);
+    measured = test_measured_dir();
+    probe = test_measured_file("test-frame-series",
+                               "fastscan-series/09261606.001",
+                               "the measured-file tests");
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     tcase_set_timeout(tc_simscan, 120);
     tcase_add_test(tc_simscan, test_simscan_fit_reads_simscan_timing);
-    suite_add_tcase(s, tc_simscan);
-    if (have_measured) {
+    if (probe) {
+        tc = tcase_create("measured");
         tcase_add_test(tc, test_nanoscope_timing);
         tcase_add_test(tc, test_hsafm_channels_as_frames);
         tcase_add_test(tc, test_anasys_duplicates_dropped);
         tcase_add_test(tc, test_options_override_and_refusals);
         suite_add_tcase(s, tc);
     }
-    else
-        printf("SKIPPED: the measured-file tests, measured data absent (%s)\n", measured);
-    sr = srunner_create(s);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    g_free(probe);
+    return test_run_suite(s);
 }

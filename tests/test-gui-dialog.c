@@ -22,6 +22,7 @@
 #include "localscan-channel.h"
 #include "localscan-params.h"
 #include "paper-compensate.h"
+#include "test-common.h"
 
 #define SCREENSHOT TEST_BUILDDIR "/tests/gui-dialog.png"
 #define SCREENSHOT_DE TEST_BUILDDIR "/tests/gui-dialog-de.png"
@@ -673,32 +674,21 @@ END_TEST
 int
 main(void)
 {
-    const gchar *seed_env = g_getenv("LOCALSCAN_TEST_SEED");
     Suite *suite;
     TCase *tc;
-    SRunner *sr;
-    gint failed;
 
     if (!g_getenv("DISPLAY") || !*g_getenv("DISPLAY")) {
-        printf("test-gui-dialog: SKIPPED: no X display (run it through tests/test-gui-dialog.sh)\n");
-        return 77;
+        return test_skip_all("test-gui-dialog",
+                             "no X display (run it through tests/test-gui-dialog.sh)");
     }
-    seed = seed_env ? (guint32)g_ascii_strtoull(seed_env, NULL, 10) : (guint32)g_random_int();
-    printf("test-gui-dialog: seed %u (set LOCALSCAN_TEST_SEED to repeat)\n", seed);
-    fflush(stdout);
+    seed = test_seed_from_env("test-gui-dialog");
 
-    suite = suite_create("gui-dialog");
-    tc = tcase_create("dialog");
+    suite = test_suite_new("gui-dialog", "dialog", &tc);
     tcase_set_timeout(tc, 60);
     tcase_add_test(tc, test_dialog_ok_makes_channel);
     tcase_add_test(tc, test_dialog_in_german);
     tcase_add_test(tc, test_no_double_correction);
     tcase_add_test(tc, test_reference_chooser);
     tcase_add_test(tc, test_cancel_large_image);
-    suite_add_tcase(suite, tc);
-    sr = srunner_create(suite);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? 1 : 0;
+    return test_run_suite(suite);
 }

@@ -17,6 +17,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "hidden-effect-cases.h"
+#include "test-common.h"
 
 #define N_CASES 20
 static guint32 base_seed;
@@ -91,24 +92,12 @@ END_TEST
 int
 main(void)
 {
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    Suite *s = suite_create("hidden-effects");
-    TCase *tc = tcase_create("blind");
-    SRunner *sr;
-    gint failed;
+    TCase *tc;
+    Suite *s = test_suite_new("hidden-effects", "blind", &tc);
 
-    base_seed = env ? (guint32)strtoul(env, NULL, 10)
-                    : (guint32)g_get_real_time();
-    printf("hidden-effects: seed %u (set LOCALSCAN_TEST_SEED to repeat)\n",
-           base_seed);
-    fflush(stdout);
+    base_seed = test_seed_from_env("test-hidden-effects");
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     tcase_add_loop_test(tc, test_hidden_effect, 0, N_CASES);
     tcase_set_timeout(tc, 60);
-    suite_add_tcase(s, tc);
-    sr = srunner_create(s);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(s);
 }

@@ -18,6 +18,7 @@
 #include "local-scan.h"
 #include "sample.h"
 #include "scanner.h"
+#include "test-common.h"
 
 #define MAX_SPHERES 16
 
@@ -748,16 +749,6 @@ local_scan_suite(void)
 int
 main(void)
 {
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    SRunner *runner;
-    gint failed;
-
-    test_seed = env ? (guint32)g_ascii_strtoull(env, NULL, 10) : g_random_int();
-    g_printerr("test-local-scan: seed %u (LOCALSCAN_TEST_SEED overrides)\n",
-               test_seed);
-    runner = srunner_create(local_scan_suite());
-    srunner_run_all(runner, CK_NORMAL);
-    failed = srunner_ntests_failed(runner);
-    srunner_free(runner);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    test_seed = test_seed_from_env("test-local-scan");
+    return test_run_suite(local_scan_suite());
 }

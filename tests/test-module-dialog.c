@@ -20,6 +20,7 @@
 #include "localscan-channel.h"
 #include "localscan-params.h"
 #include "registration-frames.h"
+#include "test-common.h"
 
 #define RERUN_GUARD "LOCALSCAN_TEST_UNDER_XVFB"
 #define MAX_TICKS 100
@@ -577,13 +578,11 @@ ensure_display(gchar **argv)
     if (g_getenv("DISPLAY") && *g_getenv("DISPLAY"))
         return;
     if (g_getenv(RERUN_GUARD) || !g_find_program_in_path("xvfb-run")) {
-        printf("test-module-dialog: SKIPPED: no X display and no xvfb-run\n");
-        exit(77);
+        exit(test_skip_all("test-module-dialog", "no X display and no xvfb-run"));
     }
     g_setenv(RERUN_GUARD, "1", TRUE);
     execlp("xvfb-run", "xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", argv[0], (gchar*)NULL);
-    printf("test-module-dialog: SKIPPED: cannot run xvfb-run\n");
-    exit(77);
+    exit(test_skip_all("test-module-dialog", "cannot run xvfb-run"));
 }
 
 int
@@ -593,15 +592,13 @@ main(int argc, char **argv)
     GError *error = NULL;
     Suite *suite;
     TCase *tc;
-    SRunner *sr;
-    gint failed;
 
     ensure_display(argv);
     if (!path) {
         fprintf(stderr, "test-module-dialog: LOCALSCAN_MODULE is not set.\n");
         return 1;
     }
-    test_seed = frame_pair_test_seed("test-module-dialog");
+    test_seed = test_seed_from_env("test-module-dialog");
     gtk_init(&argc, &argv);
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     gwy_stock_register_stock_items();
@@ -610,18 +607,11 @@ main(int argc, char **argv)
         return 1;
     }
 
-    suite = suite_create("module-dialog");
-    tc = tcase_create("dialog");
+    suite = test_suite_new("module-dialog", "dialog", &tc);
     tcase_add_test(tc, test_bad_table_disables_ok);
     tcase_add_test(tc, test_good_table_ok_makes_channel);
     tcase_add_test(tc, test_status_names_timing_source);
     tcase_add_test(tc, test_reference_chooser_and_cache);
-    suite_add_tcase(suite, tc);
-    sr = srunner_create(suite);
     /* One X connection, one process. */
-    srunner_set_fork_status(sr, CK_NOFORK);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite_forking(suite, FALSE);
 }

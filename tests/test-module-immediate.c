@@ -27,6 +27,7 @@
 #include "scan-timing-meta.h"
 #include "registration-frames.h"
 #include "simscan-file-case.h"
+#include "test-common.h"
 
 #define TITLE "Height"
 #define RESULT_TITLE "Height (local-scan compensated)"
@@ -1331,16 +1332,10 @@ static const MeasuredTiming measured_timings[] = {
 START_TEST(test_measured_files_timing)
 {
     const MeasuredTiming *mt = measured_timings + _i;
-    const gchar *dir = g_getenv("LOCALSCAN_MEASURED_DIR");
-    gchar *path = g_build_filename(dir ? dir : "", mt->file, NULL);
+    gchar *path = g_build_filename(test_measured_dir(), mt->file, NULL);
     GwyContainer *data;
     ScanTiming t;
 
-    if (!dir || !g_file_test(path, G_FILE_TEST_EXISTS)) {
-        printf("test-module-immediate: SKIPPED %s timing: the measured data is absent (%s)\n", mt->file, path);
-        g_free(path);
-        return;
-    }
     data = gwy_file_load(path, GWY_RUN_NONINTERACTIVE, NULL);
     ck_assert_msg(data, "cannot load %s", path);
     ck_assert_int_eq(localscan_channel_scan_timing(data, mt->id, SCAN_DIRECTION_UP, &t), mt->found);
@@ -1353,6 +1348,20 @@ START_TEST(test_measured_files_timing)
     g_free(path);
 }
 END_TEST
+
+/* Measured file i's timing case, or SKIPPED when the file is absent. */
+static void
+add_measured_timing_test(TCase *tc, guint i)
+{
+    gchar *what = g_strdup_printf("%s timing", measured_timings[i].file);
+    gchar *path = test_measured_file("test-module-immediate",
+                                     measured_timings[i].file, what);
+
+    if (path)
+        tcase_add_loop_test(tc, test_measured_files_timing, i, i + 1);
+    g_free(path);
+    g_free(what);
+}
 
 /************************************************************************
  * Continuous mode on simscan's files: timing from their metadata
@@ -1549,16 +1558,6 @@ START_TEST(test_simscan_frame_start)
 }
 END_TEST
 
-static guint32
-choose_seed(void)
-{
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    guint32 seed = env ? (guint32)g_ascii_strtoull(env, NULL, 10) : g_random_int();
-
-    printf("test-module-immediate: seed %u (set LOCALSCAN_TEST_SEED to repeat)\n", seed);
-    fflush(stdout);
-    return seed;
-}
 
 static gboolean
 load_module(void)
@@ -1582,12 +1581,11 @@ load_module(void)
 int
 main(void)
 {
-    Suite *suite = suite_create("module-immediate");
-    TCase *tc = tcase_create("immediate");
-    SRunner *sr;
-    gint failed;
+    TCase *tc;
+    Suite *suite = test_suite_new("module-immediate", "immediate", &tc);
+    guint i;
 
-    test_seed = choose_seed();
+    test_seed = test_seed_from_env("test-module-immediate");
     if (!load_module())
         return 1;
 
@@ -1608,7 +1606,8 @@ main(void)
     tcase_add_test(tc, test_scan_timing_from_metadata);
     tcase_add_test(tc, test_scan_timing_meta_dates);
     tcase_add_test(tc, test_source_content_meta_dropped);
-    tcase_add_loop_test(tc, test_measured_files_timing, 0, G_N_ELEMENTS(measured_timings));
+    for (i = 0; i < G_N_ELEMENTS(measured_timings); i++)
+        add_measured_timing_test(tc, i);
     tcase_add_test(tc, test_simscan_default_timing);
     tcase_add_test(tc, test_simscan_up_timing);
     tcase_add_test(tc, test_simscan_frame_start);
@@ -1617,11 +1616,5 @@ main(void)
     tcase_add_test(tc, test_reference_graph_and_log);
     tcase_add_test(tc, test_reference_refused);
     tcase_add_test(tc, test_reference_unrelated_refused);
-    suite_add_tcase(suite, tc);
-
-    sr = srunner_create(suite);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(suite);
 }

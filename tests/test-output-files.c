@@ -12,6 +12,7 @@
 #include <glib.h>
 #include <glib/gstdio.h>
 #include "output-files.h"
+#include "test-common.h"
 
 static gchar *dir;
 
@@ -275,10 +276,8 @@ END_TEST
 int
 main(void)
 {
-    Suite *suite = suite_create("output-files");
-    TCase *tc = tcase_create("core");
-    SRunner *sr;
-    gint failed;
+    TCase *tc;
+    Suite *suite = test_suite_new("output-files", "core", &tc);
 
     tcase_add_test(tc, test_commit_writes_all);
     tcase_add_test(tc, test_failed_rename_rolls_back);
@@ -286,10 +285,5 @@ main(void)
     tcase_add_test(tc, test_add_refuses_folder_and_repeats);
     tcase_add_test(tc, test_same_file);
     tcase_add_test(tc, test_check_roles);
-    suite_add_tcase(suite, tc);
-    sr = srunner_create(suite);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(suite);
 }

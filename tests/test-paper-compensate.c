@@ -11,6 +11,7 @@
 #include <check.h>
 #include <glib.h>
 #include "paper-compensate.h"
+#include "test-common.h"
 
 static guint32 test_seed;
 
@@ -308,40 +309,18 @@ START_TEST(test_mean_accuracy)
 }
 END_TEST
 
-static guint32
-choose_seed(void)
-{
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    guint32 seed;
-
-    if (env && *env)
-        seed = (guint32)g_ascii_strtoull(env, NULL, 10);
-    else
-        seed = g_random_int();
-    printf("test-paper-compensate: seed %u (set LOCALSCAN_TEST_SEED to "
-           "repeat)\n", seed);
-    fflush(stdout);
-    return seed;
-}
 
 int
 main(void)
 {
-    Suite *suite = suite_create("paper-compensate");
-    TCase *tc = tcase_create("core");
-    SRunner *sr;
-    gint failed;
+    TCase *tc;
+    Suite *suite = test_suite_new("paper-compensate", "core", &tc);
 
-    test_seed = choose_seed();
+    test_seed = test_seed_from_env("test-paper-compensate");
     tcase_add_test(tc, test_worked_example);
     tcase_add_test(tc, test_figure6);
     tcase_add_test(tc, test_random_against_reference);
     tcase_add_test(tc, test_everything_filled);
     tcase_add_test(tc, test_mean_accuracy);
-    suite_add_tcase(suite, tc);
-    sr = srunner_create(suite);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(suite);
 }

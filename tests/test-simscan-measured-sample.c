@@ -20,6 +20,7 @@
 #include "centre-error.h"
 #include "simscan-config.h"
 #include "simscan-run.h"
+#include "test-common.h"
 
 #define SAMPLE_PATH "particles-film/PTO_110_Virgin0001.gwy"
 /* Particles are farther apart than this (px), drifts are smaller. */
@@ -399,31 +400,19 @@ measured_sample_suite(void)
 int
 main(void)
 {
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    const gchar *dir = g_getenv("LOCALSCAN_MEASURED_DIR");
-    SRunner *runner;
-    gint failed;
+    gint status;
 
-    sample_file = g_build_filename(dir ? dir : TEST_SRCDIR "/../shared/data/measured",
-                                   SAMPLE_PATH, NULL);
-    if (!g_file_test(sample_file, G_FILE_TEST_IS_REGULAR)) {
-        printf("test-simscan-measured-sample: SKIPPED: measured data absent "
-               "(%s)\n", sample_file);
-        g_free(sample_file);
-        return 77;
-    }
+    sample_file = test_measured_file("test-simscan-measured-sample",
+                                     SAMPLE_PATH, "every test");
+    if (!sample_file)
+        return TEST_EXIT_SKIP;
     if (!(sample_field = load_sample(sample_file))) {
         printf("test-simscan-measured-sample: cannot read %s\n", sample_file);
         return EXIT_FAILURE;
     }
-    test_seed = env ? (guint32)g_ascii_strtoull(env, NULL, 10) : g_random_int();
-    g_printerr("test-simscan-measured-sample: seed %u (LOCALSCAN_TEST_SEED "
-               "overrides)\n", test_seed);
-    runner = srunner_create(measured_sample_suite());
-    srunner_run_all(runner, CK_NORMAL);
-    failed = srunner_ntests_failed(runner);
-    srunner_free(runner);
+    test_seed = test_seed_from_env("test-simscan-measured-sample");
+    status = test_run_suite(measured_sample_suite());
     g_object_unref(sample_field);
     g_free(sample_file);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return status;
 }

@@ -15,6 +15,7 @@
 #include "stripe-geometry.h"
 #include "sample.h"
 #include "scanner.h"
+#include "test-common.h"
 
 static guint32 test_seed;
 static gint warnings_seen;
@@ -672,16 +673,6 @@ scanner_suite(void)
 int
 main(void)
 {
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-    SRunner *sr;
-    gint failed;
-
-    test_seed = env ? (guint32)g_ascii_strtoull(env, NULL, 10) : g_random_int();
-    g_printerr("test-simscan-scanner: seed %u (LOCALSCAN_TEST_SEED overrides)\n",
-               test_seed);
-    sr = srunner_create(scanner_suite());
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    test_seed = test_seed_from_env("test-simscan-scanner");
+    return test_run_suite(scanner_suite());
 }

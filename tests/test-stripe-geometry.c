@@ -8,6 +8,7 @@
 #include <check.h>
 #include <glib.h>
 #include "stripe-geometry.h"
+#include "test-common.h"
 
 START_TEST(test_bounds_multiple)
 {
@@ -201,10 +202,8 @@ END_TEST
 int
 main(void)
 {
-    Suite *suite = suite_create("stripe-geometry");
-    TCase *tc = tcase_create("core");
-    SRunner *sr;
-    gint failed;
+    TCase *tc;
+    Suite *suite = test_suite_new("stripe-geometry", "core", &tc);
 
     tcase_add_test(tc, test_bounds_multiple);
     tcase_add_test(tc, test_bounds_not_multiple);
@@ -215,10 +214,5 @@ main(void)
     tcase_add_test(tc, test_nearest_first_last_blank);
     tcase_add_test(tc, test_nearest_all_blank);
     tcase_add_test(tc, test_nearest_single);
-    suite_add_tcase(suite, tc);
-    sr = srunner_create(suite);
-    srunner_run_all(sr, CK_NORMAL);
-    failed = srunner_ntests_failed(sr);
-    srunner_free(sr);
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return test_run_suite(suite);
 }
