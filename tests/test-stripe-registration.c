@@ -12,6 +12,7 @@
 #include <fftw3.h>
 #include "stripe-registration.h"
 #include "registration-frames.h"
+#include "test-common.h"
 
 static guint32 test_seed;
 
@@ -473,14 +474,10 @@ registration_suite(void)
 int
 main(void)
 {
-    SRunner *runner;
-    gint failed;
+    gint status;
 
-    test_seed = frame_pair_test_seed("test-stripe-registration");
-    runner = srunner_create(registration_suite());
-    srunner_run_all(runner, CK_NORMAL);
-    failed = srunner_ntests_failed(runner);
-    srunner_free(runner);
+    test_seed = test_seed_from_env("test-stripe-registration");
+    status = test_run_suite(registration_suite());
     fftw_cleanup();
-    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+    return status;
 }
