@@ -21,21 +21,12 @@
 #include "localscan-params.h"
 #include "registration-frames.h"
 #include "test-common.h"
+#include "worked-example.h"
 
 #define RERUN_GUARD "LOCALSCAN_TEST_UNDER_XVFB"
 #define MAX_TICKS 100
 
 static guint32 test_seed;
-
-static const gchar worked_table[] = "stripe,dx,dy\n0,1,1\n1,-1,0\n2,0,-1\n";
-static const gdouble worked_c[6*4] = {
-    6.0,  7.0,  8.0,  12.5,
-    12.5, 9.0,  10.0, 11.0,
-    12.5, 9.0,  10.0, 11.0,
-    12.5, 13.0, 14.0, 15.0,
-    12.5, 13.0, 14.0, 15.0,
-    17.0, 18.0, 19.0, 20.0,
-};
 
 /* What the timeout found in the dialog, and how it answered. */
 typedef struct {

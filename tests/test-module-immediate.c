@@ -28,34 +28,12 @@
 #include "registration-frames.h"
 #include "simscan-file-case.h"
 #include "test-common.h"
+#include "worked-example.h"
 
 #define TITLE "Height"
 #define RESULT_TITLE "Height (local-scan compensated)"
 
 static guint32 test_seed;
-
-/* The worked example of shared/spec/paper-mode.md. */
-static const gchar worked_table[] =
-    "stripe,dx,dy\n"
-    "0,1,1\n"
-    "1,-1,0\n"
-    "2,0,-1\n";
-static const gdouble worked_c[6*4] = {
-    6.0,  7.0,  8.0,  12.5,
-    12.5, 9.0,  10.0, 11.0,
-    12.5, 9.0,  10.0, 11.0,
-    12.5, 13.0, 14.0, 15.0,
-    12.5, 13.0, 14.0, 15.0,
-    17.0, 18.0, 19.0, 20.0,
-};
-static const gdouble worked_mask[6*4] = {
-    0, 0, 0, 1,
-    1, 0, 0, 0,
-    1, 0, 0, 0,
-    1, 0, 0, 0,
-    1, 0, 0, 0,
-    0, 0, 0, 0,
-};
 
 typedef struct {
     gint source;
@@ -121,12 +99,7 @@ make_field(const gdouble *values, gint xres, gint yres, gint k, gdouble xstep, g
 static GwyDataField*
 make_worked_example(gint k, gdouble xstep, gdouble ystep, const gchar *xyunit)
 {
-    gdouble a[6*4];
-    gint i;
-
-    for (i = 0; i < 6*4; i++)
-        a[i] = i + 1;
-    return make_field(a, 4, 6, k, xstep, ystep, xyunit);
+    return make_field(worked_a, WORKED_XRES, WORKED_YRES, k, xstep, ystep, xyunit);
 }
 
 static GwyContainer*

@@ -12,6 +12,7 @@
 #include <glib.h>
 #include "paper-compensate.h"
 #include "test-common.h"
+#include "worked-example.h"
 
 static guint32 test_seed;
 
@@ -72,36 +73,12 @@ assert_same_pixels(const gdouble *got, const gdouble *expected, gint size,
 
 START_TEST(test_worked_example)
 {
-    static const gdouble a[6*4] = {
-         1,  2,  3,  4,
-         5,  6,  7,  8,
-         9, 10, 11, 12,
-        13, 14, 15, 16,
-        17, 18, 19, 20,
-        21, 22, 23, 24,
-    };
-    static const gdouble e = 12.5;
-    static const gdouble expected[6*4] = {
-        6, 7,  8,  e,
-        e, 9,  10, 11,
-        e, 9,  10, 11,
-        e, 13, 14, 15,
-        e, 13, 14, 15,
-        17, 18, 19, 20,
-    };
-    static const gdouble expected_mask[6*4] = {
-        0, 0, 0, 1,
-        1, 0, 0, 0,
-        1, 0, 0, 0,
-        1, 0, 0, 0,
-        1, 0, 0, 0,
-        0, 0, 0, 0,
-    };
-    static const gint dx[3] = { 1, -1, 0 }, dy[3] = { 1, 0, -1 };
+    const gdouble *a = worked_a, *expected = worked_c, *expected_mask = worked_mask;
+    const gint *dx = worked_dx, *dy = worked_dy;
     gdouble result[6*4], mask[6*4], d;
 
     d = paper_image_mean(a, 4, 6);
-    ck_assert(d == 12.5);
+    ck_assert(d == WORKED_FILL);
     paper_compensate(a, 4, 6, 3, dx, dy, d, result, mask);
     assert_same_pixels(result, expected, 24, "result", "worked example");
     assert_same_pixels(mask, expected_mask, 24, "mask", "worked example");
