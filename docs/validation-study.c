@@ -1498,7 +1498,7 @@ write_header(GString *md)
         "line-levelled and blurred by %.3g %% of the frame first; a block "
         "counts only when its peak stands clear of rival peaks and "
         "correlates at least %.2g), which measures p(t_a) - p(t_b) at the "
-        "two scan times of its content (interfaces.md section 4).  All "
+        "two scan times of its content (conventions.md).  All "
         "models are fitted to all measurements of a series at once, after "
         "gross outliers (beyond %g robust sigmas) are dropped; held-out "
         "errors are %d-fold cross-validated over the blocks.  `simscan fit` "

@@ -1,6 +1,6 @@
 /*
  *  The simulated scanner: raster frames of a SimSample under drift, with the
- *  timing of shared/spec/interfaces.md section 4 (scan-timing.h).
+ *  timing of docs/conventions.md (scan-timing.h).
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -85,7 +85,7 @@ void           sim_scan_add_noise      (GwyDataField *field,
                                         guint32 seed);
 
 /* The paper's Figure 6 contamination: no time model, stripe s of n (the
- * stripes of paper-mode.md, stripe-geometry.h) displaced by (dx_px[s],
+ * stripes of docs/paper-mode.md, stripe-geometry.h) displaced by (dx_px[s],
  * dy_px[s]) pixels, i.e. a feature truly at (r, c) appears at (r + dy, c + dx).
  * Fractional displacements are sampled exactly.  Noise and tip as in params;
  * timing fields are ignored. */

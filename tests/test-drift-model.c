@@ -1,5 +1,5 @@
 /*
- *  Tests of the drift trajectories p(t) (interfaces.md section 4).
+ *  Tests of the drift trajectories p(t) (docs/conventions.md).
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */

@@ -1,5 +1,5 @@
 /*
- *  Tests of the drift table CSV reader and writer (interfaces.md section 1).
+ *  Tests of the drift table CSV reader and writer (docs/drift-table.md).
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */

@@ -21,7 +21,7 @@
 static guint32 test_seed;
 
 /* p(t) = p0 + v t + u tau (1 - exp(-t/tau)): constant velocity plus
- * settling (interfaces.md section 4), px and s. */
+ * settling (docs/conventions.md), px and s. */
 typedef struct {
     gdouble p0[2];
     gdouble v[2];
@@ -636,7 +636,7 @@ max_linear_interpolation_error(const DriftMeasurement *meas, gint n,
     return err;
 }
 
-/* Settling drift (interfaces.md section 4) with an excess drift of 5-15 px
+/* Settling drift (docs/conventions.md) with an excess drift of 5-15 px
  * relaxing with tau of 1/8 to 1/2 of the frame: the spline through 16 exact
  * stripe measurements follows it within 0.02 px between the first and last
  * stripe centre and 0.1 px over the whole frame (the top half stripe is

@@ -1,5 +1,5 @@
 /*
- *  Tests of paper-mode compensation against shared/spec/paper-mode.md.
+ *  Tests of paper-mode compensation against docs/paper-mode.md.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */

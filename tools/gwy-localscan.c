@@ -1,6 +1,6 @@
 /*
  *  gwy-localscan: batch local-scan drift compensation from the command line
- *  (shared/spec/interfaces.md section 2).
+ *  (docs/cli.md).
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */

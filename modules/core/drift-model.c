@@ -1,5 +1,5 @@
 /*
- *  Drift trajectories p(t) of shared/spec/interfaces.md section 4.
+ *  Drift trajectories p(t) of docs/conventions.md.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */

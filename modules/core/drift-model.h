@@ -1,5 +1,5 @@
 /*
- *  Drift trajectories p(t) of shared/spec/interfaces.md section 4.  A feature
+ *  Drift trajectories p(t) of docs/conventions.md.  A feature
  *  truly at X appears in the image at X + p(t), t the moment its pixel was
  *  scanned; t = 0 is the start of the first frame.  Metres and seconds.
  *  Copyright (C) 2026 The gwy-localscan authors.

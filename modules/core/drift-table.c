@@ -1,5 +1,5 @@
 /*
- *  The per-stripe drift table (shared/spec/interfaces.md section 1):
+ *  The per-stripe drift table (docs/drift-table.md):
  *  reading, validation, physical-unit conversion and writing.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later

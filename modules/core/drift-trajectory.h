@@ -1,6 +1,6 @@
 /*
  *  The drift trajectory over scan time, built from per-stripe local-scan
- *  measurements (shared/spec/interfaces.md sections 1 and 4).
+ *  measurements (docs/conventions.md).
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */

@@ -1,7 +1,7 @@
 /*
  *  A time series of frames of one area: from several files or from the
- *  channels of one file, with each frame's scan timing (interfaces.md
- *  section 4) taken from the file metadata or from options.  Loading the
+ *  channels of one file, with each frame's scan timing
+ *  (docs/conventions.md) taken from the file metadata or from options.  Loading the
  *  files needs Gwyddion's file modules, outside this GTK-free core:
  *  tools/frame-series-load.h does it and calls frame_series_from_files.
  *  Copyright (C) 2026 The gwy-localscan authors.

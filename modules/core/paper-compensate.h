@@ -1,6 +1,6 @@
 /*
  *  Paper-mode compensation: whole-pixel stripe shifts, bit-exact to
- *  shared/spec/paper-mode.md.
+ *  docs/paper-mode.md.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */

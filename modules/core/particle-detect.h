@@ -2,7 +2,7 @@
  *  Finding particles in a (drift-contaminated) image: a levelled copy,
  *  threshold above the substrate, grain numbering, weighted centres, typical
  *  size; and choosing one particle per stripe by the paper's rule
- *  (shared/spec/paper-mode.md).
+ *  (docs/paper-mode.md).
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -89,7 +89,7 @@ gdouble     particle_typical_radius      (const GArray *particles,
 
 /* How a stripe with several particles picks the one to local-scan. */
 typedef enum {
-    /* The paper's rule (shared/spec/paper-mode.md): the particle whose
+    /* The paper's rule (docs/paper-mode.md): the particle whose
      * centre lies closest to the stripe's centre point
      * ((xres-1)/2, (first_row+last_row)/2), Euclidean distance in px. */
     PARTICLE_CHOICE_CLOSEST = 0,

@@ -1,6 +1,6 @@
 /*
- *  When each pixel of a raster scan is measured (shared/spec/interfaces.md
- *  section 4).  Shared by the simulator, continuous compensation and fitting.
+ *  When each pixel of a raster scan is measured (docs/conventions.md).
+ *  Shared by the simulator, continuous compensation and fitting.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */

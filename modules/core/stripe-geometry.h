@@ -1,5 +1,5 @@
 /*
- *  Stripe geometry of the local-scan method (shared/spec/paper-mode.md).
+ *  Stripe geometry of the local-scan method (docs/paper-mode.md).
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
