@@ -168,15 +168,14 @@ END_TEST
 static Suite*
 continuous_blocks_suite(void)
 {
-    Suite *suite = suite_create("continuous-blocks");
-    TCase *tc = tcase_create("core");
+    TCase *tc;
+    Suite *suite = test_suite_new("continuous-blocks", "core", &tc);
 
     tcase_set_timeout(tc, 60);
     tcase_add_loop_test(tc, test_tall_shift_matches_gwyddion,
                         0, G_N_ELEMENTS(all_kernels));
     tcase_add_loop_test(tc, test_wide_shift_matches_gwyddion,
                         0, G_N_ELEMENTS(all_kernels));
-    suite_add_tcase(suite, tc);
     return suite;
 }
 

@@ -860,8 +860,8 @@ END_TEST
 static Suite*
 continuous_compensate_suite(void)
 {
-    Suite *suite = suite_create("continuous-compensate");
-    TCase *tc = tcase_create("core");
+    TCase *tc;
+    Suite *suite = test_suite_new("continuous-compensate", "core", &tc);
 
     tcase_set_timeout(tc, 120);
     tcase_add_loop_test(tc, test_accuracy_against_paper_mode, 0, 4);
@@ -875,7 +875,6 @@ continuous_compensate_suite(void)
     tcase_add_test(tc, test_one_stripe);
     tcase_add_test(tc, test_physical_units);
     tcase_add_test(tc, test_errors_leave_output_untouched);
-    suite_add_tcase(suite, tc);
     return suite;
 }
 

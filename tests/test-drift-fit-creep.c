@@ -251,8 +251,8 @@ END_TEST
 static Suite*
 drift_fit_creep_suite(void)
 {
-    Suite *s = suite_create("drift-fit-creep");
-    TCase *tc = tcase_create("creep");
+    TCase *tc;
+    Suite *s = test_suite_new("drift-fit-creep", "creep", &tc);
 
     tcase_add_loop_test(tc, test_acceleration_found, 0, 10);
     tcase_add_loop_test(tc, test_log_creep_found, 0, 10);
@@ -261,7 +261,6 @@ drift_fit_creep_suite(void)
     tcase_add_test(tc, test_overlapping_frames_unused);
     tcase_add_test(tc, test_min_period);
     tcase_set_timeout(tc, 60);
-    suite_add_tcase(s, tc);
     return s;
 }
 

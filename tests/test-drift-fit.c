@@ -308,8 +308,8 @@ END_TEST
 static Suite*
 drift_fit_suite(void)
 {
-    Suite *s = suite_create("drift-fit");
-    TCase *tc = tcase_create("fit");
+    TCase *tc;
+    Suite *s = test_suite_new("drift-fit", "fit", &tc);
 
     tcase_add_test(tc, test_constant_velocity);
     tcase_add_test(tc, test_settling);
@@ -319,7 +319,6 @@ drift_fit_suite(void)
     tcase_add_test(tc, test_aliased_periods_not_fitted);
     tcase_add_test(tc, test_outlier_dropped);
     tcase_add_test(tc, test_model_roundtrip);
-    suite_add_tcase(s, tc);
     return s;
 }
 

@@ -365,8 +365,8 @@ END_TEST
 static Suite*
 drift_model_suite(void)
 {
-    Suite *s = suite_create("drift-model");
-    TCase *tc = tcase_create("core");
+    TCase *tc;
+    Suite *s = test_suite_new("drift-model", "core", &tc);
 
     tcase_add_test(tc, test_none_formula);
     tcase_add_test(tc, test_settling_formula);
@@ -378,7 +378,6 @@ drift_model_suite(void)
     tcase_add_test(tc, test_random_walk_integral);
     tcase_add_test(tc, test_type_names);
     tcase_add_test(tc, test_init_is_no_drift);
-    suite_add_tcase(s, tc);
     return s;
 }
 

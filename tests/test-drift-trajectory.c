@@ -963,8 +963,8 @@ END_TEST
 static Suite*
 drift_trajectory_suite(void)
 {
-    Suite *suite = suite_create("drift-trajectory");
-    TCase *tc = tcase_create("core");
+    TCase *tc;
+    Suite *suite = test_suite_new("drift-trajectory", "core", &tc);
 
     tcase_add_loop_test(tc, test_constant_velocity_exact, 0, 2);
     tcase_add_test(tc, test_knots_interpolated);
@@ -983,7 +983,6 @@ drift_trajectory_suite(void)
     tcase_add_loop_test(tc, test_table_defaults, 0, 2);
     tcase_add_test(tc, test_table_blank_not_filled);
     tcase_add_test(tc, test_table_errors);
-    suite_add_tcase(suite, tc);
     return suite;
 }
 

@@ -729,8 +729,8 @@ END_TEST
 static Suite*
 local_scan_suite(void)
 {
-    Suite *suite = suite_create("local-scan");
-    TCase *tc = tcase_create("core");
+    TCase *tc;
+    Suite *suite = test_suite_new("local-scan", "core", &tc);
 
     tcase_add_test(tc, test_ideal_centre);
     tcase_add_test(tc, test_displaced_found);
@@ -742,7 +742,6 @@ local_scan_suite(void)
     tcase_add_test(tc, test_choice_boundary_grain);
     tcase_add_test(tc, test_figure6_measured);
     tcase_add_test(tc, test_true_drift_recovers_truth);
-    suite_add_tcase(suite, tc);
     return suite;
 }
 

@@ -384,8 +384,8 @@ END_TEST
 static Suite*
 measured_sample_suite(void)
 {
-    Suite *suite = suite_create("simscan-measured-sample");
-    TCase *tc = tcase_create("particles-film");
+    TCase *tc;
+    Suite *suite = test_suite_new("simscan-measured-sample", "particles-film", &tc);
 
     tcase_add_test(tc, test_detect_film);
     tcase_add_test(tc, test_detect_tilted_film);
@@ -393,7 +393,6 @@ measured_sample_suite(void)
     tcase_add_test(tc, test_sample_without_particles);
     tcase_add_test(tc, test_local_scans_default_drift);
     tcase_add_test(tc, test_local_scans_random_drift);
-    suite_add_tcase(suite, tc);
     return suite;
 }
 

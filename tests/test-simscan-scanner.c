@@ -650,8 +650,8 @@ END_TEST
 static Suite*
 scanner_suite(void)
 {
-    Suite *s = suite_create("simscan-scanner");
-    TCase *tc = tcase_create("core");
+    TCase *tc;
+    Suite *s = test_suite_new("simscan-scanner", "core", &tc);
 
     tcase_add_test(tc, test_zero_drift_is_truth);
     tcase_add_test(tc, test_whole_pixel_drift_shifts);
@@ -666,7 +666,6 @@ scanner_suite(void)
     tcase_add_test(tc, test_substrate_roughness);
     tcase_add_test(tc, test_stripes_figure6);
     tcase_add_test(tc, test_bad_input_refused);
-    suite_add_tcase(s, tc);
     return s;
 }
 
