@@ -452,8 +452,8 @@ END_TEST
 static Suite*
 registration_suite(void)
 {
-    Suite *suite = suite_create("stripe-registration");
-    TCase *tc = tcase_create("core");
+    TCase *tc;
+    Suite *suite = test_suite_new("stripe-registration", "core", &tc);
 
     tcase_add_test(tc, test_random_drift_pairs);
     tcase_add_test(tc, test_non_square_images);
@@ -467,7 +467,6 @@ registration_suite(void)
     tcase_add_test(tc, test_table_for_fields);
     tcase_add_test(tc, test_bad_arguments);
     tcase_add_test(tc, test_flat_image);
-    suite_add_tcase(suite, tc);
     return suite;
 }
 
