@@ -96,14 +96,15 @@
  * 1800 fits, on exact settling at least 43 in 2000. */
 #define NOISE_OVER_DIFFERENCES_MAX 20.0
 
-/* The noise variance is estimated from fits leaving at least this fraction
- * of the measurements as residual degrees of freedom.  Leave-one-out
- * cross-validation cannot see noise between knots imaged close together
- * (each is predicted from its twin), so on 16 noisy knots it sometimes
- * prefers a near-interpolating fit; a variance from the single residual
- * degree of freedom such a fit leaves falls below a twentieth of the truth
- * about once in five draws (chi-squared, one degree of freedom), C_p then
- * prices complexity at nothing and the trajectory follows the noise.
+/* When the noise variance of data that are not exact comes from a fit
+ * leaving fewer than this fraction of the measurements as residual degrees
+ * of freedom, it is estimated again from fits leaving at least that many.
+ * Leave-one-out cross-validation cannot see noise between knots imaged
+ * close together (each is predicted from its twin), so on 16 noisy knots
+ * it sometimes prefers a near-interpolating fit, and a variance from the
+ * one or two residual degrees of freedom left falls below a twentieth of
+ * the truth about once in five draws (chi-squared, one degree of freedom):
+ * C_p prices complexity at nothing and the trajectory follows the noise.
  * simscan --preset paper --seed 739936 (displayed centres 0.13 px off,
  * stripes 0 and 1 imaged 1.6 s apart): noise estimated at 0.022 px in x,
  * a fit of 14.9 degrees of freedom for 16 knots, a slope of -0.064 px/s
@@ -111,9 +112,11 @@
  * px off and continuous mode 0.252 px RMS; with half the knots left to the
  * residuals the noise is estimated at 0.094 px, the fit is the quadratic
  * and continuous mode 0.148 px RMS (0.135 px with perfect local scans).
- * Over simscan seeds 1-1000 this removed both other results above 0.2 px
- * (seeds 752, 731: 0.229, 0.218 -> 0.162, 0.143 px; mean 0.1395 ->
- * 0.1382 px). */
+ * Over simscan seeds 1-1000 the two other results above 0.2 px went too
+ * (seeds 752, 731: 0.229, 0.218 -> 0.162, 0.143 px; mean 0.1395 -> 0.1382
+ * px).  Exact data keep the first estimate (noise_is_bias() of either):
+ * there a smoother fit's residual is its bias, and smoothing exact
+ * settling like noise of that size was up to 2.2 px off. */
 #define NOISE_MIN_RESIDUAL_FRACTION 0.5
 
 enum {
@@ -142,6 +145,7 @@ typedef gdouble PenaltyBandRow[PENALTY_ORDER + 1];
 
 typedef struct {
     gint n;
+    const gdouble *t;          /* knot times */
     const gdouble *count;      /* measurements per knot */
     gdouble *robust;           /* robustness weight of each knot, 0 .. 1 */
     gdouble *w;                /* count times robust */
@@ -155,6 +159,8 @@ typedef struct {
     gdouble change;            /* largest change of a robustness weight */
     gdouble penalty_unit;      /* penalty weight of step 0 */
     gboolean cv_interpolates;  /* cross-validation prefers interpolation */
+    gdouble noise_df;          /* residual degrees of freedom of the fit
+                                  the noise variance came from */
     gdouble *fit;
 } Smoother;
 
@@ -335,6 +341,7 @@ smoother_init(Smoother *smoother, gint n, const gdouble *t,
     gdouble h = (t[n-1] - t[0])/(n - 1), scale = 1.0, prod;
 
     smoother->n = n;
+    smoother->t = t;
     smoother->count = count;
     smoother->coeff = g_new0(PenaltyBandRow, n - PENALTY_ORDER);
     smoother->band = g_new0(PenaltyBandRow, n);
@@ -603,11 +610,11 @@ smoother_cross_validation(Smoother *smoother, const gdouble *y)
  * predicts each knot badly from the others): its robust loss per residual
  * degree of freedom.  A rejected gross error adds its fixed cost, so data
  * with gross errors are smoothed somewhat more.  Only fits leaving at least
- * NOISE_MIN_RESIDUAL_FRACTION of the measurements to the residuals estimate
- * noise; smoother->cv_interpolates says whether cross-validation prefers
- * one leaving less than one degree of freedom. */
+ * min_df degrees of freedom to the residuals estimate noise (the one used
+ * leaves smoother->noise_df); smoother->cv_interpolates says whether
+ * cross-validation prefers one leaving less than one. */
 static gdouble
-smoother_noise_variance(Smoother *smoother, const gdouble *y)
+smoother_noise_variance(Smoother *smoother, const gdouble *y, gdouble min_df)
 {
     gint n = smoother->n, i, step;
     gdouble total = 0.0, best_score = G_MAXDOUBLE, variance = 0.0;
@@ -624,30 +631,51 @@ smoother_noise_variance(Smoother *smoother, const gdouble *y)
             best_any = score;
             smoother->cv_interpolates = (total - trace < 1.0);
         }
-        if (score < best_score
-            && total - trace >= NOISE_MIN_RESIDUAL_FRACTION*total) {
+        if (score < best_score && total - trace >= min_df) {
             best_score = score;
             variance = loss/(total - trace);
+            smoother->noise_df = total - trace;
         }
     }
     return variance;
 }
 
+static gdouble difference_noise_scale(gint n, const gdouble *t,
+                                      const gdouble *y);
+
+/* Whether the noise variance estimated for y is the smoother fits' bias
+ * rather than noise: the noise estimated from differences is far below it
+ * (the second sign interpolate_if_exact() reads; the first, that
+ * cross-validation prefers interpolation, the caller checks).  FALSE when
+ * there are too few knots to tell. */
+static gboolean
+noise_is_bias(const Smoother *smoother, const gdouble *y, gdouble variance)
+{
+    gint n = smoother->n;
+
+    return (n > DIFFERENCE_NEIGHBOURS
+            && sqrt(variance) > (NOISE_OVER_DIFFERENCES_MAX
+                                 *difference_noise_scale(n, smoother->t, y)));
+}
+
 /* Sets smoother->fit to the robust penalised least-squares fit of y whose
  * penalty weight minimises loss + 2 COMPLEXITY_PRICE sigma^2 trace
  * (Mallows' C_p with each degree of freedom priced above its expected
- * cost), sigma^2 the noise variance from robust cross-validation.  Exact
+ * cost), sigma^2 the noise variance from robust cross-validation (again
+ * from smoother fits when it came from a near-interpolating fit of data
+ * that are not exact, NOISE_MIN_RESIDUAL_FRACTION).  Exact
  * data have sigma = 0 and keep their values; noisy data are not followed
  * into the near-interpolating fits where cross-validation alone is
  * erratic on a few knots.  Robustness and smoothing are chosen together:
  * a fit that follows a gross error also follows the noise and costs
  * degrees of freedom, a smoother one rejects the error at a fixed price.
- * Constant values are fitted exactly.  Returns sigma^2. */
+ * Constant values are fitted exactly.  Returns the first estimate of
+ * sigma^2, from which interpolate_if_exact() judges exactness. */
 static gdouble
 smoother_fit(Smoother *smoother, const gdouble *y)
 {
     gint n = smoother->n, i, step, best_step = 0;
-    gdouble best_score = G_MAXDOUBLE, variance, scale, trace, loss, score;
+    gdouble best_score = G_MAXDOUBLE, variance, noise, scale, trace, loss, score;
     gboolean constant = TRUE;
 
     for (i = 1; i < n; i++)
@@ -659,13 +687,20 @@ smoother_fit(Smoother *smoother, const gdouble *y)
         smoother->cv_interpolates = TRUE;
         return 0.0;
     }
-    variance = smoother_noise_variance(smoother, y);
-    scale = fmax(sqrt(variance), ROBUST_SCALE_MIN);
+    variance = noise = smoother_noise_variance(smoother, y, 1.0);
+    if (smoother->noise_df < NOISE_MIN_RESIDUAL_FRACTION*n
+        && !noise_is_bias(smoother, y, variance)) {
+        noise = smoother_noise_variance(smoother, y,
+                                        NOISE_MIN_RESIDUAL_FRACTION*n);
+        if (noise_is_bias(smoother, y, noise))
+            noise = variance;
+    }
+    scale = fmax(sqrt(noise), ROBUST_SCALE_MIN);
     for (step = SMOOTHING_LOG_MIN*SMOOTHING_STEPS_PER_DECADE;
          step <= SMOOTHING_LOG_MAX*SMOOTHING_STEPS_PER_DECADE; step++) {
         trace = smoother_fit_robust(smoother, y, penalty_weight(smoother, step), scale,
                                     &loss);
-        score = loss + 2.0*COMPLEXITY_PRICE*variance*trace;
+        score = loss + 2.0*COMPLEXITY_PRICE*noise*trace;
         /* Exact data score zero up to rounding at every weight: keep the
          * smallest, best conditioned one. */
         if (score < best_score - SCORE_ROUNDING) {
