@@ -557,9 +557,10 @@ START_TEST(test_close_twins_noise_not_followed)
     gint s;
 
     scan_timing_init(&timing, 256, 256, 0.0, LINE_TIME, SCAN_DIRECTION_DOWN);
+    memset(meas, 0, sizeof(meas));
     for (s = 0; s < 16; s++) {
-        meas[s].t_image = t_image[s];
-        meas[s].t_local = 300.0625 + 0.125*s;
+        meas[s].t_a = t_image[s];
+        meas[s].t_b = 300.0625 + 0.125*s;
         meas[s].dx = dx[s];
         meas[s].dy = dy[s];
     }

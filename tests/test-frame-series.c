@@ -163,13 +163,7 @@ END_TEST
  * velocity (one frame's shift is 1-3 px, 39 nm each). */
 #define SIMSCAN_VELOCITY_TOLERANCE 0.05
 
-static guint32
-test_seed(void)
-{
-    const gchar *env = g_getenv("LOCALSCAN_TEST_SEED");
-
-    return env && *env ? (guint32)g_ascii_strtoull(env, NULL, 10) : g_random_int();
-}
+static guint32 test_seed;
 
 static gboolean
 spawn(const gchar *const *argv, gchar **out, gchar **err)
@@ -215,7 +209,7 @@ write_simscan_frames(const gchar *dir, const gchar *simulated, const gint *shift
  * it finds is the frames' hidden shift over their metadata frame starts. */
 START_TEST(test_simscan_fit_reads_simscan_timing)
 {
-    guint32 seed = test_seed();
+    guint32 seed = test_seed;
     GRand *rng = g_rand_new_with_seed(seed);
     gchar *dir = g_dir_make_tmp("test-frame-series-XXXXXX", NULL);
     gchar *simulated = g_build_filename(dir, "simulated.gwy", NULL), *seedarg = g_strdup_printf("%u", seed);
@@ -272,6 +266,7 @@ main(void)
     Suite *s = test_suite_new("frame-series", "simscan", &tc_simscan);
     gchar *probe;
 
+    test_seed = test_seed_from_env("test-frame-series");
     measured = test_measured_dir();
     probe = test_measured_file("test-frame-series",
                                "fastscan-series/09261606.001",

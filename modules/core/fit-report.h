@@ -33,7 +33,7 @@ gboolean  fit_report_compute  (const FrameSeries *series,
                                const DriftFitOptions *foptions,
                                FitReport *report);
 void      fit_report_clear    (FitReport *report);
-/* The interfaces.md JSON (plus frames, notes and measurement counts). */
+/* The JSON of docs/cli.md (plus frames, notes and measurement counts). */
 gchar*    fit_report_to_json  (const FitReport *report,
                                const FrameSeries *series);
 
