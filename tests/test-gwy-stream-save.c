@@ -18,7 +18,7 @@
 #include <libgwymodule/gwymodule-file.h>
 #include <app/gwyapp.h>
 #include "gwy-stream-save.h"
-#include "test-seed.h"
+#include "test-common.h"
 
 static guint32 seed;
 
@@ -191,13 +191,12 @@ END_TEST
 int
 main(void)
 {
-    Suite *suite = suite_create("gwy-stream-save");
-    TCase *tc = tcase_create("stream-save");
+    TCase *tc;
+    Suite *suite = test_suite_new("gwy-stream-save", "stream-save", &tc);
 
     seed = test_seed_from_env("test-gwy-stream-save");
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     tcase_add_test(tc, test_same_as_gwyddion);
     tcase_add_test(tc, test_unwritable);
-    suite_add_tcase(suite, tc);
     return test_run_suite(suite);
 }

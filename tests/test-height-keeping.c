@@ -23,7 +23,7 @@
 #include "localscan-params.h"
 #include "sample.h"
 #include "scanner.h"
-#include "test-seed.h"
+#include "test-common.h"
 
 #ifdef HEIGHT_MEASURED
 #define PROGRAM "test-height-keeping-measured"
@@ -187,17 +187,12 @@ END_TEST
 static GwyDataField*
 load_image(void)
 {
-    const gchar *dir = g_getenv("LOCALSCAN_MEASURED_DIR");
-    gchar *filename = g_build_filename(dir && *dir ? dir : TEST_SRCDIR "/../shared/data/measured",
-                                       SAMPLE_PATH, NULL);
+    gchar *filename = test_measured_file(PROGRAM, SAMPLE_PATH, "every test");
     GwyContainer *data;
     GwyDataField *field = NULL;
 
-    if (!g_file_test(filename, G_FILE_TEST_IS_REGULAR)) {
-        printf("%s: SKIPPED: measured data absent (%s)\n", PROGRAM, filename);
-        g_free(filename);
-        exit(77);
-    }
+    if (!filename)
+        exit(TEST_EXIT_SKIP);
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     if ((data = gwy_file_load(filename, GWY_RUN_NONINTERACTIVE, NULL))
         && gwy_container_gis_object_by_name(data, "/0/data", &field)) {
@@ -237,15 +232,14 @@ load_image(void)
 int
 main(void)
 {
-    Suite *suite = suite_create("height-keeping");
-    TCase *tc = tcase_create("default-kernel");
+    TCase *tc;
+    Suite *suite = test_suite_new("height-keeping", "default-kernel", &tc);
     gint status;
 
     seed = test_seed_from_env(PROGRAM);
     if (!(image = load_image()))
         return EXIT_FAILURE;
     tcase_add_test(tc, test_default_keeps_heights);
-    suite_add_tcase(suite, tc);
     status = test_run_suite(suite);
     g_object_unref(image);
     return status;

@@ -11,7 +11,7 @@
 #include <libgwyddion/gwyddion.h>
 #include <libprocess/gwyprocess.h>
 #include "reference-choice.h"
-#include "test-seed.h"
+#include "test-common.h"
 
 static void
 add_channel(GwyContainer *data, gint id, gint xres, const gchar *title, const gchar *frame_start)
@@ -90,11 +90,10 @@ END_TEST
 int
 main(void)
 {
-    Suite *suite = suite_create("reference-choice");
-    TCase *tc = tcase_create("choice");
+    TCase *tc;
+    Suite *suite = test_suite_new("reference-choice", "choice", &tc);
 
     tcase_add_test(tc, test_ranks);
     tcase_add_test(tc, test_labels);
-    suite_add_tcase(suite, tc);
     return test_run_suite(suite);
 }

@@ -9,7 +9,7 @@
 #include <string.h>
 #include <check.h>
 #include "run-description.h"
-#include "test-seed.h"
+#include "test-common.h"
 
 START_TEST(test_format)
 {
@@ -69,12 +69,11 @@ END_TEST
 int
 main(void)
 {
-    Suite *suite = suite_create("run-description");
-    TCase *tc = tcase_create("description");
+    TCase *tc;
+    Suite *suite = test_suite_new("run-description", "description", &tc);
 
     tcase_add_test(tc, test_format);
     tcase_add_test(tc, test_names);
     tcase_add_test(tc, test_parse_mode);
-    suite_add_tcase(suite, tc);
     return test_run_suite(suite);
 }
