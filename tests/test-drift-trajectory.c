@@ -754,8 +754,8 @@ END_TEST
 START_TEST(test_few_measurements)
 {
     DriftMeasurement meas[2] = {
-        { 10.0, 50.0, 1.5, -2.0 },
-        { 30.0, 50.0, 3.5, 2.0 },
+        { .t_a = 10.0, .t_b = 50.0, .dx = 1.5, .dy = -2.0 },
+        { .t_a = 30.0, .t_b = 50.0, .dx = 3.5, .dy = 2.0 },
     };
     DriftTrajectory *trajectory;
     gdouble dx, dy;
@@ -782,9 +782,9 @@ END_TEST
 START_TEST(test_same_time_averaged)
 {
     DriftMeasurement meas[3] = {
-        { 10.0, 50.0, 1.0, 0.0 },
-        { 10.0, 50.0, 2.0, 1.0 },
-        { 20.0, 50.0, 5.0, 5.0 },
+        { .t_a = 10.0, .t_b = 50.0, .dx = 1.0, .dy = 0.0 },
+        { .t_a = 10.0, .t_b = 50.0, .dx = 2.0, .dy = 1.0 },
+        { .t_a = 20.0, .t_b = 50.0, .dx = 5.0, .dy = 5.0 },
     };
     DriftTrajectory *trajectory;
     gdouble dx, dy;
@@ -831,8 +831,8 @@ END_TEST
 START_TEST(test_bad_measurements)
 {
     DriftMeasurement meas[2] = {
-        { 10.0, 50.0, 1.0, 0.0 },
-        { 20.0, 50.0, NAN, 1.0 },
+        { .t_a = 10.0, .t_b = 50.0, .dx = 1.0, .dy = 0.0 },
+        { .t_a = 20.0, .t_b = 50.0, .dx = NAN, .dy = 1.0 },
     };
     GError *error = NULL;
 
