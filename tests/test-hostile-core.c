@@ -23,7 +23,7 @@
 #include "quoted-input.h"
 #include "file-screening.h"
 #include "safe-output.h"
-#include "test-seed.h"
+#include "test-common.h"
 
 static guint32 seed;
 

@@ -20,7 +20,7 @@
 #include <libgwyddion/gwyddion.h>
 #include <libprocess/gwyprocess.h>
 #include "safe-output.h"
-#include "test-seed.h"
+#include "test-common.h"
 
 #define TOOL_PATH    TEST_BUILDDIR "/tools/gwy-localscan"
 #define SIMSCAN_PATH TEST_BUILDDIR "/simscan/simscan"
