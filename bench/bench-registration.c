@@ -24,14 +24,16 @@ time_ours(const FramePair *pair, gdouble max_shift, gdouble *rms)
 {
     StripeShift shifts[STRIPES];
     gdouble tx[STRIPES], ty[STRIPES], best = G_MAXDOUBLE, sum = 0.0;
+    StripeRegistrationOptions options;
     GError *error = NULL;
     gint i, s;
 
     for (i = 0; i < REPEATS; i++) {
         gint64 start = g_get_monotonic_time();
 
-        if (!stripe_registration_measure(pair->image, pair->reference, RES, RES, STRIPES, max_shift,
-                                         STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, shifts, &error))
+        stripe_registration_options_init(&options);
+        options.search_x = options.search_y = max_shift;
+        if (!stripe_registration_measure(pair->image, pair->reference, RES, RES, STRIPES, &options, shifts, &error))
             g_error("registration failed: %s", error->message);
         best = MIN(best, (g_get_monotonic_time() - start)/1e6);
     }

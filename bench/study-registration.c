@@ -208,12 +208,14 @@ run_ours(const FramePair *pair, gint n, gdouble max_shift, const gdouble *tx, co
     StripeShift *shifts = g_new(StripeShift, n);
     gboolean *has = g_new(gboolean, n);
     gdouble *dx = g_new(gdouble, n), *dy = g_new(gdouble, n);
+    StripeRegistrationOptions options;
     GError *error = NULL;
     gint64 start = g_get_monotonic_time();
     gint s;
 
-    if (!stripe_registration_measure(pair->image, pair->reference, pair->xres, pair->yres, n, max_shift,
-                                     STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, shifts, &error))
+    stripe_registration_options_init(&options);
+    options.search_x = options.search_y = max_shift;
+    if (!stripe_registration_measure(pair->image, pair->reference, pair->xres, pair->yres, n, &options, shifts, &error))
         g_error("registration failed: %s", error->message);
     raw->seconds += (g_get_monotonic_time() - start)/1e6;
     raw->frames++;

@@ -492,7 +492,7 @@ measure_drift(MeasuredDrift *measured, GwyDataField *image, GwyDataField *refere
         g_debug("%s: registering %d stripes against channel %d (%d x %d px)",
                 LOCALSCAN_FUNCTION_NAME, n, refid.id,
                 gwy_data_field_get_xres(image), gwy_data_field_get_yres(image));
-        measured->table = stripe_registration_table_for_fields(image, reference, n, 0.0, FALSE,
+        measured->table = stripe_registration_table_for_fields(image, reference, n, NULL, FALSE, NULL,
                                                                &measured->error);
         measured->valid = TRUE;
         measured->reference = refid;

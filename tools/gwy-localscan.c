@@ -497,8 +497,8 @@ register_stripes(GwyDataField *image, const gchar *image_name,
     GError *err = NULL;
     DriftTable *table;
 
-    table = stripe_registration_table_for_fields(image, reference, n, 0.0,
-                                                 mode->whole_pixels, &err);
+    table = stripe_registration_table_for_fields(image, reference, n, NULL,
+                                                 mode->whole_pixels, NULL, &err);
     if (table)
         return table;
     if (g_error_matches(err, STRIPE_REGISTRATION_ERROR,

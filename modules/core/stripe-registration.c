@@ -1,6 +1,6 @@
 /*
  *  Drift measured from the data: each stripe of an image registered against
- *  a reference frame of the same area (FFT cross-correlation, FFTW).
+ *  a reference frame of the same area, coarse to fine.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -8,115 +8,122 @@
 #include <math.h>
 #include <string.h>
 #include <libgwyddion/gwymacros.h>
+#include <libgwyddion/gwymath.h>
 #include "stripe-registration.h"
+#include "stripe-correlation.h"
 #include "stripe-geometry.h"
-#include "fft-correlation.h"
 #include "stripe-subpixel.h"
 #include "localscan-intl.h"
 
 /*
- * How it works.
+ * How it works (docs/registration.md tells it with figures).
  *
- * Every stripe (a template of h rows by xres columns) is matched against the
- * whole reference, not against the same stripe of the reference: a stripe
- * drifted in y shares only part of its rows with the reference stripe, the
- * reference frame around it holds all of them.  The match measure is the
- * zero-mean normalised cross-correlation (ZNCC) with a Tukey window in x as
- * weights, computed over the part of the template that overlaps the reference
- * at each shift (masked ZNCC).  The local mean and energy of the reference
- * under the template normalise each shift, so a bright or rough region of the
- * reference cannot win over the matching one, and shifts that move the
- * template partly off the reference are judged on the shared part only.
+ * Both frames are conditioned first (frame-conditioning.c): raw channels'
+ * line offsets, bows and 1/f noise would otherwise decide the match.
  *
- * Only the cross term needs a 2D FFT per stripe (template against the slab of
- * reference rows the search can reach).  The other sums are separable: the
- * window is constant along y, so the reference's windowed row sums are 1D
- * correlations done once per frame and summed over rows by prefix sums, and
- * the template's sums over its overlap are prefix sums too.
+ * Then coarse to fine, because a frame may be offset by a third of its size
+ * and a full-resolution search over such shifts costs far too much:
  *
- * The best peak is located to a fraction of a pixel by a quadratic fitted to
- * its 3x3 neighbourhood, which is enough to judge it and to predict the
- * neighbours; the shift reported is then refined by matching the stripe
- * against the reference interpolated at fractional shifts, with the shift
- * free to change linearly over the stripe's rows and taken at its centre row
- * (stripe-subpixel.c says why the map alone cannot give it without bias).
- * Confidence comes from the peak height and from how far the best competing
- * peak stays below it, so periodic textures and featureless stripes score low.
- * Drift varies smoothly from stripe to stripe: a stripe whose best peak lies
- * far from the median of its confident neighbours is searched again in a
- * small window around that prediction.
+ * 1. The whole frame's shift, at a resolution of about COARSE_SIZE px,
+ *    searched over every shift that keeps half of the frame on the
+ *    reference (or what the caller bounds).
+ * 2. Bands of rows at that resolution, each searched around the whole
+ *    frame's shift within BAND_REACH of the frame: the drift changes while
+ *    the frame is scanned.  A band whose own peak is not clearly the best
+ *    takes the best peak near its confident neighbours' median.
+ * 3. Every stripe at full resolution, around its band's shift (interpolated
+ *    between band centres) within the coarse stage's uncertainty plus room
+ *    for a jump.  Each stripe is judged on its own there: a jump of a few
+ *    pixels between two stripes is measured, not smoothed away.
+ *
+ * A stripe's shift is located to a fraction of a pixel by matching it
+ * against the interpolated reference (stripe-subpixel.c), which also gives
+ * its uncertainty.  Confidence comes from the peak height and from how far
+ * the best competing peak in the stripe's window stays below it, so
+ * periodic textures and featureless stripes score low and are left empty
+ * (the nearest-stripe rule fills them).
  */
 
 /* Competing peaks closer than this (px, in both axes) are the main peak's. */
 #define RIVAL_EXCLUSION 3
 /* Half-size of the window searched around the neighbours' prediction (px). */
 #define CONSISTENCY_RADIUS 3
-/* Neighbours on each side whose median predicts a stripe; the far reach is
- * used where the near one has too few confident stripes. */
+/* Neighbours on each side whose median predicts a band; the far reach is
+ * used where the near one has too few confident bands. */
 #define NEAR_REACH 2
 #define FAR_REACH 4
-/* Fraction of the width tapered by the Tukey window at each side. */
+/* Fraction of the width tapered by the Tukey window of the sub-pixel match
+ * at each side. */
 #define WINDOW_TAPER 0.1
-/* Shifts that leave less than this fraction of the stripe on the reference
- * are not considered: a tiny overlap can correlate by chance. */
-#define MIN_OVERLAP 0.5
 /* Correlation peaks below this are hardly above chance for a stripe. */
 #define LOW_PEAK 0.3
-/* Stripes this confident predict their neighbours. */
+/* The whole frame at coarse resolution is trusted from this score: its
+ * peak stands out of far more pixels than a stripe's, so a lower margin
+ * over its rival is already decisive. */
+#define GLOBAL_MIN_SCORE 0.1
+/* Bands this confident keep their own peak and predict their neighbours. */
 #define RELIABLE_SCORE 0.3
-/* Correlation maps are kept for the consistency step up to this size;
- * above it they are computed again. */
-#define MAP_CACHE_BYTES (256*1024*1024)
 /* How far (px) the match may move a peak that lies on the edge of the
  * shifts with enough overlap; a peak inside them moves at most 1 px.  On
- * the edge row itself only dx = 0 may be kept (off it the window loses a
- * little weight), so the true peak may lie a few px along x. */
+ * the edge row itself the true peak may lie a few px along x. */
 #define EDGE_POLISH_REACH 3
-/* Marks shifts that are not considered. */
-#define NO_MATCH -2.0
+/* How far (px) the sub-pixel match may move a stripe from its map peak:
+ * where the frames correlate weakly the map's peak and the match's optimum
+ * can lie more than a pixel apart. */
+#define POLISH_REACH 3
+/* The coarse stage works at about this many px along the longer side. */
+#define COARSE_SIZE 160
+/* Coarse bands have about this many rows. */
+#define BAND_ROWS 12
+/* How far (fraction of the frame) a band's shift may differ from the
+ * whole frame's. */
+#define BAND_REACH 0.12
+/* The fine search reaches this far (px) beyond the coarse stage's
+ * resolution around a stripe's predicted shift: room for a jump between
+ * stripes that a band straddles. */
+#define FINE_MIN_RADIUS 10
+/* A stripe lies in the reference when at least this fraction of it is on
+ * the reference at its predicted shift. */
+#define IN_REFERENCE_FRACTION 0.5
 
 typedef struct {
-    gint iy, ix;          /* map indices of the peak */
+    gint ky, kx;          /* whole-pixel shift of the peak */
     gdouble dy, dx;       /* refined shift, px */
     gdouble value;        /* ZNCC at the peak */
     gdouble rival;        /* best competing local maximum, >= 0 */
+    gdouble sigma;        /* px, from the sub-pixel match; 0 without */
     gboolean trusted;     /* found, inside the search area, refinable */
     gboolean polished;    /* dy, dx refined by stripe_subpixel_refine() */
+    gint ylo, yhi;        /* the shifts searched */
+    gint xlo, xhi;
 } Peak;
 
+/* One resolution: n stripes (or bands) of the frames, with their maps. */
 typedef struct {
-    const gdouble *image;
-    const gdouble *reference;
-    gint xres;
-    gint yres;
+    const ConditionedFrame *image;
+    const ConditionedFrame *reference;
     gint n;
-    gint m;                   /* largest shift searched, px */
-    gint span;                /* 2m + 1 shifts per axis */
-    gint max_height;          /* rows in the tallest stripe */
-    gdouble reference_mean;
-    gdouble *window;          /* xres weights */
-    gdouble *window_overlap;  /* span: window sum over columns with
-                                 reference data, per dx */
-    gdouble *ref_cum;         /* (yres+1) x span: prefix sums over rows of
-                                 the windowed reference row sums, per dx */
-    gdouble *ref_sq_cum;      /* the same for squares */
-    gdouble *tmpl_cum;        /* (max_height+1) x span: prefix sums over
-                                 template rows of their overlap sums */
-    gdouble *tmpl_sq_cum;
-    gdouble *row_prefix;      /* xres + 1 */
-    gdouble *row_sq_prefix;
-    FFTCorrelation *stripe_fc;
-    gdouble *map;             /* span x span scratch */
-    StripeSubpixel *subpixel;
-    gdouble **cached_maps;    /* n, NULL where not kept */
-} Registration;
+    StripeCorrelation *correlation;
+    StripeCorrelationMap *maps;   /* n */
+    gdouble *window;              /* xres, for the sub-pixel match */
+    StripeSubpixel *subpixel;     /* NULL: no sub-pixel match */
+    StripeSubpixel *subpixel_band;/* the same on the band-passed frames */
+} Level;
 
 G_DEFINE_QUARK(stripe-registration-error-quark, stripe_registration_error)
 
-static gint
-map_index(const Registration *reg, gint dy, gint dx)
+void
+stripe_registration_options_init(StripeRegistrationOptions *options)
 {
-    return (dy + reg->m)*reg->span + (dx + reg->m);
+    options->search_x = options->search_y = 0.0;
+    options->min_score = STRIPE_REGISTRATION_DEFAULT_MIN_SCORE;
+    options->pixel_aspect = 1.0;
+}
+
+static gint
+nearest_int(gdouble x)
+{
+    return (gint)floor(x + 0.5);
 }
 
 static void
@@ -127,229 +134,117 @@ make_tukey_window(gdouble *window, gint res)
     for (j = 0; j < res; j++) {
         gint edge = MIN(j, res-1 - j);
 
-        if (edge >= taper)
-            window[j] = 1.0;
-        else
-            window[j] = 0.5*(1.0 - cos(G_PI*(edge + 0.5)/taper));
+        window[j] = (edge >= taper) ? 1.0 : 0.5*(1.0 - cos(G_PI*(edge + 0.5)/taper));
     }
 }
 
-/* Columns j of the template meet reference column j - dx; those with
- * reference data form [lo, hi). */
-static void
-overlap_columns(gint xres, gint dx, gint *lo, gint *hi)
+static gint
+level_max_height(gint n, gint yres)
 {
-    *lo = MAX(0, dx);
-    *hi = MIN(xres, xres + dx);
+    gint s, h = 1;
+
+    for (s = 0; s < n; s++)
+        h = MAX(h, stripe_end_row(s, n, yres) - stripe_first_row(s, n, yres));
+    return h;
+}
+
+static gint
+edge_margin(const ConditionedFrame *frame)
+{
+    return (gint)ceil(2.0*frame->narrow_sigma);
 }
 
 static void
-compute_window_overlap(Registration *reg)
+level_init(Level *level, const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
+           gint max_ry, gint max_rx, gboolean subpixel)
 {
-    gint dx, j, lo, hi;
+    gint s, h = level_max_height(n, image->yres);
 
-    for (dx = -reg->m; dx <= reg->m; dx++) {
-        gdouble s = 0.0;
-
-        overlap_columns(reg->xres, dx, &lo, &hi);
-        for (j = lo; j < hi; j++)
-            s += reg->window[j];
-        reg->window_overlap[dx + reg->m] = s;
-    }
-}
-
-/* Windowed sums of every reference row (and of its squares) at every dx, as
- * 1D correlations, accumulated over rows: any stripe's reference sums at any
- * shift are then a difference of two entries. */
-static void
-compute_reference_sums(Registration *reg)
-{
-    gint xres = reg->xres, m = reg->m, span = reg->span;
-    FFTCorrelation *fc;
-    gdouble *field;
-    const gdouble *corr;
-    gint r, j, dx, pass;
-
-    fc = fft_correlation_new(1, fft_correlation_nice_size(xres + 2*m));
-    memcpy(fft_correlation_template(fc), reg->window, xres*sizeof(gdouble));
-    fft_correlation_set_template(fc);
-    field = fft_correlation_field(fc);
-    memset(reg->ref_cum, 0, span*sizeof(gdouble));
-    memset(reg->ref_sq_cum, 0, span*sizeof(gdouble));
-    for (r = 0; r < reg->yres; r++) {
-        const gdouble *row = reg->reference + (gsize)r*xres;
-
-        for (pass = 0; pass < 2; pass++) {
-            gdouble *cum = pass ? reg->ref_sq_cum : reg->ref_cum;
-
-            for (j = 0; j < xres; j++) {
-                gdouble v = row[j] - reg->reference_mean;
-                field[m + j] = pass ? v*v : v;
-            }
-            corr = fft_correlation_run(fc);
-            /* corr[b] = sum_j w[j] field[j + b] = sum_j w[j] R[j + b - m]. */
-            for (dx = -m; dx <= m; dx++)
-                cum[(r + 1)*span + dx + m] = cum[r*span + dx + m] + corr[m - dx];
-        }
-    }
-    fft_correlation_free(fc);
-}
-
-static gdouble
-stripe_weighted_mean(const Registration *reg, gint first, gint end)
-{
-    gdouble s = 0.0, w = 0.0;
-    gint r, j;
-
-    for (r = first; r < end; r++) {
-        const gdouble *row = reg->image + (gsize)r*reg->xres;
-
-        for (j = 0; j < reg->xres; j++) {
-            s += reg->window[j]*row[j];
-            w += reg->window[j];
-        }
-    }
-    return s/w;
-}
-
-/* Puts the windowed, zero-mean template into the FFT buffer and accumulates
- * its overlap sums (of values and squares) over rows, per dx. */
-static void
-prepare_template(Registration *reg, gint first, gint end)
-{
-    gint xres = reg->xres, m = reg->m, span = reg->span;
-    gint cols = fft_correlation_cols(reg->stripe_fc);
-    gdouble *tmpl = fft_correlation_template(reg->stripe_fc);
-    gdouble mean = stripe_weighted_mean(reg, first, end);
-    gint i, j, dx, lo, hi;
-
-    memset(reg->tmpl_cum, 0, span*sizeof(gdouble));
-    memset(reg->tmpl_sq_cum, 0, span*sizeof(gdouble));
-    for (i = 0; i < end - first; i++) {
-        const gdouble *row = reg->image + (gsize)(first + i)*xres;
-        gdouble *trow = tmpl + (gsize)i*cols;
-
-        reg->row_prefix[0] = reg->row_sq_prefix[0] = 0.0;
-        for (j = 0; j < xres; j++) {
-            gdouble v = row[j] - mean;
-
-            trow[j] = reg->window[j]*v;
-            reg->row_prefix[j+1] = reg->row_prefix[j] + trow[j];
-            reg->row_sq_prefix[j+1] = reg->row_sq_prefix[j] + trow[j]*v;
-        }
-        for (dx = -m; dx <= m; dx++) {
-            gint k = (i + 1)*span + dx + m;
-
-            overlap_columns(xres, dx, &lo, &hi);
-            reg->tmpl_cum[k] = reg->tmpl_cum[k - span] + reg->row_prefix[hi] - reg->row_prefix[lo];
-            reg->tmpl_sq_cum[k] = (reg->tmpl_sq_cum[k - span]
-                                   + reg->row_sq_prefix[hi] - reg->row_sq_prefix[lo]);
-        }
-    }
-    fft_correlation_set_template(reg->stripe_fc);
-}
-
-/* The reference rows the search can reach, first - m .. end - 1 + m, with m
- * columns of zeros each side; zero outside the frame. */
-static void
-prepare_slab(Registration *reg, gint first, gint end)
-{
-    gint xres = reg->xres, m = reg->m;
-    gint cols = fft_correlation_cols(reg->stripe_fc);
-    gdouble *field = fft_correlation_field(reg->stripe_fc);
-    gint k, j, r;
-
-    for (k = 0; k < end - first + 2*m; k++) {
-        gdouble *frow = field + (gsize)k*cols + m;
-        const gdouble *row;
-
-        r = first - m + k;
-        if (r < 0 || r >= reg->yres) {
-            memset(frow, 0, xres*sizeof(gdouble));
-            continue;
-        }
-        row = reg->reference + (gsize)r*xres;
-        for (j = 0; j < xres; j++)
-            frow[j] = row[j] - reg->reference_mean;
+    gwy_clear(level, 1);
+    level->image = image;
+    level->reference = reference;
+    level->n = n;
+    level->correlation = stripe_correlation_new(image, reference, h, max_ry, max_rx);
+    level->maps = g_new0(StripeCorrelationMap, n);
+    for (s = 0; s < n; s++)
+        level->maps[s].values = g_new(gdouble, (gsize)(2*max_ry + 1)*(2*max_rx + 1));
+    if (subpixel) {
+        level->window = g_new(gdouble, image->xres);
+        make_tukey_window(level->window, image->xres);
+        /* The levelled frames keep exact shifts exact up to the frames'
+         * edges, where the band-pass cannot. */
+        level->subpixel = stripe_subpixel_new(image->levelled ? image->levelled : image->data,
+                                              reference->levelled ? reference->levelled : reference->data,
+                                              image->weight,
+                                              image->xres, image->yres, level->window, h,
+                                              edge_margin(image));
+        /* Where pixel noise or what differs between the frames beyond the
+         * sample outweighs the features, only the band-passed frames
+         * match. */
+        if (image->levelled && reference->levelled)
+            level->subpixel_band = stripe_subpixel_new(image->data, reference->data, image->weight,
+                                                       image->xres, image->yres, level->window, h,
+                                                       edge_margin(image));
     }
 }
 
 static void
-compute_stripe_map(Registration *reg, gint s, gdouble *map)
+level_free(Level *level)
 {
-    gint first = stripe_first_row(s, reg->n, reg->yres);
-    gint end = stripe_end_row(s, reg->n, reg->yres);
-    gint h = end - first, m = reg->m, span = reg->span;
-    gint cols = fft_correlation_cols(reg->stripe_fc);
-    gdouble full_weight, min_weight;
-    const gdouble *cross;
-    gint dy, dx;
+    gint s;
 
-    fft_correlation_clear(reg->stripe_fc);
-    prepare_template(reg, first, end);
-    prepare_slab(reg, first, end);
-    cross = fft_correlation_run(reg->stripe_fc);
-    full_weight = h*reg->window_overlap[m];
-    min_weight = MIN_OVERLAP*full_weight;
-
-    for (dy = -m; dy <= m; dy++) {
-        /* Template rows i meet reference rows first + i - dy. */
-        gint ilo = MAX(0, dy - first), ihi = MIN(h, reg->yres - first + dy);
-        gint rlo = first + ilo - dy, rhi = first + ihi - dy;
-
-        for (dx = -m; dx <= m; dx++) {
-            gint k = dx + m;
-            gdouble w, st, stt, sr, srr, str, vt, vr;
-
-            map[map_index(reg, dy, dx)] = NO_MATCH;
-            if (ihi <= ilo)
-                continue;
-            w = (ihi - ilo)*reg->window_overlap[k];
-            if (w < min_weight)
-                continue;
-            st = reg->tmpl_cum[ihi*span + k] - reg->tmpl_cum[ilo*span + k];
-            stt = reg->tmpl_sq_cum[ihi*span + k] - reg->tmpl_sq_cum[ilo*span + k];
-            sr = reg->ref_cum[rhi*span + k] - reg->ref_cum[rlo*span + k];
-            srr = reg->ref_sq_cum[rhi*span + k] - reg->ref_sq_cum[rlo*span + k];
-            str = cross[(m - dy)*cols + (m - dx)];
-            vt = stt - st*st/w;
-            vr = srr - sr*sr/w;
-            /* A flat template or reference patch matches nothing. */
-            if (vt <= 1e-12*stt || vr <= 1e-12*srr || vt <= 0.0 || vr <= 0.0) {
-                map[map_index(reg, dy, dx)] = 0.0;
-                continue;
-            }
-            map[map_index(reg, dy, dx)] = (str - st*sr/w)/sqrt(vt*vr);
-        }
-    }
+    for (s = 0; s < level->n; s++)
+        g_free(level->maps[s].values);
+    g_free(level->maps);
+    stripe_subpixel_free(level->subpixel);
+    stripe_subpixel_free(level->subpixel_band);
+    g_free(level->window);
+    stripe_correlation_free(level->correlation);
 }
 
-static const gdouble*
-stripe_map(Registration *reg, gint s)
+static void
+level_compute_map(Level *level, gint s, gint cy, gint cx, gint ry, gint rx)
 {
-    if (reg->cached_maps && reg->cached_maps[s])
-        return reg->cached_maps[s];
-    compute_stripe_map(reg, s, reg->map);
-    if (!reg->cached_maps)
-        return reg->map;
-    reg->cached_maps[s] = g_memdup2(reg->map, (gsize)reg->span*reg->span*sizeof(gdouble));
-    return reg->cached_maps[s];
+    StripeCorrelationMap *map = level->maps + s;
+    gint yres = level->image->yres;
+
+    map->cy = cy;
+    map->cx = cx;
+    map->ry = ry;
+    map->rx = rx;
+    stripe_correlation_map(level->correlation, stripe_first_row(s, level->n, yres),
+                           stripe_end_row(s, level->n, yres), map);
 }
 
 static gboolean
-is_local_maximum(const gdouble *map, gint span, gint iy, gint ix)
+is_local_maximum(const StripeCorrelationMap *map, gint ky, gint kx)
 {
-    gdouble v = map[iy*span + ix];
+    gdouble v = stripe_correlation_map_at(map, ky, kx), u;
     gint i, j;
 
-    if (v <= NO_MATCH)
+    if (v <= STRIPE_CORRELATION_NONE)
         return FALSE;
-    for (i = MAX(0, iy-1); i <= MIN(span-1, iy+1); i++) {
-        for (j = MAX(0, ix-1); j <= MIN(span-1, ix+1); j++) {
-            /* Next to the shifts left out for too little overlap, a maximum
-             * is as likely the cut slope of the main peak beyond them (as
-             * for a stripe half off the reference) as a peak of its own. */
-            if (map[i*span + j] > v || map[i*span + j] <= NO_MATCH)
+    for (i = ky - 1; i <= ky + 1; i++) {
+        for (j = kx - 1; j <= kx + 1; j++) {
+            /* Next to the shifts left out (too little overlap, or outside
+             * the window), a maximum is as likely the cut slope of a peak
+             * beyond them as a peak of its own. */
+            u = stripe_correlation_map_at(map, i, j);
+            if (u > v || u <= STRIPE_CORRELATION_NONE)
+                return FALSE;
+        }
+    }
+    return TRUE;
+}
+
+static gboolean
+neighbourhood_matched(const StripeCorrelationMap *map, gint ky, gint kx)
+{
+    gint i, j;
+
+    for (i = -1; i <= 1; i++) {
+        for (j = -1; j <= 1; j++) {
+            if (stripe_correlation_map_at(map, ky + i, kx + j) <= STRIPE_CORRELATION_NONE)
                 return FALSE;
         }
     }
@@ -359,7 +254,7 @@ is_local_maximum(const gdouble *map, gint span, gint iy, gint ix)
 /* Least-squares quadratic through the 3x3 neighbourhood; its maximum, when
  * it has one near the centre, else a parabola along each axis. */
 static void
-refine_peak(const gdouble *map, gint span, gint iy, gint ix, gdouble *oy, gdouble *ox)
+refine_peak(const StripeCorrelationMap *map, gint ky, gint kx, gdouble *oy, gdouble *ox)
 {
     gdouble sx = 0.0, sy = 0.0, sxy = 0.0, sxx = 0.0, syy = 0.0;
     gdouble f, det, x, y, fm, fp, f0, denom;
@@ -367,7 +262,7 @@ refine_peak(const gdouble *map, gint span, gint iy, gint ix, gdouble *oy, gdoubl
 
     for (i = -1; i <= 1; i++) {
         for (j = -1; j <= 1; j++) {
-            f = map[(iy + i)*span + ix + j];
+            f = stripe_correlation_map_at(map, ky + i, kx + j);
             sx += j*f;
             sy += i*f;
             sxy += i*j*f;
@@ -390,29 +285,15 @@ refine_peak(const gdouble *map, gint span, gint iy, gint ix, gdouble *oy, gdoubl
             return;
         }
     }
-    f0 = map[iy*span + ix];
-    fm = map[iy*span + ix - 1];
-    fp = map[iy*span + ix + 1];
+    f0 = stripe_correlation_map_at(map, ky, kx);
+    fm = stripe_correlation_map_at(map, ky, kx - 1);
+    fp = stripe_correlation_map_at(map, ky, kx + 1);
     denom = fm - 2.0*f0 + fp;
     *ox = (denom < 0.0) ? CLAMP(0.5*(fm - fp)/denom, -0.5, 0.5) : 0.0;
-    fm = map[(iy - 1)*span + ix];
-    fp = map[(iy + 1)*span + ix];
+    fm = stripe_correlation_map_at(map, ky - 1, kx);
+    fp = stripe_correlation_map_at(map, ky + 1, kx);
     denom = fm - 2.0*f0 + fp;
     *oy = (denom < 0.0) ? CLAMP(0.5*(fm - fp)/denom, -0.5, 0.5) : 0.0;
-}
-
-static gboolean
-neighbourhood_matched(const gdouble *map, gint span, gint iy, gint ix)
-{
-    gint k, l;
-
-    for (k = -1; k <= 1; k++) {
-        for (l = -1; l <= 1; l++) {
-            if (map[(iy + k)*span + ix + l] <= NO_MATCH)
-                return FALSE;
-        }
-    }
-    return TRUE;
 }
 
 /* The shift of a trusted peak refined by matching the stripe against the
@@ -420,73 +301,105 @@ neighbourhood_matched(const gdouble *map, gint span, gint iy, gint ix)
  * the match fails to converge the quadratic's estimate stays.  TRUE if the
  * peak is polished. */
 static gboolean
-polish_peak(Registration *reg, gint s, gint reach, Peak *peak)
+polish_peak(Level *level, gint s, gint reach, Peak *peak)
 {
-    gint first = stripe_first_row(s, reg->n, reg->yres), end = stripe_end_row(s, reg->n, reg->yres);
+    gint yres = level->image->yres;
 
-    if (peak->trusted && !peak->polished) {
-        peak->polished = stripe_subpixel_refine(reg->subpixel, first, end, peak->iy - reg->m,
-                                                peak->ix - reg->m, reach, &peak->dy, &peak->dx);
+    gint first = stripe_first_row(s, level->n, yres), end = stripe_end_row(s, level->n, yres);
+
+    if (level->subpixel && peak->trusted && !peak->polished) {
+        gint ky = peak->ky, kx = peak->kx;
+
+        peak->polished = stripe_subpixel_refine(level->subpixel, first, end, peak->ky, peak->kx,
+                                                reach, &peak->dy, &peak->dx, &peak->sigma);
+        if (!peak->polished && level->subpixel_band) {
+            peak->polished = stripe_subpixel_refine(level->subpixel_band, first, end, peak->ky, peak->kx,
+                                                    reach, &peak->dy, &peak->dx, &peak->sigma);
+        }
+        /* The match must not carry the stripe out of its searched window,
+         * whose border a peak of its own could not cross. */
+        if (peak->polished && !(peak->dy >= peak->ylo && peak->dy <= peak->yhi
+                                && peak->dx >= peak->xlo && peak->dx <= peak->xhi)) {
+            peak->polished = peak->trusted = FALSE;
+            peak->dy = ky;
+            peak->dx = kx;
+        }
+        if (!peak->polished)
+            g_debug("registration: stripe %d: no sub-pixel match at (%d, %d)", s, peak->ky, peak->kx);
     }
     return peak->polished;
 }
 
-/* The best shift within radius of map indices (cy, cx) in the map of stripe
- * s, and the best local maximum that is not part of it.  A peak on the
- * border of the searched area may be the slope of a better one outside, so
- * it is not trusted. */
+/* The best shift within (ry, rx) of (cy, cx) in the map of stripe s, and
+ * the best local maximum that is not part of it.  A peak on the border of
+ * the searched area may be the slope of a better one outside, so it is
+ * not trusted.  With known > 0, the prediction (cy, cx) is known to within
+ * known px already (a coarser stage with more content resolved what lies
+ * beyond, such as the aliases of a periodic background): a peak within it
+ * competes only with the maxima within it; a peak beyond it (a jump away
+ * from the prediction) competes with the whole window. */
 static void
-find_peak(Registration *reg, gint s, const gdouble *map, gint cy, gint cx, gint radius, Peak *peak)
+find_peak(Level *level, gint s, gint cy, gint cx, gint ry, gint rx, gint known, Peak *peak)
 {
-    gint span = reg->span, i, j;
-    gint ylo = MAX(0, cy - radius), yhi = MIN(span-1, cy + radius);
-    gint xlo = MAX(0, cx - radius), xhi = MIN(span-1, cx + radius);
-    gdouble best = NO_MATCH, rival = 0.0, oy, ox;
+    const StripeCorrelationMap *map = level->maps + s;
+    gint ylo = MAX(cy - ry, map->cy - map->ry), yhi = MIN(cy + ry, map->cy + map->ry);
+    gint xlo = MAX(cx - rx, map->cx - map->rx), xhi = MIN(cx + rx, map->cx + map->rx);
+    gdouble best = STRIPE_CORRELATION_NONE, rival = 0.0, oy, ox, v;
+    gint i, j;
 
-    peak->iy = cy;
-    peak->ix = cx;
+    gwy_clear(peak, 1);
+    peak->ylo = ylo;
+    peak->yhi = yhi;
+    peak->xlo = xlo;
+    peak->xhi = xhi;
+    peak->ky = cy;
+    peak->kx = cx;
     for (i = ylo; i <= yhi; i++) {
         for (j = xlo; j <= xhi; j++) {
-            if (map[i*span + j] > best) {
-                best = map[i*span + j];
-                peak->iy = i;
-                peak->ix = j;
+            if ((v = stripe_correlation_map_at(map, i, j)) > best) {
+                best = v;
+                peak->ky = i;
+                peak->kx = j;
             }
         }
     }
     peak->value = best;
-    peak->dy = peak->iy - reg->m;
-    peak->dx = peak->ix - reg->m;
-    peak->polished = FALSE;
-    peak->trusted = (best > NO_MATCH
-                     && peak->iy > ylo && peak->iy < yhi && peak->ix > xlo && peak->ix < xhi);
+    peak->dy = peak->ky;
+    peak->dx = peak->kx;
+    peak->trusted = (best > STRIPE_CORRELATION_NONE
+                     && peak->ky > ylo && peak->ky < yhi && peak->kx > xlo && peak->kx < xhi);
+    if (known > 0 && ABS(peak->ky - cy) <= known && ABS(peak->kx - cx) <= known) {
+        ylo = MAX(ylo, cy - known);
+        yhi = MIN(yhi, cy + known);
+        xlo = MAX(xlo, cx - known);
+        xhi = MIN(xhi, cx + known);
+    }
     for (i = ylo; i <= yhi; i++) {
         for (j = xlo; j <= xhi; j++) {
-            if (ABS(i - peak->iy) < RIVAL_EXCLUSION && ABS(j - peak->ix) < RIVAL_EXCLUSION)
+            if (ABS(i - peak->ky) < RIVAL_EXCLUSION && ABS(j - peak->kx) < RIVAL_EXCLUSION)
                 continue;
-            if (map[i*span + j] > rival && is_local_maximum(map, span, i, j))
-                rival = map[i*span + j];
+            if ((v = stripe_correlation_map_at(map, i, j)) > rival && is_local_maximum(map, i, j))
+                rival = v;
         }
     }
     peak->rival = rival;
     if (!peak->trusted)
         return;
-    if (neighbourhood_matched(map, span, peak->iy, peak->ix)) {
-        refine_peak(map, span, peak->iy, peak->ix, &oy, &ox);
+    if (neighbourhood_matched(map, peak->ky, peak->kx)) {
+        refine_peak(map, peak->ky, peak->kx, &oy, &ox);
         peak->dy += oy;
         peak->dx += ox;
     }
-    else {
+    else if (level->subpixel) {
         /* On the edge of the shifts that keep enough of the stripe on the
          * reference the map cannot tell a peak from the slope of a better
          * one beyond; the match can, and says where the peak lies, which
          * must still be within the searched area. */
-        peak->trusted = (polish_peak(reg, s, EDGE_POLISH_REACH, peak)
-                         && peak->dy >= ylo - reg->m && peak->dy <= yhi - reg->m
-                         && peak->dx >= xlo - reg->m && peak->dx <= xhi - reg->m);
+        peak->trusted = (polish_peak(level, s, EDGE_POLISH_REACH, peak)
+                         && peak->dy >= ylo && peak->dy <= yhi && peak->dx >= xlo && peak->dx <= xhi);
         if (!peak->trusted) {
-            peak->dy = peak->iy - reg->m;
-            peak->dx = peak->ix - reg->m;
+            peak->dy = peak->ky;
+            peak->dx = peak->kx;
         }
     }
 }
@@ -507,25 +420,25 @@ peak_score(const Peak *peak)
     return CLAMP((p - q)/(1.0 - q)*MIN(1.0, p/LOW_PEAK), 0.0, 1.0);
 }
 
+/* The coarse stages decide which of a periodic background's aliases the
+ * fine windows (narrower than many periods) will see at all, so there a
+ * peak must also stand out relative to its own height: on a lattice with a
+ * little roughness, 0.95 over 0.93 is a coin toss, however high both are. */
 static gdouble
-median_of(gdouble *values, gint count)
+coarse_peak_score(const Peak *peak)
 {
-    gint i, j;
+    gdouble p = peak->value, q = MAX(peak->rival, 0.0);
 
-    /* A handful of values: insertion sort. */
-    for (i = 1; i < count; i++) {
-        gdouble v = values[i];
-
-        for (j = i; j > 0 && values[j-1] > v; j--)
-            values[j] = values[j-1];
-        values[j] = v;
-    }
-    if (count % 2)
-        return values[count/2];
-    return 0.5*(values[count/2 - 1] + values[count/2]);
+    return (p > 0.0) ? MIN(peak_score(peak), 1.0 - q/p) : 0.0;
 }
 
-/* The median shift of the confident stripes around s (not s itself), from
+static gdouble
+level_peak_score(const Level *level, const Peak *peak)
+{
+    return level->subpixel ? peak_score(peak) : coarse_peak_score(peak);
+}
+
+/* The median shift of the confident bands around s (not s itself), from
  * the near neighbours if there are two or more, else from farther ones.  On a
  * linear drift the median of symmetric neighbours is exact. */
 static gboolean
@@ -547,222 +460,373 @@ predict_from_neighbours(const Peak *peaks, const gboolean *reliable, gint n, gin
     }
     if (count < 2)
         return FALSE;
-    *dy = median_of(ys, count);
-    *dx = median_of(xs, count);
+    *dy = gwy_math_median(count, ys);
+    *dx = gwy_math_median(count, xs);
     return TRUE;
 }
 
+/* At full resolution a stripe is accepted only with a sub-pixel match,
+ * which also gives its uncertainty: no value is given without one. */
 static void
-set_shift(StripeShift *shift, const Peak *peak, gdouble score, gboolean resolved, gdouble min_score)
+set_shift(StripeShift *shift, const Peak *peak, gdouble score, gboolean resolved, gdouble min_score,
+          gboolean need_polish)
 {
     shift->dx = peak->dx;
     shift->dy = peak->dy;
     shift->score = score;
-    shift->accepted = peak->trusted && score >= min_score && score > 0.0;
+    shift->sigma = peak->polished ? peak->sigma : 0.0;
+    shift->accepted = (peak->trusted && score >= min_score && score > 0.0
+                       && (peak->polished || !need_polish));
     shift->peak = MAX(peak->value, -1.0);
     shift->rival = peak->rival;
     shift->resolved = resolved;
+    shift->in_reference = TRUE;
 }
 
-/* Every stripe with a prediction from its neighbours is judged within a small
- * window around it: there, a peak is either the neighbours' peak or a rival
- * the neighbours rule out.  A stripe whose own best peak lies outside the
- * window takes the best peak inside, at a score scaled down by how much lower
- * that peak is. */
+/* A band whose own peak is not clearly the best is judged within a small
+ * window around its confident neighbours' median: there, a peak is either
+ * the neighbours' peak or a rival the neighbours rule out.  It takes the
+ * best peak inside, at a score scaled down by how much lower that peak is
+ * than its own.  Confident bands keep their own peak, so that a jump of
+ * the drift between bands stays. */
 static void
-choose_consistent_shifts(Registration *reg, const Peak *global, gdouble min_score, StripeShift *shifts)
+choose_consistent_shifts(Level *level, const Peak *own, gdouble min_score, StripeShift *shifts)
 {
-    gint n = reg->n, s;
+    gint n = level->n, s;
     gboolean *reliable = g_new(gboolean, MAX(n, 1));
     gdouble py, px, score;
     Peak local;
 
     for (s = 0; s < n; s++)
-        reliable[s] = (peak_score(global + s) >= MAX(min_score, RELIABLE_SCORE));
+        reliable[s] = (level_peak_score(level, own + s) >= MAX(min_score, RELIABLE_SCORE));
     for (s = 0; s < n; s++) {
-        gboolean resolved;
-
-        if (!predict_from_neighbours(global, reliable, n, s, &py, &px)) {
-            local = global[s];
-            polish_peak(reg, s, 1, &local);
-            set_shift(shifts + s, &local, peak_score(&local), FALSE, min_score);
+        if (reliable[s] || !predict_from_neighbours(own, reliable, n, s, &py, &px)) {
+            set_shift(shifts + s, own + s, level_peak_score(level, own + s), FALSE, min_score, level->subpixel != NULL);
             continue;
         }
-        find_peak(reg, s, stripe_map(reg, s), (gint)floor(py + 0.5) + reg->m,
-                  (gint)floor(px + 0.5) + reg->m, CONSISTENCY_RADIUS, &local);
-        polish_peak(reg, s, 1, &local);
-        resolved = (local.iy != global[s].iy || local.ix != global[s].ix);
-        score = peak_score(&local);
-        if (resolved && global[s].value > 0.0)
-            score *= CLAMP(local.value/global[s].value, 0.0, 1.0);
-        set_shift(shifts + s, &local, score, resolved, min_score);
+        find_peak(level, s, nearest_int(py), nearest_int(px), CONSISTENCY_RADIUS, CONSISTENCY_RADIUS,
+                  0, &local);
+        score = level_peak_score(level, &local);
+        if ((local.ky != own[s].ky || local.kx != own[s].kx) && own[s].value > 0.0)
+            score *= CLAMP(local.value/own[s].value, 0.0, 1.0);
+        set_shift(shifts + s, &local, score, local.ky != own[s].ky || local.kx != own[s].kx,
+                  min_score, level->subpixel != NULL);
     }
     g_free(reliable);
 }
 
+/* Each stripe of the level searched within (ry, rx) of its predicted shift
+ * (0 where predicted is NULL); polished with reach px where the level has
+ * a sub-pixel match. */
 static void
-registration_setup(Registration *reg, const gdouble *image, const gdouble *reference,
-                   gint xres, gint yres, gint n, gdouble max_shift_px)
+measure_level(Level *level, const gdouble *pdy, const gdouble *pdx, gint ry, gint rx, gint known,
+              gboolean consistency, gdouble min_score, StripeShift *shifts)
 {
-    gint s, rows, cols;
-    gsize maps_bytes;
-    gdouble sum = 0.0;
-    gsize k;
+    Peak *own = g_new(Peak, MAX(level->n, 1));
+    gint s, cy, cx;
 
-    gwy_clear(reg, 1);
-    reg->image = image;
-    reg->reference = reference;
-    reg->xres = xres;
-    reg->yres = yres;
-    reg->n = n;
-    if (max_shift_px > 0.0)
-        reg->m = (gint)MIN(ceil(max_shift_px), G_MAXINT/4);
-    else
-        reg->m = MIN(xres, yres)/4;
-    /* Beyond half the smaller side most of a stripe has left the frame. */
-    reg->m = CLAMP(reg->m, 1, MIN(xres, yres)/2);
-    reg->span = 2*reg->m + 1;
-    for (s = 0; s < n; s++)
-        reg->max_height = MAX(reg->max_height, stripe_end_row(s, n, yres) - stripe_first_row(s, n, yres));
-
-    for (k = 0; k < (gsize)xres*yres; k++)
-        sum += reference[k];
-    reg->reference_mean = sum/((gdouble)xres*yres);
-
-    reg->window = g_new(gdouble, xres);
-    make_tukey_window(reg->window, xres);
-    reg->window_overlap = g_new(gdouble, reg->span);
-    compute_window_overlap(reg);
-    reg->ref_cum = g_new(gdouble, (gsize)(yres + 1)*reg->span);
-    reg->ref_sq_cum = g_new(gdouble, (gsize)(yres + 1)*reg->span);
-    compute_reference_sums(reg);
-
-    reg->tmpl_cum = g_new(gdouble, (gsize)(reg->max_height + 1)*reg->span);
-    reg->tmpl_sq_cum = g_new(gdouble, (gsize)(reg->max_height + 1)*reg->span);
-    reg->row_prefix = g_new(gdouble, xres + 1);
-    reg->row_sq_prefix = g_new(gdouble, xres + 1);
-    rows = fft_correlation_nice_size(reg->max_height + 2*reg->m);
-    cols = fft_correlation_nice_size(xres + 2*reg->m);
-    reg->stripe_fc = fft_correlation_new(rows, cols);
-    reg->map = g_new(gdouble, (gsize)reg->span*reg->span);
-    reg->subpixel = stripe_subpixel_new(image, reference, xres, yres, reg->window, reg->max_height);
-    maps_bytes = (gsize)n*reg->span*reg->span*sizeof(gdouble);
-    if (maps_bytes <= MAP_CACHE_BYTES)
-        reg->cached_maps = g_new0(gdouble*, n);
+    for (s = 0; s < level->n; s++) {
+        cy = pdy ? nearest_int(pdy[s]) : 0;
+        cx = pdx ? nearest_int(pdx[s]) : 0;
+        level_compute_map(level, s, cy, cx, ry, rx);
+        find_peak(level, s, cy, cx, ry, rx, known, own + s);
+        polish_peak(level, s, POLISH_REACH, own + s);
+    }
+    if (consistency)
+        choose_consistent_shifts(level, own, min_score, shifts);
+    else {
+        for (s = 0; s < level->n; s++)
+            set_shift(shifts + s, own + s, level_peak_score(level, own + s), FALSE, min_score, level->subpixel != NULL);
+    }
+    g_free(own);
 }
 
+/* Search half-widths (px) from the options: the whole frame unless bounded. */
 static void
-registration_free(Registration *reg)
+search_radii(const StripeRegistrationOptions *options, gint xres, gint yres, gint *ry, gint *rx)
 {
-    gint s;
+    gdouble sy = options->search_y, sx = options->search_x;
 
-    if (reg->cached_maps) {
-        for (s = 0; s < reg->n; s++)
-            g_free(reg->cached_maps[s]);
-        g_free(reg->cached_maps);
+    if (!(sy > 0.0))
+        sy = STRIPE_REGISTRATION_WHOLE_FRAME*yres;
+    if (!(sx > 0.0))
+        sx = STRIPE_REGISTRATION_WHOLE_FRAME*xres;
+    *ry = (gint)CLAMP(ceil(sy), 1, MAX(1, yres/2));
+    *rx = (gint)CLAMP(ceil(sx), 1, MAX(1, xres/2));
+}
+
+/* Linear interpolation of the accepted bands' shifts at row y (band rows),
+ * the nearest band's beyond the outer ones.  FALSE when none is accepted. */
+static gboolean
+interpolate_bands(const StripeShift *bands, gint nb, gint yres, gdouble y, gdouble *dy, gdouble *dx)
+{
+    gint b, below = -1, above = -1;
+    gdouble yb, ya, t;
+
+    for (b = 0; b < nb; b++) {
+        if (!bands[b].accepted)
+            continue;
+        yb = 0.5*(stripe_first_row(b, nb, yres) + stripe_end_row(b, nb, yres) - 1);
+        if (yb <= y)
+            below = b;
+        else if (above < 0)
+            above = b;
     }
-    fft_correlation_free(reg->stripe_fc);
-    stripe_subpixel_free(reg->subpixel);
-    g_free(reg->map);
-    g_free(reg->row_sq_prefix);
-    g_free(reg->row_prefix);
-    g_free(reg->tmpl_sq_cum);
-    g_free(reg->tmpl_cum);
-    g_free(reg->ref_sq_cum);
-    g_free(reg->ref_cum);
-    g_free(reg->window_overlap);
-    g_free(reg->window);
+    if (below < 0 && above < 0)
+        return FALSE;
+    if (below < 0 || above < 0) {
+        b = (below < 0) ? above : below;
+        *dy = bands[b].dy;
+        *dx = bands[b].dx;
+        return TRUE;
+    }
+    yb = 0.5*(stripe_first_row(below, nb, yres) + stripe_end_row(below, nb, yres) - 1);
+    ya = 0.5*(stripe_first_row(above, nb, yres) + stripe_end_row(above, nb, yres) - 1);
+    t = (y - yb)/(ya - yb);
+    *dy = (1.0 - t)*bands[below].dy + t*bands[above].dy;
+    *dx = (1.0 - t)*bands[below].dx + t*bands[above].dx;
+    return TRUE;
+}
+
+/* Stages 1 and 2 at reduced resolution: the predicted shift (full-resolution
+ * px) of each of n stripes.  FALSE when the coarse stage found nothing. */
+static gboolean
+predict_coarsely(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
+                 const StripeRegistrationOptions *options, gint *factor, gboolean *known,
+                 gdouble *pdy, gdouble *pdx)
+{
+    ConditionedFrame *small_image, *small_reference;
+    StripeShift whole, *bands;
+    Level level;
+    gint f, nb, ry, rx, by, bx, s, yres = image->yres;
+    gdouble gy = 0.0, gx = 0.0, y;
+    StripeRegistrationOptions coarse = *options;
+    gboolean found = TRUE, global_ok;
+
+    f = MAX(1, (MAX(image->xres, image->yres) + COARSE_SIZE - 1)/COARSE_SIZE);
+    *factor = f;
+    *known = FALSE;
+    small_image = conditioned_frame_downsample(image, f);
+    small_reference = conditioned_frame_downsample(reference, f);
+    coarse.search_x = (options->search_x > 0.0) ? options->search_x/f : 0.0;
+    coarse.search_y = (options->search_y > 0.0) ? options->search_y/f : 0.0;
+    search_radii(&coarse, small_image->xres, small_image->yres, &ry, &rx);
+
+    level_init(&level, small_image, small_reference, 1, ry, rx, FALSE);
+    measure_level(&level, NULL, NULL, ry, rx, 0, FALSE, MIN(options->min_score, GLOBAL_MIN_SCORE), &whole);
+    level_free(&level);
+    global_ok = whole.accepted;
+    g_debug("registration: coarse factor %d, whole frame (%.2f, %.2f) coarse px, peak %.3f, "
+            "rival %.3f, score %.3f", f, whole.dx, whole.dy, whole.peak, whole.rival, whole.score);
+    if (global_ok) {
+        gy = whole.dy;
+        gx = whole.dx;
+        by = MIN(ry, MAX(3, (gint)ceil(BAND_REACH*small_image->yres)));
+        bx = MIN(rx, MAX(3, (gint)ceil(BAND_REACH*small_image->xres)));
+    }
+    else {
+        by = ry;
+        bx = rx;
+    }
+
+    nb = CLAMP(small_image->yres/BAND_ROWS, 1, n);
+    bands = g_new(StripeShift, nb);
+    {
+        gdouble *cdy = g_new(gdouble, nb), *cdx = g_new(gdouble, nb);
+
+        for (s = 0; s < nb; s++) {
+            cdy[s] = gy;
+            cdx[s] = gx;
+        }
+        level_init(&level, small_image, small_reference, nb, by, bx, FALSE);
+        measure_level(&level, cdy, cdx, by, bx, 0, TRUE, options->min_score, bands);
+        for (s = 0; s < nb; s++) {
+            g_debug("registration: band %d/%d (%.2f, %.2f) coarse px, peak %.3f, rival %.3f, "
+                    "score %.3f%s", s, nb, bands[s].dx, bands[s].dy, bands[s].peak, bands[s].rival,
+                    bands[s].score, bands[s].accepted ? "" : ", rejected");
+        }
+        level_free(&level);
+        g_free(cdy);
+        g_free(cdx);
+    }
+    for (s = 0; s < n && found; s++) {
+        y = (0.5*(stripe_first_row(s, n, yres) + stripe_end_row(s, n, yres) - 1) + 0.5)/f - 0.5;
+        if (interpolate_bands(bands, nb, small_image->yres, y, pdy + s, pdx + s))
+            *known = TRUE;
+        else {
+            if (!global_ok)
+                found = FALSE;
+            pdy[s] = gy;
+            pdx[s] = gx;
+        }
+        pdy[s] *= f;
+        pdx[s] *= f;
+    }
+    g_free(bands);
+    conditioned_frame_free(small_image);
+    conditioned_frame_free(small_reference);
+    return found;
+}
+
+/* Whether at least IN_REFERENCE_FRACTION of stripe s lies on the reference
+ * at the shift (dy, dx). */
+static gboolean
+stripe_in_reference(gint s, gint n, gint xres, gint yres, gdouble dy, gdouble dx)
+{
+    gint first = stripe_first_row(s, n, yres), end = stripe_end_row(s, n, yres);
+    gdouble rows = MIN(end, yres + dy) - MAX(first, dy), cols = xres - fabs(dx);
+
+    return (rows > 0.0 && cols > 0.0
+            && rows*cols >= IN_REFERENCE_FRACTION*(end - first)*(gdouble)xres);
 }
 
 static gboolean
-all_finite(const gdouble *data, gsize count)
+check_frames(const ConditionedFrame *image, const ConditionedFrame *reference, gint n, GError **error)
 {
-    gsize k;
+    if (image->xres < 4 || image->yres < 4) {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE,
+                    _("The image (%d x %d px) is too small to register: it needs at least 4 x 4 px."),
+                    image->xres, image->yres);
+        return FALSE;
+    }
+    if (reference->xres != image->xres || reference->yres != image->yres) {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE,
+                    _("The reference (%d x %d px) does not have the image's size (%d x %d px)."),
+                    reference->xres, reference->yres, image->xres, image->yres);
+        return FALSE;
+    }
+    if (n < 1 || n > image->yres) {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_STRIPES,
+                    _("The number of stripes (%d) must be between 1 and the image's %d rows."),
+                    n, image->yres);
+        return FALSE;
+    }
+    return TRUE;
+}
 
-    for (k = 0; k < count; k++) {
-        if (!isfinite(data[k]))
+gboolean
+stripe_registration_measure_conditioned(const ConditionedFrame *image, const ConditionedFrame *reference,
+                                        gint n, const StripeRegistrationOptions *options,
+                                        StripeShift *shifts, GError **error)
+{
+    StripeRegistrationOptions defaults;
+    gdouble *pdy, *pdx;
+    gint factor, radius, s;
+    gboolean known;
+    Level level;
+
+    g_return_val_if_fail(image && reference && shifts, FALSE);
+    if (!options) {
+        stripe_registration_options_init(&defaults);
+        options = &defaults;
+    }
+    if (!check_frames(image, reference, n, error))
+        return FALSE;
+    pdy = g_new(gdouble, n);
+    pdx = g_new(gdouble, n);
+    if (!predict_coarsely(image, reference, n, options, &factor, &known, pdy, pdx)) {
+        for (s = 0; s < n; s++) {
+            gwy_clear(shifts + s, 1);
+            shifts[s].in_reference = TRUE;
+        }
+    }
+    else {
+        /* The coarse shift is good to about a coarse pixel; a stripe may
+         * have jumped away from its band's. */
+        radius = MAX(FINE_MIN_RADIUS, 2*factor + 4);
+        radius = MIN(radius, MIN(image->xres, image->yres)/2);
+        level_init(&level, image, reference, n, radius, radius, TRUE);
+        measure_level(&level, pdy, pdx, radius, radius, 0, FALSE, options->min_score, shifts);
+        level_free(&level);
+        for (s = 0; s < n; s++)
+            shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres, pdy[s], pdx[s]);
+    }
+    g_free(pdy);
+    g_free(pdx);
+    return TRUE;
+}
+
+gboolean
+stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
+                                               const ConditionedFrame *reference, gint n,
+                                               const gdouble *predicted_dx, const gdouble *predicted_dy,
+                                               gdouble radius_px, gdouble min_score,
+                                               StripeShift *shifts, GError **error)
+{
+    Level level;
+    gint s, radius;
+
+    g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
+    if (!check_frames(image, reference, n, error))
+        return FALSE;
+    for (s = 0; s < n; s++) {
+        if (!isfinite(predicted_dx[s]) || !isfinite(predicted_dy[s])
+            || fabs(predicted_dx[s]) > image->xres || fabs(predicted_dy[s]) > image->yres) {
+            g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
+                        _("The predicted shift of stripe %d is not a finite number within the frame."),
+                        s);
             return FALSE;
+        }
+    }
+    radius = (gint)CLAMP(ceil(radius_px), 1, MIN(image->xres, image->yres)/2);
+    level_init(&level, image, reference, n, radius, radius, TRUE);
+    measure_level(&level, predicted_dy, predicted_dx, radius, radius, 0, FALSE, min_score, shifts);
+    level_free(&level);
+    for (s = 0; s < n; s++) {
+        shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres,
+                                                     predicted_dy[s], predicted_dx[s]);
     }
     return TRUE;
 }
 
 static gboolean
-check_arguments(const gdouble *image, const gdouble *reference, gint xres, gint yres, gint n,
-                GError **error)
+condition_pair(const gdouble *image, const gdouble *reference, gint xres, gint yres, gdouble aspect,
+               ConditionedFrame **cimage, ConditionedFrame **creference, GError **error)
 {
+    gdouble narrow;
+
+    *cimage = *creference = NULL;
     if (xres < 4 || yres < 4) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE,
                     _("The image (%d x %d px) is too small to register: it needs at least 4 x 4 px."),
                     xres, yres);
         return FALSE;
     }
-    if (n < 1 || n > yres) {
-        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_STRIPES,
-                    _("The number of stripes (%d) must be between 1 and the image's %d rows."),
-                    n, yres);
-        return FALSE;
-    }
-    if (!all_finite(image, (gsize)xres*yres)) {
+    if (!(*cimage = frame_condition_level(image, NULL, xres, yres))) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
-                    _("The image contains NaN or infinite values."));
+                    _("The image has no valid pixel (all are NaN or infinite)."));
         return FALSE;
     }
-    if (!all_finite(reference, (gsize)xres*yres)) {
+    if (!(*creference = frame_condition_level(reference, NULL, xres, yres))) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
-                    _("The reference contains NaN or infinite values."));
+                    _("The reference has no valid pixel (all are NaN or infinite)."));
+        conditioned_frame_free(*cimage);
+        *cimage = NULL;
         return FALSE;
     }
+    /* One band for both frames: the noisier one decides. */
+    narrow = MAX(conditioned_frame_noise_scale(*cimage, aspect),
+                 conditioned_frame_noise_scale(*creference, aspect));
+    conditioned_frame_band_pass(*cimage, aspect, narrow);
+    conditioned_frame_band_pass(*creference, aspect, narrow);
     return TRUE;
-}
-
-static gint
-nearest_int(gdouble x)
-{
-    return (gint)floor(x + 0.5);
-}
-
-/* Each stripe's best peak within radius of its predicted shift (0 without a
- * prediction).  A blind search (no prediction) is followed by the
- * consistency step; a predicted window already is the prior the step
- * would impose, and one wider than the step's own window is the caller's
- * statement that neighbours may differ by that much. */
-static void
-register_stripes(Registration *reg, const gdouble *predicted_dx, const gdouble *predicted_dy,
-                 gint radius, gdouble min_score, StripeShift *shifts)
-{
-    Peak *global;
-    gint s, cx, cy;
-
-    g_return_if_fail(reg->n >= 1);
-    global = g_new(Peak, reg->n);
-    for (s = 0; s < reg->n; s++) {
-        cx = predicted_dx ? nearest_int(predicted_dx[s]) : 0;
-        cy = predicted_dy ? nearest_int(predicted_dy[s]) : 0;
-        find_peak(reg, s, stripe_map(reg, s), cy + reg->m, cx + reg->m, radius, global + s);
-        if (predicted_dx) {
-            polish_peak(reg, s, 1, global + s);
-            set_shift(shifts + s, global + s, peak_score(global + s), FALSE, min_score);
-        }
-    }
-    if (!predicted_dx)
-        choose_consistent_shifts(reg, global, min_score, shifts);
-    g_free(global);
 }
 
 gboolean
 stripe_registration_measure(const gdouble *image, const gdouble *reference, gint xres, gint yres, gint n,
-                            gdouble max_shift_px, gdouble min_score, StripeShift *shifts, GError **error)
+                            const StripeRegistrationOptions *options, StripeShift *shifts, GError **error)
 {
-    Registration reg;
+    ConditionedFrame *cimage, *creference;
+    gboolean ok;
 
     g_return_val_if_fail(image && reference && shifts, FALSE);
-    if (!check_arguments(image, reference, xres, yres, n, error))
+    if (!condition_pair(image, reference, xres, yres, options ? options->pixel_aspect : 1.0,
+                        &cimage, &creference, error))
         return FALSE;
-
-    registration_setup(&reg, image, reference, xres, yres, n, max_shift_px);
-    register_stripes(&reg, NULL, NULL, reg.m, min_score, shifts);
-    registration_free(&reg);
-    return TRUE;
+    ok = stripe_registration_measure_conditioned(cimage, creference, n, options, shifts, error);
+    conditioned_frame_free(cimage);
+    conditioned_frame_free(creference);
+    return ok;
 }
 
 gboolean
@@ -771,37 +835,25 @@ stripe_registration_measure_around(const gdouble *image, const gdouble *referenc
                                    gdouble radius_px, gdouble min_score, StripeShift *shifts,
                                    GError **error)
 {
-    Registration reg;
-    gint s, radius, reach = 0;
+    ConditionedFrame *cimage, *creference;
+    gboolean ok;
 
     g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
-    if (!check_arguments(image, reference, xres, yres, n, error))
+    if (!condition_pair(image, reference, xres, yres, 1.0, &cimage, &creference, error))
         return FALSE;
-    for (s = 0; s < n; s++) {
-        if (!isfinite(predicted_dx[s]) || !isfinite(predicted_dy[s])) {
-            g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
-                        _("The predicted shift of stripe %d is not a finite number."), s);
-            return FALSE;
-        }
-    }
-    radius = (gint)CLAMP(ceil(radius_px), 1, MIN(xres, yres)/2);
-    /* The correlation maps must reach every stripe's window. */
-    for (s = 0; s < n; s++) {
-        gdouble far = MAX(fabs(predicted_dx[s]), fabs(predicted_dy[s]));
-
-        reach = MAX(reach, (gint)MIN(far + 0.5, MIN(xres, yres)) + radius);
-    }
-    registration_setup(&reg, image, reference, xres, yres, n, reach);
-    register_stripes(&reg, predicted_dx, predicted_dy, radius, min_score, shifts);
-    registration_free(&reg);
-    return TRUE;
+    ok = stripe_registration_measure_around_conditioned(cimage, creference, n, predicted_dx, predicted_dy,
+                                                        radius_px, min_score, shifts, error);
+    conditioned_frame_free(cimage);
+    conditioned_frame_free(creference);
+    return ok;
 }
 
 gboolean
 stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference, gint n,
-                                   gdouble max_shift_px, gdouble min_score, StripeShift *shifts,
+                                   const StripeRegistrationOptions *options, StripeShift *shifts,
                                    GError **error)
 {
+    StripeRegistrationOptions opts;
     gint xres, yres, rxres, ryres;
 
     g_return_val_if_fail(GWY_IS_DATA_FIELD(image) && GWY_IS_DATA_FIELD(reference), FALSE);
@@ -815,9 +867,14 @@ stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference,
                     rxres, ryres, xres, yres);
         return FALSE;
     }
+    if (options)
+        opts = *options;
+    else
+        stripe_registration_options_init(&opts);
+    opts.pixel_aspect = gwy_data_field_get_dy(image)/gwy_data_field_get_dx(image);
     return stripe_registration_measure(gwy_data_field_get_data_const(image),
                                        gwy_data_field_get_data_const(reference),
-                                       xres, yres, n, max_shift_px, min_score, shifts, error);
+                                       xres, yres, n, &opts, shifts, error);
 }
 
 gint
@@ -853,21 +910,24 @@ stripe_registration_to_table(const StripeShift *shifts, gint n, gboolean whole_p
         drift_table_set_extra(table, s, "dx_exact", shift->accepted ? shift->dx : NAN);
         drift_table_set_extra(table, s, "dy_exact", shift->accepted ? shift->dy : NAN);
         drift_table_set_extra(table, s, "score", shift->score);
+        drift_table_set_extra(table, s, "sigma_px", shift->accepted ? shift->sigma : NAN);
     }
     return table;
 }
 
 DriftTable*
 stripe_registration_table_for_fields(GwyDataField *image, GwyDataField *reference, gint n,
-                                     gdouble max_shift_px, gboolean whole_pixels, GError **error)
+                                     const StripeRegistrationOptions *options, gboolean whole_pixels,
+                                     StripeRegistrationSupport *support, GError **error)
 {
     StripeShift *shifts;
     DriftTable *table = NULL;
 
     g_return_val_if_fail(n >= 1, NULL);
     shifts = g_new(StripeShift, n);
-    if (stripe_registration_measure_fields(image, reference, n, max_shift_px,
-                                           STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, shifts, error)) {
+    if (stripe_registration_measure_fields(image, reference, n, options, shifts, error)) {
+        if (support)
+            stripe_registration_support(shifts, n, support);
         if (stripe_registration_count_accepted(shifts, n))
             table = stripe_registration_to_table(shifts, n, whole_pixels);
         else {
@@ -878,4 +938,40 @@ stripe_registration_table_for_fields(GwyDataField *image, GwyDataField *referenc
     }
     g_free(shifts);
     return table;
+}
+
+void
+stripe_registration_support(const StripeShift *shifts, gint n, StripeRegistrationSupport *support)
+{
+    gdouble *scores = g_new(gdouble, MAX(n, 1));
+    gint s;
+
+    gwy_clear(support, 1);
+    support->stripes = n;
+    for (s = 0; s < n; s++) {
+        support->in_reference += !!shifts[s].in_reference;
+        if (shifts[s].accepted)
+            scores[support->measured++] = shifts[s].score;
+    }
+    support->median_score = support->measured ? gwy_math_median(support->measured, scores) : 0.0;
+    /* A large offset that leaves part of the image outside the reference is
+     * normal; what cannot be trusted is a registration that measured few
+     * of the stripes it could have measured. */
+    support->supported = (support->measured >= MIN(2, n)
+                          && 2*support->measured >= support->in_reference);
+    g_free(scores);
+}
+
+gchar*
+stripe_registration_support_message(const StripeRegistrationSupport *support)
+{
+    if (support->supported)
+        return NULL;
+    if (support->measured < MIN(2, support->stripes)) {
+        return g_strdup_printf(dngettext(GETTEXT_PACKAGE, "only %d stripe of %d was measured",
+                                        "only %d stripes of %d were measured", support->measured),
+                               support->measured, support->stripes);
+    }
+    return g_strdup_printf(_("only %d of the %d stripes whose content lies in the reference "
+                             "were measured"), support->measured, support->in_reference);
 }

@@ -10,6 +10,7 @@
 #include <glib.h>
 #include <libprocess/datafield.h>
 #include "drift-table.h"
+#include "frame-conditioning.h"
 
 G_BEGIN_DECLS
 
@@ -18,13 +19,25 @@ G_BEGIN_DECLS
 typedef enum {
     STRIPE_REGISTRATION_ERROR_SIZE,     /* image and reference differ, or too small */
     STRIPE_REGISTRATION_ERROR_STRIPES,  /* n outside 1..yres */
-    STRIPE_REGISTRATION_ERROR_VALUE,    /* NaN or infinity in the data */
+    STRIPE_REGISTRATION_ERROR_VALUE,    /* no valid pixel, or a bad prediction */
     STRIPE_REGISTRATION_ERROR_NO_MATCH, /* no stripe could be registered */
 } StripeRegistrationError;
 
 /* A min_score that rejects featureless and ambiguous (periodic) stripes but
  * keeps every well-textured one; what the tools use unless told otherwise. */
 #define STRIPE_REGISTRATION_DEFAULT_MIN_SCORE 0.25
+/* The largest shift searched by default, as a fraction of the frame in
+ * each axis: beyond it too little of a stripe can still lie on the
+ * reference for a match to mean anything. */
+#define STRIPE_REGISTRATION_WHOLE_FRAME 0.45
+
+typedef struct {
+    gdouble search_x;      /* largest |dx| searched, px; <= 0: the whole frame
+                              (STRIPE_REGISTRATION_WHOLE_FRAME of xres) */
+    gdouble search_y;      /* the same for dy and yres */
+    gdouble min_score;     /* stripes scoring less are left empty */
+    gdouble pixel_aspect;  /* physical height over width of a pixel */
+} StripeRegistrationOptions;
 
 typedef struct {
     gdouble dx;        /* px: content of the reference at (r, c) appears in */
@@ -32,7 +45,13 @@ typedef struct {
                           at the stripe's centre row (the stripe's mean for a
                           drift changing linearly over its rows) */
     gdouble score;     /* confidence in [0, 1] */
-    gboolean accepted; /* score >= min_score and consistent */
+    gdouble sigma;     /* px: standard uncertainty of dx and dy (the larger
+                          of the two), from the match's residual; 0 when
+                          not measured */
+    gboolean accepted; /* score >= min_score and a sub-pixel match */
+    gboolean in_reference; /* at the shift the coarse stage found, most of
+                              the stripe lies on the reference (TRUE when
+                              there was nothing to tell) */
     /* Diagnostics. */
     gdouble peak;      /* normalised cross-correlation at the chosen peak */
     gdouble rival;     /* the highest competing peak (in the window used) */
@@ -41,25 +60,50 @@ typedef struct {
                           their prediction */
 } StripeShift;
 
+/* Whether the measured stripes can support a result. */
+typedef struct {
+    gint stripes;          /* n */
+    gint in_reference;     /* stripes whose content lies in the reference */
+    gint measured;         /* accepted stripes */
+    gdouble median_score;  /* over the measured stripes */
+    gboolean supported;    /* at least two stripes and at least half of those
+                              in the reference measured */
+} StripeRegistrationSupport;
+
 GQuark       stripe_registration_error_quark(void);
 
-/* Measures n stripes of image against reference (same xres, yres).
- * max_shift_px limits the search (<= 0: a quarter of the smaller side). */
+void         stripe_registration_options_init(StripeRegistrationOptions *options);
+
+/* Measures n stripes of image against reference (same xres, yres, raw
+ * channels: both are conditioned first, see frame-conditioning.h).  NaN and
+ * infinite pixels are missing and carry no weight.  The search runs coarse
+ * to fine: the whole frame's shift at reduced resolution, then bands of
+ * rows, then every stripe on its own at full resolution around its band's
+ * shift, so that a jump between two stripes is measured, not smoothed.
+ * options may be NULL (defaults). */
 gboolean     stripe_registration_measure (const gdouble *image,
                                           const gdouble *reference,
                                           gint xres,
                                           gint yres,
                                           gint n,
-                                          gdouble max_shift_px,
-                                          gdouble min_score,
+                                          const StripeRegistrationOptions *options,
                                           StripeShift *shifts,
                                           GError **error);
 
-/* The same, each stripe searched only within radius_px (in both axes) of
- * its predicted shift (px, table convention): for shifts known roughly
- * beforehand, such as those of a frame series registered against an older
- * frame, which may lie beyond any blind search.  The peaks that compete
- * for a stripe's score are those within its window. */
+/* The same for frames conditioned already (a series conditions each frame
+ * once). */
+gboolean     stripe_registration_measure_conditioned(const ConditionedFrame *image,
+                                                     const ConditionedFrame *reference,
+                                                     gint n,
+                                                     const StripeRegistrationOptions *options,
+                                                     StripeShift *shifts,
+                                                     GError **error);
+
+/* Each stripe searched only within radius_px (in both axes) of its
+ * predicted shift (px, table convention), with no coarse stage: for shifts
+ * known roughly beforehand, such as those of a frame series registered
+ * against an older frame.  The peaks that compete for a stripe's score are
+ * those within its window. */
 gboolean     stripe_registration_measure_around(const gdouble *image,
                                                 const gdouble *reference,
                                                 gint xres,
@@ -72,34 +116,55 @@ gboolean     stripe_registration_measure_around(const gdouble *image,
                                                 StripeShift *shifts,
                                                 GError **error);
 
+gboolean     stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
+                                                            const ConditionedFrame *reference,
+                                                            gint n,
+                                                            const gdouble *predicted_dx,
+                                                            const gdouble *predicted_dy,
+                                                            gdouble radius_px,
+                                                            gdouble min_score,
+                                                            StripeShift *shifts,
+                                                            GError **error);
+
 /* The same for two channels; refuses (with a message giving both sizes)
- * fields of different pixel dimensions. */
+ * fields of different pixel dimensions.  The pixel aspect comes from the
+ * image's pixel sizes (options' is ignored); options may be NULL. */
 gboolean     stripe_registration_measure_fields(GwyDataField *image,
                                                 GwyDataField *reference,
                                                 gint n,
-                                                gdouble max_shift_px,
-                                                gdouble min_score,
+                                                const StripeRegistrationOptions *options,
                                                 StripeShift *shifts,
                                                 GError **error);
 
 /* A px table of the shifts: rejected stripes are blank (nearest-stripe rule),
- * with dx_exact, dy_exact and score columns. */
+ * with dx_exact, dy_exact, score and sigma_px columns. */
 DriftTable*  stripe_registration_to_table(const StripeShift *shifts, gint n,
                                           gboolean whole_pixels);
 
-/* What the tool and the module call: measures with the default min_score
- * and returns the table (see above), or NULL with an error when the sizes
- * differ, n is out of range, or no stripe is accepted. */
+/* What the tool and the module call: measures and returns the table (see
+ * above), or NULL with an error when the sizes differ, n is out of range,
+ * or no stripe is accepted.  support (may be NULL) says whether the
+ * measured stripes support the result; a table is returned either way. */
 DriftTable*  stripe_registration_table_for_fields(GwyDataField *image,
                                                   GwyDataField *reference,
                                                   gint n,
-                                                  gdouble max_shift_px,
+                                                  const StripeRegistrationOptions *options,
                                                   gboolean whole_pixels,
+                                                  StripeRegistrationSupport *support,
                                                   GError **error);
 
 /* How many stripes were accepted. */
 gint         stripe_registration_count_accepted(const StripeShift *shifts,
                                                 gint n);
+
+void         stripe_registration_support(const StripeShift *shifts,
+                                         gint n,
+                                         StripeRegistrationSupport *support);
+
+/* One line for a result that is not supported, e.g. "only 3 of the 12
+ * stripes whose content lies in the reference were measured"; NULL when
+ * it is supported. */
+gchar*       stripe_registration_support_message(const StripeRegistrationSupport *support);
 
 G_END_DECLS
 

@@ -46,7 +46,7 @@ enum {
     MAX_PARAMS = 6,
 };
 
-#define MAX_ITERATIONS 16
+#define MAX_ITERATIONS 32
 /* Steps shorter than this (px, per axis) end the iteration. */
 #define CONVERGED_STEP 5e-3
 /* Fewer of the stripe's rows than this on the reference is too little to
@@ -72,15 +72,23 @@ struct _StripeSubpixel {
     const gdouble *image;
     const gdouble *reference;
     const gdouble *window;
+    const gdouble *weight;    /* image validity, NULL: all valid */
     gint xres;
     gint yres;
     gint max_height;
-    gdouble *weighted_value;  /* max_height x xres: window*stripe */
+    gint edge_margin;
+    gdouble *pixel_weight;    /* max_height x xres: window times validity
+                                 of the pixel and its gradient's taps */
+    gdouble *weighted_value;  /* pixel_weight*stripe */
     gdouble *weighted_grad_y; /* window*d(stripe)/dy */
     gdouble *weighted_grad_x;
+    gdouble *row_offset;      /* max_height x ROW_REGRESSORS: each row's
+                                 products with the constant, uncentred */
     gdouble *row_normal;      /* max_height x ROW_TERMS: each row's products
                                  of the row regressors, upper triangle */
     gdouble *column;          /* xres: reference interpolated along y */
+    gdouble *residual;        /* max_height x xres: weighted residual of the
+                                 final match, for its uncertainty */
     gboolean *row_dropped;    /* max_height: rows that left the reference */
 };
 
@@ -99,8 +107,8 @@ typedef struct {
 } StripeMotion;
 
 StripeSubpixel*
-stripe_subpixel_new(const gdouble *image, const gdouble *reference, gint xres, gint yres,
-                    const gdouble *window, gint max_height)
+stripe_subpixel_new(const gdouble *image, const gdouble *reference, const gdouble *weight,
+                    gint xres, gint yres, const gdouble *window, gint max_height, gint edge_margin)
 {
     StripeSubpixel *sp;
     gsize plane;
@@ -111,14 +119,19 @@ stripe_subpixel_new(const gdouble *image, const gdouble *reference, gint xres, g
     sp->image = image;
     sp->reference = reference;
     sp->window = window;
+    sp->weight = weight;
     sp->xres = xres;
     sp->yres = yres;
     sp->max_height = max_height;
+    sp->edge_margin = MAX(edge_margin, 0);
     plane = (gsize)max_height*xres;
+    sp->pixel_weight = g_new(gdouble, plane);
     sp->weighted_value = g_new(gdouble, plane);
+    sp->residual = g_new(gdouble, plane);
     sp->weighted_grad_y = g_new(gdouble, plane);
     sp->weighted_grad_x = g_new(gdouble, plane);
     sp->row_normal = g_new(gdouble, (gsize)max_height*ROW_TERMS);
+    sp->row_offset = g_new(gdouble, (gsize)max_height*ROW_REGRESSORS);
     sp->column = g_new(gdouble, xres);
     sp->row_dropped = g_new(gboolean, max_height);
     return sp;
@@ -129,10 +142,13 @@ stripe_subpixel_free(StripeSubpixel *sp)
 {
     if (!sp)
         return;
+    g_free(sp->pixel_weight);
     g_free(sp->weighted_value);
+    g_free(sp->residual);
     g_free(sp->weighted_grad_y);
     g_free(sp->weighted_grad_x);
     g_free(sp->row_normal);
+    g_free(sp->row_offset);
     g_free(sp->column);
     g_free(sp->row_dropped);
     g_free(sp);
@@ -152,6 +168,51 @@ image_row_clamped(const StripeSubpixel *sp, gint r)
     return sp->image + (gsize)CLAMP(r, 0, sp->yres - 1)*sp->xres;
 }
 
+/* 1 when the pixel and the taps of its gradients are valid, else 0. */
+static gdouble
+tap_validity(const StripeSubpixel *sp, gint r, gint c)
+{
+    const gdouble *w = sp->weight;
+    gint xres = sp->xres, m = sp->edge_margin;
+
+    if (r < m || r >= sp->yres - m || c < m || c >= xres - m)
+        return 0.0;
+    if (!w)
+        return 1.0;
+    return (w[(gsize)r*xres + c]*w[(gsize)r*xres + c - 1]*w[(gsize)r*xres + c + 1]
+            *w[(gsize)CLAMP(r - 1, 0, sp->yres - 1)*xres + c]
+            *w[(gsize)CLAMP(r + 1, 0, sp->yres - 1)*xres + c]);
+}
+
+/* Every scan line has an offset of its own that the frames need not share
+ * (the feedback's set point wanders between lines): the match fits one
+ * offset per row.  Eliminated row by row, it leaves the other regressors
+ * and the reference's samples centred on the row's weighted means.  Row
+ * i's products with the constant are kept in row_offset, and the products
+ * among the other regressors are centred here; the constant's own entry
+ * (the row's weight) stays, with no coupling, so the common offset the
+ * normal matrix still carries comes out 0. */
+static void
+centre_row_terms(StripeSubpixel *sp, gint i)
+{
+    gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS, *offset = sp->row_offset + (gsize)i*ROW_REGRESSORS;
+    gdouble w1 = terms[row_term(1, 1)];
+    gint a, b;
+
+    for (a = 0; a < ROW_REGRESSORS; a++)
+        offset[a] = terms[row_term(MIN(a, 1), MAX(a, 1))];
+    if (!(w1 > 0.0))
+        return;
+    for (a = 0; a < ROW_REGRESSORS; a++) {
+        for (b = a; b < ROW_REGRESSORS; b++) {
+            if (a != 1 && b != 1)
+                terms[row_term(a, b)] -= offset[a]*offset[b]/w1;
+            else if (a != b)
+                terms[row_term(a, b)] = 0.0;
+        }
+    }
+}
+
 /* Row i's weighted stripe and gradients, and its products of the row
  * regressors (stripe, 1, d/dy, d/dx), upper triangle by rows. */
 static void
@@ -160,6 +221,7 @@ prepare_row(StripeSubpixel *sp, const StripeSpan *span, gint i)
     gint xres = sp->xres, r = span->first + i, c;
     const gdouble *row = sp->image + (gsize)r*xres;
     const gdouble *above = image_row_clamped(sp, r - 1), *below = image_row_clamped(sp, r + 1);
+    gdouble *pw = sp->pixel_weight + (gsize)i*xres;
     gdouble *wv = sp->weighted_value + (gsize)i*xres;
     gdouble *wgy = sp->weighted_grad_y + (gsize)i*xres;
     gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
@@ -169,7 +231,8 @@ prepare_row(StripeSubpixel *sp, const StripeSpan *span, gint i)
     gdouble yy = 0.0, yx = 0.0, xx = 0.0, w, v, gy, gx;
 
     for (c = span->col_lo; c < span->col_hi; c++) {
-        w = sp->window[c];
+        w = sp->window[c]*tap_validity(sp, r, c);
+        pw[c] = w;
         v = row[c];
         gy = (below[c] - above[c])*inv_dist;
         gx = 0.5*(row[c+1] - row[c-1]);
@@ -197,6 +260,7 @@ prepare_row(StripeSubpixel *sp, const StripeSpan *span, gint i)
     terms[row_term(2, 2)] = yy;
     terms[row_term(2, 3)] = yx;
     terms[row_term(3, 3)] = xx;
+    centre_row_terms(sp, i);
 }
 
 /* The regressors beyond the row's own are its gradients times t. */
@@ -268,19 +332,68 @@ solve_normal(gdouble normal[MAX_PARAMS][MAX_PARAMS], const gdouble *rhs, gint n,
     return TRUE;
 }
 
+/* The row's dot products with the reference's samples, centred like its
+ * regressors (centre_row_terms); dots[1] becomes 0 and dots[4] the sum of
+ * the centred samples' squares. */
+static void
+centre_row_dots(const StripeSubpixel *sp, gint i, gdouble s0, gdouble s1, gdouble s2, gdouble s3,
+                gdouble s4, gdouble *dots)
+{
+    const gdouble *offset = sp->row_offset + (gsize)i*ROW_REGRESSORS;
+    gdouble w1 = offset[1], mean = (w1 > 0.0) ? s1/w1 : 0.0;
+
+    dots[0] = s0 - offset[0]*mean;
+    dots[1] = 0.0;
+    dots[2] = s2 - offset[2]*mean;
+    dots[3] = s3 - offset[3]*mean;
+    dots[4] = s4 - s1*mean;
+}
+
+/* The row's residual without its own offset: its weighted mean removed. */
+static void
+centre_row_residual(StripeSubpixel *sp, const StripeSpan *span, gint i)
+{
+    gdouble *res = sp->residual + (gsize)i*sp->xres;
+    const gdouble *pw = sp->pixel_weight + (gsize)i*sp->xres;
+    gdouble sr = 0.0, sw = 0.0, mean;
+    gint c;
+
+    for (c = span->col_lo; c < span->col_hi; c++) {
+        sr += res[c];
+        sw += pw[c];
+    }
+    mean = (sw > 0.0) ? sr/sw : 0.0;
+    for (c = span->col_lo; c < span->col_hi; c++)
+        res[c] -= pw[c]*mean;
+}
+
+/* The weighted model of the reference at row i, column c, with the row's
+ * offset t from the centre, for the fitted parameters p. */
+static gdouble
+row_model(const StripeSubpixel *sp, const gdouble *p, gint i, gint c, gdouble t)
+{
+    gsize k = (gsize)i*sp->xres + c;
+
+    return (p[0]*sp->weighted_value[k] + p[1]*sp->pixel_weight[k]
+            + (p[2] + t*p[4])*sp->weighted_grad_y[k] + (p[3] + t*p[5])*sp->weighted_grad_x[k]);
+}
+
 /* Dot products of row i's weighted regressors with the reference sampled
- * at (r - shift_y, c - shift_x); FALSE if the taps leave the reference. */
+ * at (r - shift_y, c - shift_x), and the weighted sum of its squares;
+ * FALSE if the taps leave the reference.  With fit (all MAX_PARAMS
+ * parameters), the weighted residual of the row is kept too. */
 static gboolean
 match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, gdouble shift_x,
-          gdouble *dots)
+          const gdouble *fit, gdouble t, gdouble *dots)
 {
     gint xres = sp->xres, ky = (gint)floor(-shift_y), kx = (gint)floor(-shift_x);
     gint top = span->first + i + ky - 1, c;
     const gdouble *r0, *r1, *r2, *r3;
+    const gdouble *pw = sp->pixel_weight + (gsize)i*xres;
     const gdouble *wv = sp->weighted_value + (gsize)i*xres;
     const gdouble *wgy = sp->weighted_grad_y + (gsize)i*xres;
     const gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
-    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, v;
+    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, s4 = 0.0, v;
     gdouble *col = sp->column;
 
     if (top < 0 || top + 3 >= sp->yres)
@@ -298,14 +411,16 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     for (c = span->col_lo; c < span->col_hi; c++) {
         v = wx[0]*col[c-1] + wx[1]*col[c] + wx[2]*col[c+1] + wx[3]*col[c+2];
         s0 += wv[c]*v;
-        s1 += sp->window[c]*v;
+        s1 += pw[c]*v;
         s2 += wgy[c]*v;
         s3 += wgx[c]*v;
+        s4 += pw[c]*v*v;
+        if (fit)
+            sp->residual[(gsize)i*xres + c] = pw[c]*v - row_model(sp, fit, i, c, t);
     }
-    dots[0] = s0;
-    dots[1] = s1;
-    dots[2] = s2;
-    dots[3] = s3;
+    centre_row_dots(sp, i, s0, s1, s2, s3, s4, dots);
+    if (fit)
+        centre_row_residual(sp, span, i);
     return TRUE;
 }
 
@@ -315,7 +430,7 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
 static gboolean
 match_step(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, StripeMotion *step)
 {
-    gdouble normal[MAX_PARAMS][MAX_PARAMS], rhs[MAX_PARAMS], p[MAX_PARAMS], dots[ROW_REGRESSORS], t;
+    gdouble normal[MAX_PARAMS][MAX_PARAMS], rhs[MAX_PARAMS], p[MAX_PARAMS], dots[ROW_REGRESSORS + 1], t;
     gint n = span->nparams, i, a, ra, pa, used = 0;
 
     memset(normal, 0, sizeof(normal));
@@ -327,7 +442,7 @@ match_step(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, St
          * the two sets' matches. */
         if (sp->row_dropped[i])
             continue;
-        if (!match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, dots)) {
+        if (!match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, NULL, t, dots)) {
             sp->row_dropped[i] = TRUE;
             continue;
         }
@@ -384,13 +499,128 @@ motion_within_reach(const StripeSpan *span, const StripeMotion *m, gint anchor_d
             && fabs(m->vy)*half <= MAX_SPREAD && fabs(m->vx)*half <= MAX_SPREAD);
 }
 
+/* Lag-one correlation of the kept residuals along x (row) or y (!row). */
+static gdouble
+residual_correlation(const StripeSubpixel *sp, const StripeSpan *span, gboolean along_x)
+{
+    gint xres = sp->xres, i, c;
+    gdouble s2 = 0.0, s11 = 0.0;
+
+    for (i = 0; i < span->height; i++) {
+        const gdouble *res = sp->residual + (gsize)i*xres;
+
+        if (sp->row_dropped[i])
+            continue;
+        for (c = span->col_lo; c < span->col_hi; c++) {
+            s2 += res[c]*res[c];
+            if (along_x && c + 1 < span->col_hi)
+                s11 += res[c]*res[c+1];
+            else if (!along_x && i + 1 < span->height && !sp->row_dropped[i+1])
+                s11 += res[c]*res[c + xres];
+        }
+    }
+    return (s2 > 0.0) ? CLAMP(s11/s2, 0.0, 0.9) : 0.0;
+}
+
+/* The standard uncertainty (px, the larger of dy's and dx's) of the match
+ * at m: least squares' own, from the residual and the normal matrix,
+ * inflated for the residual's correlation between neighbouring pixels
+ * (conditioned frames are smooth over a pixel or two, and what differs
+ * between the frames beyond noise is smooth over a feature), which makes
+ * fewer independent pixels than there are pixels. */
+static gboolean
+match_uncertainty(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, gdouble *sigma)
+{
+    gdouble normal[MAX_PARAMS][MAX_PARAMS], rhs[MAX_PARAMS], p[MAX_PARAMS] = { 0 };
+    gdouble unit[MAX_PARAMS], inv[MAX_PARAMS], dots[ROW_REGRESSORS + 1], t, vv = 0.0, wsum = 0.0;
+    gdouble rss, var_y, var_x, rx, ry;
+    gint n = span->nparams, i, a, ra, pa;
+
+    memset(normal, 0, sizeof(normal));
+    memset(rhs, 0, sizeof(rhs));
+    for (i = 0; i < span->height; i++) {
+        t = i - span->centre;
+        if (sp->row_dropped[i]
+            || !match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, NULL, t, dots))
+            continue;
+        for (a = 0; a < n; a++) {
+            ra = row_regressor_of(a, &pa);
+            rhs[a] += (pa ? t : 1.0)*dots[ra];
+        }
+        add_row_normal(sp, n, i, t, normal);
+        vv += dots[ROW_REGRESSORS];
+        wsum += sp->row_normal[(gsize)i*ROW_TERMS + row_term(1, 1)];
+    }
+    if (!(wsum > n + 1) || !solve_normal(normal, rhs, n, p) || !(p[0] > 0.0))
+        return FALSE;
+    rss = vv;
+    for (a = 0; a < n; a++)
+        rss -= p[a]*rhs[a];
+    rss = MAX(rss, 0.0);
+    memset(unit, 0, sizeof(unit));
+    unit[2] = 1.0;
+    if (!solve_normal(normal, unit, n, inv))
+        return FALSE;
+    var_y = rss/(wsum - n)*inv[2]/(p[0]*p[0]);
+    unit[2] = 0.0;
+    unit[3] = 1.0;
+    if (!solve_normal(normal, unit, n, inv))
+        return FALSE;
+    var_x = rss/(wsum - n)*inv[3]/(p[0]*p[0]);
+    for (i = 0; i < span->height; i++) {
+        t = i - span->centre;
+        if (!sp->row_dropped[i])
+            match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, p, t, dots);
+    }
+    rx = residual_correlation(sp, span, TRUE);
+    ry = residual_correlation(sp, span, FALSE);
+    *sigma = sqrt(MAX(var_y, var_x)*(1.0 + rx)/(1.0 - rx)*(1.0 + ry)/(1.0 - ry));
+    return TRUE;
+}
+
+/* Gauss-Newton from (dy, dx) with nparams unknowns; TRUE and the motion
+ * when it converges within reach of the anchor. */
+static gboolean
+iterate_match(StripeSubpixel *sp, StripeSpan *span, gint anchor_dy, gint anchor_dx, gint reach,
+              StripeMotion *m)
+{
+    StripeMotion step;
+    gint iter, i;
+
+    for (i = 0; i < span->height; i++)
+        sp->row_dropped[i] = FALSE;
+    for (iter = 0; iter < MAX_ITERATIONS; iter++) {
+        /* Once the match moves the stripe half off the reference, it keeps
+         * one shift for good (no switching back and forth). */
+        if (span->nparams > 4
+            && rows_on_reference(sp, span, m->dy) < MIN_VELOCITY_FRACTION*span->height) {
+            span->nparams = 4;
+            m->vy = m->vx = 0.0;
+        }
+        if (!motion_within_reach(span, m, anchor_dy, anchor_dx, reach)
+            || !match_step(sp, span, m, &step))
+            return FALSE;
+        limit_step(&step, span->centre);
+        m->dy += step.dy;
+        m->dx += step.dx;
+        m->vy += step.vy;
+        m->vx += step.vx;
+        if (fabs(step.dy) < CONVERGED_STEP && fabs(step.dx) < CONVERGED_STEP
+            && fabs(step.vy)*span->centre < CONVERGED_STEP
+            && fabs(step.vx)*span->centre < CONVERGED_STEP)
+            break;
+    }
+    return iter < MAX_ITERATIONS && motion_within_reach(span, m, anchor_dy, anchor_dx, reach);
+}
+
 gboolean
 stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy, gint anchor_dx,
-                       gint reach, gdouble *dy, gdouble *dx)
+                       gint reach, gdouble *dy, gdouble *dx, gdouble *sigma)
 {
     StripeSpan span;
-    StripeMotion m, step;
-    gint iter, margin, i;
+    StripeMotion m;
+    gint margin, i;
+    gboolean converged;
 
     g_return_val_if_fail(sp && first >= 0 && end <= sp->yres, FALSE);
     g_return_val_if_fail(end - first >= 1 && end - first <= sp->max_height, FALSE);
@@ -405,37 +635,25 @@ stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy,
     span.col_hi = MIN(sp->xres - 1, sp->xres - 1 - margin + anchor_dx);
     if (span.col_hi - span.col_lo < MIN_COLUMNS)
         return FALSE;
-    for (i = 0; i < span.height; i++) {
+    for (i = 0; i < span.height; i++)
         prepare_row(sp, &span, i);
-        sp->row_dropped[i] = FALSE;
-    }
 
     m.dy = *dy;
     m.dx = *dx;
     m.vy = m.vx = 0.0;
     span.nparams = (span.height >= MIN_ROWS_FOR_VELOCITY) ? MAX_PARAMS : 4;
-    for (iter = 0; iter < MAX_ITERATIONS; iter++) {
-        /* Once the match moves the stripe half off the reference, it keeps
-         * one shift for good (no switching back and forth). */
-        if (span.nparams > 4
-            && rows_on_reference(sp, &span, m.dy) < MIN_VELOCITY_FRACTION*span.height) {
-            span.nparams = 4;
-            m.vy = m.vx = 0.0;
-        }
-        if (!motion_within_reach(&span, &m, anchor_dy, anchor_dx, reach)
-            || !match_step(sp, &span, &m, &step))
-            return FALSE;
-        limit_step(&step, span.centre);
-        m.dy += step.dy;
-        m.dx += step.dx;
-        m.vy += step.vy;
-        m.vx += step.vx;
-        if (fabs(step.dy) < CONVERGED_STEP && fabs(step.dx) < CONVERGED_STEP
-            && fabs(step.vy)*span.centre < CONVERGED_STEP
-            && fabs(step.vx)*span.centre < CONVERGED_STEP)
-            break;
+    converged = iterate_match(sp, &span, anchor_dy, anchor_dx, reach, &m);
+    /* Where the frames differ by more than noise, the change of the shift
+     * over the rows can be too weakly determined to converge; one shift
+     * for the whole stripe still is. */
+    if (!converged && span.nparams > 4) {
+        m.dy = *dy;
+        m.dx = *dx;
+        m.vy = m.vx = 0.0;
+        span.nparams = 4;
+        converged = iterate_match(sp, &span, anchor_dy, anchor_dx, reach, &m);
     }
-    if (iter == MAX_ITERATIONS || !motion_within_reach(&span, &m, anchor_dy, anchor_dx, reach))
+    if (!converged || (sigma && !match_uncertainty(sp, &span, &m, sigma)))
         return FALSE;
     *dy = m.dy;
     *dx = m.dx;

@@ -13,15 +13,19 @@ G_BEGIN_DECLS
 
 typedef struct _StripeSubpixel StripeSubpixel;
 
-/* image and reference are yres x xres, row-major; window holds xres column
- * weights.  All three must outlive the object.  Stripes up to max_height
- * rows can be refined. */
+/* image and reference are yres x xres, row-major; weight (may be NULL: all
+ * valid) is 1 on the image's valid pixels and 0 on its missing ones; window
+ * holds xres column weights.  All must outlive the object.  Stripes up to
+ * max_height rows can be refined.  Image pixels within edge_margin of the
+ * frame's edge take no part (filtered frames are biased there). */
 StripeSubpixel* stripe_subpixel_new   (const gdouble *image,
                                        const gdouble *reference,
+                                       const gdouble *weight,
                                        gint xres,
                                        gint yres,
                                        const gdouble *window,
-                                       gint max_height);
+                                       gint max_height,
+                                       gint edge_margin);
 void            stripe_subpixel_free  (StripeSubpixel *sp);
 
 /* Refines the shift (dy, dx) (table convention: reference content at (r, c)
@@ -29,7 +33,8 @@ void            stripe_subpixel_free  (StripeSubpixel *sp);
  * starting from the given values, which must lie within reach px (per
  * axis) of the whole-pixel shift (anchor_dy, anchor_dx).  Returns FALSE,
  * leaving dy and dx unchanged, when the match does not converge within that
- * square or too little of the stripe stays on the reference. */
+ * square or too little of the stripe stays on the reference.  sigma (may
+ * be NULL) gets the standard uncertainty of the shift, px. */
 gboolean        stripe_subpixel_refine(StripeSubpixel *sp,
                                        gint first,
                                        gint end,
@@ -37,7 +42,8 @@ gboolean        stripe_subpixel_refine(StripeSubpixel *sp,
                                        gint anchor_dx,
                                        gint reach,
                                        gdouble *dy,
-                                       gdouble *dx);
+                                       gdouble *dx,
+                                       gdouble *sigma);
 
 G_END_DECLS
 

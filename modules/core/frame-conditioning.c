@@ -1,0 +1,526 @@
+/*
+ *  Conditioning of raw instrument channels before registration.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <math.h>
+#include <string.h>
+#include <libgwyddion/gwymacros.h>
+#include <libgwyddion/gwymath.h>
+#include "frame-conditioning.h"
+
+/*
+ * Why each step (docs/registration.md has the whole story).
+ *
+ * Raw AFM channels carry, on top of the sample: a plane and a bow from the
+ * scanner, an offset on every scan line (the feedback's set point wanders
+ * between lines), and 1/f noise that makes the low spatial frequencies
+ * wander from frame to frame.  Correlation of two raw frames is dominated
+ * by these, which differ between the frames, so the sample's features are
+ * buried.  The steps remove them in order of size:
+ *
+ * 1. Line offsets by the median of the differences between adjacent lines:
+ *    robust to features that cross lines (their differences are few), and
+ *    it removes the plane's slope along y with the offsets.  Its small
+ *    errors add up along y into a slow wander, which step 3 removes.
+ * 2. A cubic along x fitted to the column medians: the plane's slope along
+ *    x and the scanner's bow.
+ * 2b. The median of every pixel and its neighbours above and below: a
+ *    glitch of the feedback (a stroke, a scar) lasts a stretch of one scan
+ *    line and differs between the frames, while features of the sample
+ *    span several lines.  Left in, strokes decide the fine match.
+ * 3. A band-pass, the difference of two Gaussian blurs: the wide one (a
+ *    twentieth of the smaller side, the same physical size along both
+ *    axes) takes what is left of the slow wander and the 1/f noise, the
+ *    narrow one (a pixel of each axis) takes pixel noise, which would
+ *    otherwise dilute the gradients the sub-pixel match steps along.  Both frames get the same filter, which moves no
+ *    feature, so the shift between them is unchanged.
+ * 4. Each line's median once more: the band-pass leaves a little of the
+ *    line offsets that the narrow blur spread over neighbouring lines.
+ * 5. Values beyond CLIP_SIGMAS robust standard deviations are clipped: a
+ *    spike left over must not outweigh the rest of a stripe.
+ *
+ * Missing pixels take part in none of the estimates: medians and fits skip
+ * them, and the blurs are normalised convolutions (blur of value times
+ * weight over blur of weight).  They leave with value 0 and weight 0.
+ */
+
+/* The wide blur's sigma as a fraction of the smaller physical side. */
+#define BAND_WIDE_FRACTION (1.0/20.0)
+/* The narrow blur's sigma in pixels of each axis (it is against pixel
+ * noise, which is noise per pixel whatever the pixel's size): at least
+ * this, more where noise outweighs the features (see noise_scale). */
+#define BAND_NARROW_PX 1.0
+/* The narrow blur stays below this fraction of the wide one. */
+#define NARROW_MAX_FRACTION 0.25
+/* Blurs wider than this (px) run as three box passes (exact enough for a
+ * low-frequency cut, and O(1) per pixel); narrower ones with a Gaussian
+ * kernel. */
+#define BOX_FROM_SIGMA 2.5
+/* Below this blurred weight a pixel has no valid neighbour in reach. */
+#define MIN_BLURRED_WEIGHT 1e-6
+#define BOW_DEGREE 3
+/* Clip at this many robust standard deviations (1.4826 MAD). */
+#define CLIP_SIGMAS 4.0
+
+static void
+mark_valid(ConditionedFrame *frame, const gdouble *data, const gdouble *exclude)
+{
+    gsize k, n = (gsize)frame->xres*frame->yres, valid = 0;
+
+    for (k = 0; k < n; k++) {
+        gboolean ok = isfinite(data[k]) && !(exclude && exclude[k] > 0.5);
+
+        frame->weight[k] = ok ? 1.0 : 0.0;
+        frame->data[k] = ok ? data[k] : 0.0;
+        valid += ok;
+    }
+    frame->valid_fraction = (gdouble)valid/n;
+}
+
+/* Median of the valid values among count taken with stride; buf holds
+ * count values.  FALSE when none is valid. */
+static gboolean
+valid_median(const gdouble *values, const gdouble *weight, gint count, gint stride,
+             gdouble *buf, gdouble *median)
+{
+    gint k, m = 0;
+
+    for (k = 0; k < count; k++) {
+        if (weight[(gsize)k*stride] > 0.0)
+            buf[m++] = values[(gsize)k*stride];
+    }
+    if (!m)
+        return FALSE;
+    *median = gwy_math_median(m, buf);
+    return TRUE;
+}
+
+static void
+align_lines_by_median_differences(ConditionedFrame *frame)
+{
+    gint xres = frame->xres, yres = frame->yres, r, c, m;
+    gdouble *buf = g_new(gdouble, xres), offset = 0.0, *row, *prev;
+    const gdouble *w, *pw;
+
+    for (r = 1; r < yres; r++) {
+        row = frame->data + (gsize)r*xres;
+        prev = row - xres;
+        w = frame->weight + (gsize)r*xres;
+        pw = w - xres;
+        m = 0;
+        for (c = 0; c < xres; c++) {
+            if (w[c] > 0.0 && pw[c] > 0.0)
+                buf[m++] = row[c] - prev[c];
+        }
+        /* A line with nothing in common with the one above keeps its own
+         * level; step 3 takes care of what that leaves. */
+        offset = m ? gwy_math_median(m, buf) : 0.0;
+        for (c = 0; c < xres; c++)
+            row[c] -= offset;
+    }
+    g_free(buf);
+}
+
+static gdouble
+polynomial_value(const gdouble *coeffs, gint degree, gdouble x)
+{
+    gdouble v = 0.0;
+    gint k;
+
+    for (k = degree; k >= 0; k--)
+        v = v*x + coeffs[k];
+    return v;
+}
+
+static void
+remove_bow_along_x(ConditionedFrame *frame)
+{
+    gint xres = frame->xres, yres = frame->yres, c, r, m = 0;
+    gdouble *xs = g_new(gdouble, xres), *meds = g_new(gdouble, xres);
+    gdouble *buf = g_new(gdouble, yres), coeffs[BOW_DEGREE + 1], med, x, v;
+    gint degree;
+
+    for (c = 0; c < xres; c++) {
+        if (valid_median(frame->data + c, frame->weight + c, yres, xres, buf, &med)) {
+            xs[m] = (c - 0.5*(xres - 1))/MAX(0.5*(xres - 1), 1.0);
+            meds[m++] = med;
+        }
+    }
+    degree = MIN(BOW_DEGREE, m - 1);
+    if (degree >= 0 && gwy_math_fit_polynom(m, xs, meds, degree, coeffs)) {
+        for (c = 0; c < xres; c++) {
+            x = (c - 0.5*(xres - 1))/MAX(0.5*(xres - 1), 1.0);
+            v = polynomial_value(coeffs, degree, x);
+            for (r = 0; r < yres; r++)
+                frame->data[(gsize)r*xres + c] -= v;
+        }
+    }
+    g_free(buf);
+    g_free(meds);
+    g_free(xs);
+}
+
+/* Three box passes of this half-width have the variance of a Gaussian of
+ * sigma. */
+static gint
+box_half_width(gdouble sigma)
+{
+    return MAX(1, (gint)floor(0.5*(sqrt(4.0*sigma*sigma + 1.0) - 1.0) + 0.5));
+}
+
+/* Box sum of half-width h along a line of len values with stride, zero
+ * outside; tmp holds len + 1 values. */
+static void
+box_line(gdouble *line, gint len, gint stride, gint h, gdouble *tmp)
+{
+    gint i;
+
+    tmp[0] = 0.0;
+    for (i = 0; i < len; i++)
+        tmp[i+1] = tmp[i] + line[(gsize)i*stride];
+    for (i = 0; i < len; i++)
+        line[(gsize)i*stride] = tmp[MIN(len, i + h + 1)] - tmp[MAX(0, i - h)];
+}
+
+static gdouble*
+gaussian_kernel(gdouble sigma, gint *half)
+{
+    gint h = MAX(1, (gint)ceil(3.0*sigma)), k;
+    gdouble *kernel = g_new(gdouble, 2*h + 1);
+
+    for (k = -h; k <= h; k++)
+        kernel[k + h] = exp(-0.5*k*k/(sigma*sigma));
+    *half = h;
+    return kernel;
+}
+
+/* Gaussian-kernel sum along a line (stride), zero outside; tmp holds len. */
+static void
+kernel_line(gdouble *line, gint len, gint stride, const gdouble *kernel, gint h, gdouble *tmp)
+{
+    gint i, k;
+
+    for (i = 0; i < len; i++)
+        tmp[i] = line[(gsize)i*stride];
+    for (i = 0; i < len; i++) {
+        gdouble s = 0.0;
+
+        for (k = MAX(-h, -i); k <= MIN(h, len - 1 - i); k++)
+            s += kernel[k + h]*tmp[i + k];
+        line[(gsize)i*stride] = s;
+    }
+}
+
+/* Unnormalised blur (zero outside) of one axis: lines of len values with
+ * stride, count of them, first values step apart. */
+static void
+blur_axis(gdouble *data, gint len, gint count, gint stride, gint step, gdouble sigma)
+{
+    gdouble *tmp = g_new(gdouble, len + 1), *kernel = NULL;
+    gint l, pass, h = 0;
+
+    if (sigma < 0.2 || len < 2) {
+        g_free(tmp);
+        return;
+    }
+    if (sigma >= BOX_FROM_SIGMA)
+        h = box_half_width(sigma);
+    else
+        kernel = gaussian_kernel(sigma, &h);
+    for (l = 0; l < count; l++) {
+        gdouble *line = data + (gsize)l*step;
+
+        if (kernel)
+            kernel_line(line, len, stride, kernel, h, tmp);
+        else {
+            for (pass = 0; pass < 3; pass++)
+                box_line(line, len, stride, h, tmp);
+        }
+    }
+    g_free(kernel);
+    g_free(tmp);
+}
+
+static void
+blur(gdouble *data, gint xres, gint yres, gdouble sigma_x, gdouble sigma_y)
+{
+    blur_axis(data, xres, yres, 1, xres, sigma_x);
+    blur_axis(data, yres, xres, xres, 1, sigma_y);
+}
+
+/* The normalised blur of the valid values: where no valid pixel is within
+ * reach, 0. */
+static gdouble*
+normalised_blur(const ConditionedFrame *frame, gdouble sigma_x, gdouble sigma_y)
+{
+    gsize k, n = (gsize)frame->xres*frame->yres;
+    gdouble *values = g_new(gdouble, n), *weights = g_memdup2(frame->weight, n*sizeof(gdouble));
+
+    for (k = 0; k < n; k++)
+        values[k] = frame->data[k]*frame->weight[k];
+    blur(values, frame->xres, frame->yres, sigma_x, sigma_y);
+    blur(weights, frame->xres, frame->yres, sigma_x, sigma_y);
+    for (k = 0; k < n; k++)
+        values[k] = (weights[k] > MIN_BLURRED_WEIGHT) ? values[k]/weights[k] : 0.0;
+    g_free(weights);
+    return values;
+}
+
+/* The wide blur's sigma along x (px; along y it is this over the aspect). */
+static gdouble
+wide_sigma(const ConditionedFrame *frame, gdouble pixel_aspect)
+{
+    return BAND_WIDE_FRACTION*MIN(frame->xres, frame->yres*pixel_aspect);
+}
+
+/* Mean squared difference of valid pixels lag apart along the lines. */
+static gdouble
+structure_function(const ConditionedFrame *frame, gint lag)
+{
+    gint xres = frame->xres, r, c;
+    gdouble s = 0.0, count = 0.0, d;
+
+    for (r = 0; r < frame->yres; r++) {
+        const gdouble *row = frame->data + (gsize)r*xres, *w = frame->weight + (gsize)r*xres;
+
+        for (c = 0; c + lag < xres; c++) {
+            if (w[c] > 0.0 && w[c + lag] > 0.0) {
+                d = row[c + lag] - row[c];
+                s += d*d;
+                count += 1.0;
+            }
+        }
+    }
+    return count > 0.0 ? s/count : 0.0;
+}
+
+gdouble
+conditioned_frame_noise_scale(const ConditionedFrame *frame, gdouble pixel_aspect)
+{
+    gdouble wide, d1, d2, dl, noise, signal, sigma;
+
+    g_return_val_if_fail(frame, BAND_NARROW_PX);
+    if (!(pixel_aspect > 0.0) || !isfinite(pixel_aspect))
+        pixel_aspect = 1.0;
+    wide = wide_sigma(frame, pixel_aspect);
+    /* Along a line, white pixel noise of variance N adds 2N to every
+     * squared difference, while a signal smooth at the pixel scale adds
+     * four times as much at lag 2 as at lag 1; a lag of half the wide blur
+     * sees the features' whole variance S (twice). */
+    d1 = structure_function(frame, 1);
+    d2 = structure_function(frame, 2);
+    dl = structure_function(frame, MAX(3, (gint)(0.5*wide)));
+    noise = MAX(0.0, (4.0*d1 - d2)/6.0);
+    signal = 0.5*dl - noise;
+    /* Blurring by sigma in 2D divides white noise's variance by 4 pi
+     * sigma^2: enough for it to fall to the features' variance. */
+    sigma = (signal > 0.0) ? sqrt(noise/(4.0*G_PI*signal)) : G_MAXDOUBLE;
+    return CLAMP(sigma, BAND_NARROW_PX, MAX(BAND_NARROW_PX, NARROW_MAX_FRACTION*wide));
+}
+
+static void
+band_pass(ConditionedFrame *frame, gdouble pixel_aspect, gdouble narrow)
+{
+    gsize k, n = (gsize)frame->xres*frame->yres;
+    gdouble wide = wide_sigma(frame, pixel_aspect);
+    gdouble *fine = normalised_blur(frame, narrow, narrow);
+    gdouble *coarse = normalised_blur(frame, wide, wide/pixel_aspect);
+
+    for (k = 0; k < n; k++) {
+        frame->data[k] = (fine[k] - coarse[k])*frame->weight[k];
+        fine[k] *= frame->weight[k];
+    }
+    g_free(coarse);
+    g_free(frame->levelled);
+    frame->levelled = fine;
+}
+
+static gdouble
+median_of_three(gdouble a, gdouble b, gdouble c)
+{
+    return MAX(MIN(a, b), MIN(MAX(a, b), c));
+}
+
+/* Each valid pixel becomes the median of itself and its valid neighbours
+ * above and below (of two, the mean). */
+static void
+remove_strokes(ConditionedFrame *frame)
+{
+    gint xres = frame->xres, yres = frame->yres, r, c;
+    gdouble *out = g_new(gdouble, (gsize)xres*yres);
+
+    for (r = 0; r < yres; r++) {
+        for (c = 0; c < xres; c++) {
+            gsize k = (gsize)r*xres + c;
+            gboolean up = (r > 0 && frame->weight[k - xres] > 0.0);
+            gboolean down = (r + 1 < yres && frame->weight[k + xres] > 0.0);
+            gdouble v = frame->data[k];
+
+            if (!(frame->weight[k] > 0.0))
+                out[k] = 0.0;
+            else if (up && down)
+                out[k] = median_of_three(frame->data[k - xres], v, frame->data[k + xres]);
+            else if (up || down)
+                out[k] = 0.5*(v + frame->data[up ? k - xres : k + xres]);
+            else
+                out[k] = v;
+        }
+    }
+    g_free(frame->data);
+    frame->data = out;
+}
+
+static void
+clip_outliers(ConditionedFrame *frame)
+{
+    gsize k, n = (gsize)frame->xres*frame->yres, m = 0;
+    gdouble *buf = g_new(gdouble, n), limit;
+
+    for (k = 0; k < n; k++) {
+        if (frame->weight[k] > 0.0)
+            buf[m++] = fabs(frame->data[k]);
+    }
+    /* The values are zero-median already, so the median of |v| is the MAD. */
+    limit = m ? CLIP_SIGMAS*1.4826*gwy_math_median(m, buf) : 0.0;
+    g_free(buf);
+    if (!(limit > 0.0))
+        return;
+    for (k = 0; k < n; k++)
+        frame->data[k] = CLAMP(frame->data[k], -limit, limit);
+}
+
+static void
+subtract_line_medians(ConditionedFrame *frame)
+{
+    gint xres = frame->xres, r, c;
+    gdouble *buf = g_new(gdouble, xres), med;
+
+    for (r = 0; r < frame->yres; r++) {
+        gdouble *row = frame->data + (gsize)r*xres;
+        const gdouble *w = frame->weight + (gsize)r*xres;
+
+        if (!valid_median(row, w, xres, 1, buf, &med))
+            continue;
+        for (c = 0; c < xres; c++)
+            row[c] = (w[c] > 0.0) ? row[c] - med : 0.0;
+    }
+    g_free(buf);
+}
+
+static void
+normalise_rms(ConditionedFrame *frame)
+{
+    gsize k, n = (gsize)frame->xres*frame->yres;
+    gdouble s2 = 0.0, w = 0.0, scale;
+
+    for (k = 0; k < n; k++) {
+        s2 += frame->data[k]*frame->data[k]*frame->weight[k];
+        w += frame->weight[k];
+    }
+    scale = (s2 > 0.0 && w > 0.0) ? 1.0/sqrt(s2/w) : 1.0;
+    for (k = 0; k < n; k++)
+        frame->data[k] *= scale;
+    if (frame->levelled) {
+        for (k = 0; k < n; k++)
+            frame->levelled[k] *= scale;
+    }
+}
+
+static ConditionedFrame*
+conditioned_frame_new(gint xres, gint yres)
+{
+    ConditionedFrame *frame = g_new0(ConditionedFrame, 1);
+
+    frame->xres = xres;
+    frame->yres = yres;
+    frame->data = g_new(gdouble, (gsize)xres*yres);
+    frame->weight = g_new(gdouble, (gsize)xres*yres);
+    return frame;
+}
+
+ConditionedFrame*
+frame_condition_level(const gdouble *data, const gdouble *exclude, gint xres, gint yres)
+{
+    ConditionedFrame *frame;
+
+    g_return_val_if_fail(data && xres >= 1 && yres >= 1, NULL);
+    frame = conditioned_frame_new(xres, yres);
+    mark_valid(frame, data, exclude);
+    if (!(frame->valid_fraction > 0.0)) {
+        conditioned_frame_free(frame);
+        return NULL;
+    }
+    align_lines_by_median_differences(frame);
+    remove_bow_along_x(frame);
+    remove_strokes(frame);
+    return frame;
+}
+
+void
+conditioned_frame_band_pass(ConditionedFrame *frame, gdouble pixel_aspect, gdouble narrow_sigma)
+{
+    g_return_if_fail(frame);
+    if (!(pixel_aspect > 0.0) || !isfinite(pixel_aspect))
+        pixel_aspect = 1.0;
+    frame->narrow_sigma = MAX(narrow_sigma, BAND_NARROW_PX);
+    band_pass(frame, pixel_aspect, frame->narrow_sigma);
+    subtract_line_medians(frame);
+    clip_outliers(frame);
+    normalise_rms(frame);
+}
+
+ConditionedFrame*
+frame_condition(const gdouble *data, const gdouble *exclude, gint xres, gint yres,
+                gdouble pixel_aspect)
+{
+    ConditionedFrame *frame = frame_condition_level(data, exclude, xres, yres);
+
+    if (frame)
+        conditioned_frame_band_pass(frame, pixel_aspect, conditioned_frame_noise_scale(frame, pixel_aspect));
+    return frame;
+}
+
+ConditionedFrame*
+conditioned_frame_downsample(const ConditionedFrame *frame, gint factor)
+{
+    ConditionedFrame *small;
+    gint xres, yres, r, c, i, j;
+
+    g_return_val_if_fail(frame && factor >= 1, NULL);
+    xres = MAX(1, frame->xres/factor);
+    yres = MAX(1, frame->yres/factor);
+    small = conditioned_frame_new(xres, yres);
+    small->valid_fraction = 0.0;
+    for (r = 0; r < yres; r++) {
+        for (c = 0; c < xres; c++) {
+            gdouble s = 0.0, w = 0.0;
+
+            for (i = r*factor; i < MIN((r + 1)*factor, frame->yres); i++) {
+                for (j = c*factor; j < MIN((c + 1)*factor, frame->xres); j++) {
+                    gsize k = (gsize)i*frame->xres + j;
+
+                    s += frame->data[k]*frame->weight[k];
+                    w += frame->weight[k];
+                }
+            }
+            small->data[(gsize)r*xres + c] = (w > 0.0) ? s/w : 0.0;
+            small->weight[(gsize)r*xres + c] = (w > 0.0) ? 1.0 : 0.0;
+            small->valid_fraction += (w > 0.0);
+        }
+    }
+    small->valid_fraction /= (gdouble)xres*yres;
+    return small;
+}
+
+void
+conditioned_frame_free(ConditionedFrame *frame)
+{
+    if (!frame)
+        return;
+    g_free(frame->data);
+    g_free(frame->weight);
+    g_free(frame->levelled);
+    g_free(frame);
+}

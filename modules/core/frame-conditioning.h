@@ -1,0 +1,70 @@
+/*
+ *  Conditioning of raw instrument channels before registration: what
+ *  correlation must see is the sample, not the scanner's artefacts.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef LOCALSCAN_FRAME_CONDITIONING_H
+#define LOCALSCAN_FRAME_CONDITIONING_H
+
+#include <glib.h>
+
+G_BEGIN_DECLS
+
+/* A conditioned copy of a channel; the user's data is never touched. */
+typedef struct {
+    gint xres;
+    gint yres;
+    gdouble *data;           /* yres x xres, unit RMS, 0 where missing */
+    gdouble *weight;         /* yres x xres, 1 where valid, 0 where missing */
+    gdouble *levelled;       /* the same before the band-pass's wide cut
+                                (line offsets, bow and strokes removed, the
+                                narrow blur only), on data's scale, for the
+                                sub-pixel match: it keeps the shift between
+                                two frames exact up to their edges; NULL in
+                                a downsampled frame */
+    gdouble valid_fraction;  /* of the pixels */
+    gdouble narrow_sigma;    /* px, the band-pass's narrow blur: within
+                                about twice this of the frame's edge the
+                                blur is one-sided and moves content */
+} ConditionedFrame;
+
+/* Conditions data (yres x xres, row-major): NaN and infinite pixels, and
+ * pixels where exclude (may be NULL) is above 0.5, are missing and carry no
+ * weight.  Then, on the valid pixels: per-scan-line offsets (medians of the
+ * differences of adjacent lines), a cubic bow along x, strokes one line
+ * tall, and a band-pass that keeps features between a pixel or more (more
+ * where pixel noise outweighs them) and a twentieth of the frame (against
+ * 1/f noise and slow bows along y).  pixel_aspect is the physical height of
+ * a pixel over its width, so that the band is the same physical size along
+ * both axes.  Returns NULL when no pixel is valid. */
+ConditionedFrame* frame_condition          (const gdouble *data,
+                                            const gdouble *exclude,
+                                            gint xres,
+                                            gint yres,
+                                            gdouble pixel_aspect);
+
+/* The same in two steps, for two frames that must get one band-pass:
+ * steps up to the band-pass, ... */
+ConditionedFrame* frame_condition_level    (const gdouble *data,
+                                            const gdouble *exclude,
+                                            gint xres,
+                                            gint yres);
+/* ... the narrow blur (px) a levelled frame's pixel noise calls for, ... */
+gdouble           conditioned_frame_noise_scale(const ConditionedFrame *frame,
+                                                gdouble pixel_aspect);
+/* ... and the rest, with the larger of the two frames' narrow blurs. */
+void              conditioned_frame_band_pass(ConditionedFrame *frame,
+                                              gdouble pixel_aspect,
+                                              gdouble narrow_sigma);
+
+/* Block means over factor x factor pixels (valid pixels only); a block with
+ * no valid pixel is missing. */
+ConditionedFrame* conditioned_frame_downsample(const ConditionedFrame *frame,
+                                               gint factor);
+
+void              conditioned_frame_free   (ConditionedFrame *frame);
+
+G_END_DECLS
+
+#endif
