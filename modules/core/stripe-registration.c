@@ -154,9 +154,13 @@ edge_margin(const ConditionedFrame *frame)
     return (gint)ceil(2.0*frame->narrow_sigma);
 }
 
+/* Maps of image against reference; with sub_image and sub_reference (may
+ * be NULL) a sub-pixel match on their levelled frames, and failing that on
+ * their band-passed ones. */
 static void
-level_init(Level *level, const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
-           gint max_ry, gint max_rx, gboolean subpixel)
+level_init(Level *level, const ConditionedFrame *image, const ConditionedFrame *reference,
+           const ConditionedFrame *sub_image, const ConditionedFrame *sub_reference, gint n,
+           gint max_ry, gint max_rx)
 {
     gint s, h = level_max_height(n, image->yres);
 
@@ -168,7 +172,9 @@ level_init(Level *level, const ConditionedFrame *image, const ConditionedFrame *
     level->maps = g_new0(StripeCorrelationMap, n);
     for (s = 0; s < n; s++)
         level->maps[s].values = g_new(gdouble, (gsize)(2*max_ry + 1)*(2*max_rx + 1));
-    if (subpixel) {
+    if (sub_image && sub_reference) {
+        image = sub_image;
+        reference = sub_reference;
         level->window = g_new(gdouble, image->xres);
         make_tukey_window(level->window, image->xres);
         /* The levelled frames keep exact shifts exact up to the frames'
@@ -312,6 +318,7 @@ polish_peak(Level *level, gint s, gint reach, Peak *peak)
 
         peak->polished = stripe_subpixel_refine(level->subpixel, first, end, peak->ky, peak->kx,
                                                 reach, &peak->dy, &peak->dx, &peak->sigma);
+        g_debug("polish stripe %d levelled %s (%.4f, %.4f)", s, peak->polished ? "ok" : "FAILED", peak->dy, peak->dx);
         if (!peak->polished && level->subpixel_band) {
             peak->polished = stripe_subpixel_refine(level->subpixel_band, first, end, peak->ky, peak->kx,
                                                     reach, &peak->dy, &peak->dx, &peak->sigma);
@@ -612,7 +619,7 @@ predict_coarsely(const ConditionedFrame *image, const ConditionedFrame *referenc
     coarse.search_y = (options->search_y > 0.0) ? options->search_y/f : 0.0;
     search_radii(&coarse, small_image->xres, small_image->yres, &ry, &rx);
 
-    level_init(&level, small_image, small_reference, 1, ry, rx, FALSE);
+    level_init(&level, small_image, small_reference, NULL, NULL, 1, ry, rx);
     measure_level(&level, NULL, NULL, ry, rx, 0, FALSE, MIN(options->min_score, GLOBAL_MIN_SCORE), &whole);
     level_free(&level);
     global_ok = whole.accepted;
@@ -638,7 +645,7 @@ predict_coarsely(const ConditionedFrame *image, const ConditionedFrame *referenc
             cdy[s] = gy;
             cdx[s] = gx;
         }
-        level_init(&level, small_image, small_reference, nb, by, bx, FALSE);
+        level_init(&level, small_image, small_reference, NULL, NULL, nb, by, bx);
         measure_level(&level, cdy, cdx, by, bx, 0, TRUE, options->min_score, bands);
         for (s = 0; s < nb; s++) {
             g_debug("registration: band %d/%d (%.2f, %.2f) coarse px, peak %.3f, rival %.3f, "
@@ -666,6 +673,37 @@ predict_coarsely(const ConditionedFrame *image, const ConditionedFrame *referenc
     conditioned_frame_free(small_image);
     conditioned_frame_free(small_reference);
     return found;
+}
+
+/* A view of the frame's levelled data, without the wide cut. */
+static ConditionedFrame
+levelled_view(const ConditionedFrame *frame)
+{
+    ConditionedFrame view = *frame;
+
+    if (frame->levelled)
+        view.data = frame->levelled;
+    view.levelled = NULL;
+    return view;
+}
+
+/* Every stripe at full resolution within radius of its predicted shift.
+ * Its map comes from the levelled frames: within a small window the
+ * correlation's own mean removal over each shift's overlap takes what
+ * stays of slow variations, and the wide cut, which a search over large
+ * shifts needs, paints the smoothed texture around a featureless region
+ * into it, with structure both frames share, so that a featureless stripe
+ * matched on it (scores up to 0.6 in the tests). */
+static void
+measure_fine(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
+             const gdouble *pdy, const gdouble *pdx, gint radius, gdouble min_score, StripeShift *shifts)
+{
+    ConditionedFrame image_view = levelled_view(image), reference_view = levelled_view(reference);
+    Level level;
+
+    level_init(&level, &image_view, &reference_view, image, reference, n, radius, radius);
+    measure_level(&level, pdy, pdx, radius, radius, 0, FALSE, min_score, shifts);
+    level_free(&level);
 }
 
 /* Whether at least IN_REFERENCE_FRACTION of stripe s lies on the reference
@@ -713,7 +751,6 @@ stripe_registration_measure_conditioned(const ConditionedFrame *image, const Con
     gdouble *pdy, *pdx;
     gint factor, radius, s;
     gboolean known;
-    Level level;
 
     g_return_val_if_fail(image && reference && shifts, FALSE);
     if (!options) {
@@ -735,9 +772,7 @@ stripe_registration_measure_conditioned(const ConditionedFrame *image, const Con
          * have jumped away from its band's. */
         radius = MAX(FINE_MIN_RADIUS, 2*factor + 4);
         radius = MIN(radius, MIN(image->xres, image->yres)/2);
-        level_init(&level, image, reference, n, radius, radius, TRUE);
-        measure_level(&level, pdy, pdx, radius, radius, 0, FALSE, options->min_score, shifts);
-        level_free(&level);
+        measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, shifts);
         for (s = 0; s < n; s++)
             shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres, pdy[s], pdx[s]);
     }
@@ -753,7 +788,6 @@ stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
                                                gdouble radius_px, gdouble min_score,
                                                StripeShift *shifts, GError **error)
 {
-    Level level;
     gint s, radius;
 
     g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
@@ -769,9 +803,7 @@ stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
         }
     }
     radius = (gint)CLAMP(ceil(radius_px), 1, MIN(image->xres, image->yres)/2);
-    level_init(&level, image, reference, n, radius, radius, TRUE);
-    measure_level(&level, predicted_dy, predicted_dx, radius, radius, 0, FALSE, min_score, shifts);
-    level_free(&level);
+    measure_fine(image, reference, n, predicted_dy, predicted_dx, radius, min_score, shifts);
     for (s = 0; s < n; s++) {
         shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres,
                                                      predicted_dy[s], predicted_dx[s]);
