@@ -31,17 +31,13 @@
  * correlation a little where the stripe meets many of them.
  */
 
-/* Shifts that leave less than this fraction of the stripe's valid pixels
- * on the reference are not considered: a tiny overlap can correlate by
- * chance. */
-#define MIN_OVERLAP 0.5
-
 struct _StripeCorrelation {
     const ConditionedFrame *image;
     const ConditionedFrame *reference;
     gint max_height;
     gint max_ry;
     gint max_rx;
+    gdouble min_overlap;
     gdouble *ref_sum;       /* (yres+1) x (xres+1) summed-area tables */
     gdouble *ref_sq_sum;
     gdouble *tmpl_sum;      /* (max_height+1) x (xres+1) */
@@ -81,7 +77,7 @@ rectangle_sum(const gdouble *table, gint w, gint r0, gint r1, gint c0, gint c1)
 
 StripeCorrelation*
 stripe_correlation_new(const ConditionedFrame *image, const ConditionedFrame *reference,
-                       gint max_height, gint max_ry, gint max_rx)
+                       gint max_height, gint max_ry, gint max_rx, gdouble min_overlap)
 {
     StripeCorrelation *sc;
     gint xres, yres;
@@ -97,6 +93,7 @@ stripe_correlation_new(const ConditionedFrame *image, const ConditionedFrame *re
     sc->max_height = max_height;
     sc->max_ry = max_ry;
     sc->max_rx = max_rx;
+    sc->min_overlap = min_overlap;
     sc->ref_sum = g_new(gdouble, (gsize)(yres + 1)*(xres + 1));
     sc->ref_sq_sum = g_new(gdouble, (gsize)(yres + 1)*(xres + 1));
     summed_area_table(reference->data, xres, yres, FALSE, sc->ref_sum);
@@ -197,7 +194,7 @@ stripe_correlation_map(StripeCorrelation *sc, gint first, gint end, StripeCorrel
     prepare_slab(sc, first, end, map);
     cross = fft_correlation_run(sc->fc);
     total = rectangle_sum(sc->tmpl_count, tw, 0, h, 0, xres);
-    min_weight = MAX(MIN_OVERLAP*total, 1.0);
+    min_weight = MAX(sc->min_overlap*total, 1.0);
 
     for (iy = 0; iy <= 2*map->ry; iy++) {
         gint dy = map->cy - map->ry + iy;

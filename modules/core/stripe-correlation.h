@@ -27,18 +27,20 @@ typedef struct {
 typedef struct _StripeCorrelation StripeCorrelation;
 
 /* For stripes up to max_height rows and windows up to max_ry x max_rx;
- * image and reference (same size) must outlive the object. */
+ * image and reference (same size) must outlive the object.  Shifts that
+ * keep less than min_overlap of a stripe's valid pixels on the reference
+ * are not considered: a small overlap can correlate by chance. */
 StripeCorrelation* stripe_correlation_new (const ConditionedFrame *image,
                                            const ConditionedFrame *reference,
                                            gint max_height,
                                            gint max_ry,
-                                           gint max_rx);
+                                           gint max_rx,
+                                           gdouble min_overlap);
 void               stripe_correlation_free(StripeCorrelation *sc);
 
 /* Fills map (its cy, cx, ry, rx set by the caller, values allocated for
- * them) for image rows first .. end - 1.  Shifts that keep less than half
- * of the stripe's valid pixels on the reference are
- * STRIPE_CORRELATION_NONE; a flat stripe or reference patch gives 0. */
+ * them) for image rows first .. end - 1.  Shifts with too little overlap
+ * are STRIPE_CORRELATION_NONE; a flat stripe or reference patch gives 0. */
 void               stripe_correlation_map (StripeCorrelation *sc,
                                            gint first,
                                            gint end,

@@ -71,6 +71,13 @@
  * where the frames correlate weakly the map's peak and the match's optimum
  * can lie more than a pixel apart. */
 #define POLISH_REACH 3
+/* A fine match is accepted only with a standard uncertainty below this
+ * fraction of its search radius. */
+#define LOCATED_FRACTION 0.25
+/* The least fraction of a stripe, or of the whole frame, that must lie on
+ * the reference at a shift considered. */
+#define STRIPE_MIN_OVERLAP 0.5
+#define WHOLE_FRAME_MIN_OVERLAP 0.25
 /* The coarse stage works at about this many px along the longer side. */
 #define COARSE_SIZE 160
 /* Coarse bands have about this many rows. */
@@ -168,7 +175,11 @@ level_init(Level *level, const ConditionedFrame *image, const ConditionedFrame *
     level->image = image;
     level->reference = reference;
     level->n = n;
-    level->correlation = stripe_correlation_new(image, reference, h, max_ry, max_rx);
+    /* The whole frame holds so much more than a stripe that a third of it
+     * on the reference still matches surely: frames offset by a third
+     * of their size in both axes overlap by less than half. */
+    level->correlation = stripe_correlation_new(image, reference, h, max_ry, max_rx,
+                                                (n == 1) ? WHOLE_FRAME_MIN_OVERLAP : STRIPE_MIN_OVERLAP);
     level->maps = g_new0(StripeCorrelationMap, n);
     for (s = 0; s < n; s++)
         level->maps[s].values = g_new(gdouble, (gsize)(2*max_ry + 1)*(2*max_rx + 1));
@@ -397,11 +408,16 @@ find_peak(Level *level, gint s, gint cy, gint cx, gint ry, gint rx, gint known, 
         peak->dy += oy;
         peak->dx += ox;
     }
-    else if (level->subpixel) {
+    else if (!level->subpixel) {
         /* On the edge of the shifts that keep enough of the stripe on the
          * reference the map cannot tell a peak from the slope of a better
-         * one beyond; the match can, and says where the peak lies, which
-         * must still be within the searched area. */
+         * one beyond (on a lattice the edge is where the highest values
+         * lie), and there is no match to tell. */
+        peak->trusted = FALSE;
+    }
+    else {
+        /* The match can tell, and says where the peak lies, which must
+         * still be within the searched area. */
         peak->trusted = (polish_peak(level, s, EDGE_POLISH_REACH, peak)
                          && peak->dy >= ylo && peak->dy <= yhi && peak->dx >= xlo && peak->dx <= xhi);
         if (!peak->trusted) {
@@ -542,8 +558,15 @@ measure_level(Level *level, const gdouble *pdy, const gdouble *pdx, gint ry, gin
     if (consistency)
         choose_consistent_shifts(level, own, min_score, shifts);
     else {
-        for (s = 0; s < level->n; s++)
-            set_shift(shifts + s, own + s, level_peak_score(level, own + s), FALSE, min_score, level->subpixel != NULL);
+        for (s = 0; s < level->n; s++) {
+            set_shift(shifts + s, own + s, level_peak_score(level, own + s), FALSE, min_score,
+                      level->subpixel != NULL);
+            /* A match as uncertain as this has not located the stripe
+             * within its window: a chance peak of the texture, typically
+             * (the window's own peak has no rival when it is smooth). */
+            if (level->subpixel && shifts[s].sigma > LOCATED_FRACTION*MIN(rx, ry))
+                shifts[s].accepted = FALSE;
+        }
     }
     g_free(own);
 }
@@ -593,6 +616,28 @@ interpolate_bands(const StripeShift *bands, gint nb, gint yres, gdouble y, gdoub
     *dy = (1.0 - t)*bands[below].dy + t*bands[above].dy;
     *dx = (1.0 - t)*bands[below].dx + t*bands[above].dx;
     return TRUE;
+}
+
+/* Bands searched blind (the whole frame gave no shift) are believed only
+ * when another accepted band agrees within the reach a band may differ by:
+ * one band's peak over a blind search of a third of the frame is too
+ * often a coincidence of texture that nothing else confirms. */
+static void
+reject_uncorroborated_bands(StripeShift *bands, gint nb, gint ry, gint rx)
+{
+    gboolean *corroborated = g_new0(gboolean, MAX(nb, 1));
+    gint a, b;
+
+    for (a = 0; a < nb; a++) {
+        for (b = 0; b < nb && bands[a].accepted; b++) {
+            if (b != a && bands[b].accepted
+                && fabs(bands[a].dy - bands[b].dy) <= ry && fabs(bands[a].dx - bands[b].dx) <= rx)
+                corroborated[a] = TRUE;
+        }
+    }
+    for (a = 0; a < nb; a++)
+        bands[a].accepted = bands[a].accepted && corroborated[a];
+    g_free(corroborated);
 }
 
 /* Stages 1 and 2 at reduced resolution: the predicted shift (full-resolution
@@ -647,6 +692,10 @@ predict_coarsely(const ConditionedFrame *image, const ConditionedFrame *referenc
         }
         level_init(&level, small_image, small_reference, NULL, NULL, nb, by, bx);
         measure_level(&level, cdy, cdx, by, bx, 0, TRUE, options->min_score, bands);
+        if (!global_ok) {
+            reject_uncorroborated_bands(bands, nb, MAX(3, (gint)ceil(BAND_REACH*small_image->yres)),
+                                        MAX(3, (gint)ceil(BAND_REACH*small_image->xres)));
+        }
         for (s = 0; s < nb; s++) {
             g_debug("registration: band %d/%d (%.2f, %.2f) coarse px, peak %.3f, rival %.3f, "
                     "score %.3f%s", s, nb, bands[s].dx, bands[s].dy, bands[s].peak, bands[s].rival,

@@ -396,7 +396,9 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, s4 = 0.0, v;
     gdouble *col = sp->column;
 
-    if (top < 0 || top + 3 >= sp->yres)
+    /* Taps near the reference's edge would read what the filters moved
+     * there, as near the image's. */
+    if (top < sp->edge_margin || top + 3 >= sp->yres - sp->edge_margin)
         return FALSE;
     keys_weights(-shift_y - ky, 1.0 - (-shift_y - ky), wy);
     keys_weights(-shift_x - kx, 1.0 - (-shift_x - kx), wx);
@@ -485,7 +487,9 @@ rows_on_reference(const StripeSubpixel *sp, const StripeSpan *span, gdouble dy)
 {
     gint top = span->first + (gint)floor(-dy) - 1;
 
-    return MAX(0, MIN(span->height, sp->yres - 3 - top) - MAX(0, -top));
+    gint m = sp->edge_margin;
+
+    return MAX(0, MIN(span->height, sp->yres - m - 3 - top) - MAX(0, m - top));
 }
 
 /* Whether m keeps every row's taps on the columns prepared. */
@@ -630,7 +634,7 @@ stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy,
     span.centre = 0.5*(span.height - 1);
     /* Columns whose taps stay on the reference for every row's dx within
      * reach of the anchor plus the spread, and whose x gradient is central. */
-    margin = reach + (gint)ceil(MAX_SPREAD) + 1;
+    margin = reach + (gint)ceil(MAX_SPREAD) + 1 + sp->edge_margin;
     span.col_lo = MAX(1, anchor_dx + margin);
     span.col_hi = MIN(sp->xres - 1, sp->xres - 1 - margin + anchor_dx);
     if (span.col_hi - span.col_lo < MIN_COLUMNS)
