@@ -157,7 +157,7 @@ bench_preview_registration(GwyDataField *field, PreviewField *preview)
         start = g_get_monotonic_time();
         table = stripe_registration_table_for_fields(preview_field_source(preview),
                                                      preview_field_source(reduced_reference),
-                                                     12 + 4*i, 0.0, FALSE, &error);
+                                                     12 + 4*i, NULL, FALSE, NULL, &error);
         seconds[i] = (g_get_monotonic_time() - start)/1e6;
         if (table)
             drift_table_free(table);

@@ -50,6 +50,8 @@ frame_pair_spec_init(FramePairSpec *spec)
     spec->drift_scale = 1.0;
     spec->shift_x = spec->shift_y = 0.0;
     spec->velocity_x = spec->velocity_y = 0.0;
+    spec->jump_row = -1;
+    spec->jump_x = spec->jump_y = 0.0;
 }
 
 static gdouble
@@ -195,8 +197,10 @@ frame_pair_generate(const FramePairSpec *spec, guint32 seed)
             pair->row_dy[r] = spec->drift_scale*drift_axis_at(&ay, r);
         }
         else {
-            pair->row_dx[r] = spec->shift_x + spec->velocity_x*r;
-            pair->row_dy[r] = spec->shift_y + spec->velocity_y*r;
+            gboolean jumped = (spec->jump_row >= 0 && r >= spec->jump_row);
+
+            pair->row_dx[r] = spec->shift_x + spec->velocity_x*r + (jumped ? spec->jump_x : 0.0);
+            pair->row_dy[r] = spec->shift_y + spec->velocity_y*r + (jumped ? spec->jump_y : 0.0);
         }
         surface_sample_row(&surface, r, 0.0, pair->reference + (gsize)r*xres);
         surface_sample_row(&surface, r - pair->row_dy[r], pair->row_dx[r], pair->image + (gsize)r*xres);
@@ -218,6 +222,64 @@ frame_pair_free(FramePair *pair)
     g_free(pair->row_dx);
     g_free(pair->row_dy);
     g_free(pair);
+}
+
+/* 1/f noise along a series of len samples: octaves of random phase, each
+ * octave's amplitude falling by sqrt(2) as its frequency doubles. */
+static void
+add_wander(gdouble *out, gint len, gdouble rms, GRand *rng)
+{
+    gint octave, i;
+
+    for (octave = 0; (1 << octave) < len/2; octave++) {
+        gdouble f = (1 << octave)/(gdouble)len, a = rms*pow(0.5, 0.5*octave);
+        gdouble phase = g_rand_double_range(rng, 0.0, 2.0*G_PI);
+
+        for (i = 0; i < len; i++)
+            out[i] += a*sin(2.0*G_PI*f*i + phase);
+    }
+}
+
+/* An instrument's 1/f noise is a time series sampled in raster order: a
+ * line takes milliseconds, so within it the noise hardly moves, and it
+ * shows between lines (offsets wandering from line to line); the surface
+ * and the scanner add slow undulation over the frame. */
+static void
+add_frame_artefacts(gdouble *data, gint xres, gint yres, gdouble size, GRand *rng)
+{
+    gdouble tilt_x = g_rand_double_range(rng, -1.0, 1.0)*size*4.0/xres;
+    gdouble tilt_y = g_rand_double_range(rng, -1.0, 1.0)*size*4.0/yres;
+    gdouble bow = g_rand_double_range(rng, -1.0, 1.0)*size*2.0;
+    gdouble *line_wander = g_new0(gdouble, yres), *along_x = g_new0(gdouble, xres);
+    gdouble *along_y = g_new0(gdouble, yres);
+    gint r, c;
+
+    add_wander(line_wander, yres, 0.5*size, rng);
+    add_wander(along_x, xres, 0.3*size, rng);
+    add_wander(along_y, yres, 0.3*size, rng);
+    for (r = 0; r < yres; r++) {
+        gdouble *row = data + (gsize)r*xres;
+        gdouble offset = line_wander[r] + 0.3*size*gaussian(rng);
+
+        for (c = 0; c < xres; c++) {
+            gdouble x = 2.0*c/(xres - 1) - 1.0;
+
+            row[c] += tilt_x*c + tilt_y*r + bow*x*x + offset + along_x[c]*along_y[r]/(0.3*size);
+        }
+    }
+    g_free(along_y);
+    g_free(along_x);
+    g_free(line_wander);
+}
+
+void
+frame_pair_add_raw_artefacts(FramePair *pair, gdouble size, guint32 seed)
+{
+    GRand *rng = g_rand_new_with_seed(seed ^ 0x5eedu);
+
+    add_frame_artefacts(pair->reference, pair->xres, pair->yres, size, rng);
+    add_frame_artefacts(pair->image, pair->xres, pair->yres, size, rng);
+    g_rand_free(rng);
 }
 
 void

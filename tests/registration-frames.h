@@ -27,6 +27,9 @@ typedef struct {
     gdouble shift_y;          /* shift + velocity*row */
     gdouble velocity_x;       /* px per row */
     gdouble velocity_y;
+    gint jump_row;            /* with the linear drift, rows from this one on */
+    gdouble jump_x;           /* are moved by (jump_x, jump_y) more; */
+    gdouble jump_y;           /* jump_row < 0: no jump */
 } FramePairSpec;
 
 typedef struct {
@@ -46,6 +49,14 @@ void        frame_pair_spec_init   (FramePairSpec *spec);
  * reference content at (r, c) appears in the image at (r + dy, c + dx). */
 FramePair*  frame_pair_generate    (const FramePairSpec *spec, guint32 seed);
 void        frame_pair_free        (FramePair *pair);
+
+/* What raw instrument channels carry on top of the sample, drawn anew for
+ * each frame: a plane, an offset on every scan line, a bow along x, 1/f
+ * noise in scan time (line offsets wandering from line to line) and a slow
+ * 1/f undulation over the frame, of the given size relative to the
+ * particles' heights (~1). */
+void        frame_pair_add_raw_artefacts(FramePair *pair, gdouble size,
+                                         guint32 seed);
 
 /* The true drift of each of n stripes: the mean over its rows. */
 void        frame_pair_stripe_truth(const FramePair *pair, gint n,

@@ -16,6 +16,7 @@
 
 static guint32 test_seed;
 
+
 typedef struct {
     gdouble rms;
     gdouble max;
@@ -166,7 +167,7 @@ END_TEST
  * of the generator: content at (r, c) must appear at (r + dy, c + dx). */
 START_TEST(test_sign_convention)
 {
-    const gdouble SIGN_TOLERANCE = 0.03;
+    const gdouble SIGN_TOLERANCE = 0.01;
     enum { RES = 128, DX = 5, DY = 2, N = 8 };
     FramePairSpec spec;
     FramePair *pair;
@@ -186,11 +187,9 @@ START_TEST(test_sign_convention)
     ck_assert(stripe_registration_measure(image, pair->reference, RES, RES, N, NULL, shifts, &error));
     /* Stripe 0 holds the repeated edge rows.  The others are the reference
      * itself moved by whole pixels, which the match on the interpolated
-     * reference finds exactly but for the levelling: each frame's line
-     * offsets and bow are estimated from its own content, which differs
-     * by the repeated edge rows and columns (at most SIGN_TOLERANCE px off
-     * over 500 seeds; without the levelling 0.0006 px, but raw channels
-     * need it). */
+     * reference finds exactly but for the repeated edge rows and columns,
+     * which the two frames' conditioning sees differently (at most 0.0084
+     * px off over 300 seeds; 0.0006 px without conditioning). */
     for (s = 1; s < N; s++) {
         ck_assert_msg(fabs(shifts[s].dx - DX) <= SIGN_TOLERANCE && fabs(shifts[s].dy - DY) <= SIGN_TOLERANCE,
                       "stripe %d: (%g, %g) instead of (%d, %d)", s, shifts[s].dx, shifts[s].dy, DX, DY);
@@ -329,6 +328,108 @@ START_TEST(test_table)
     ck_assert(drift_table_get_extra(table, 2, "dx_exact", &value) && fabs(value - 2.5) < 1e-12);
     ck_assert(!table->rows[1].has_drift);
     drift_table_free(table);
+}
+END_TEST
+
+/* Raw instrument pairs as users bring them: offsets of up to 35 % of the
+ * frame in x and 30 % in y (either sign), the drift changing smoothly over
+ * the frame, a jump of 3-10 px between two rows in half of the pairs, and
+ * a plane, line offsets, a bow and 1/f wander drawn anew for each frame.
+ * Stripes holding the jump row are left out of the figures (their truth is
+ * a mean of two drifts). */
+typedef struct {
+    gint in_reference;    /* stripes whose content lies in the reference */
+    gint measured;        /* of those, accepted */
+    gint wrong_outside;   /* stripes outside it accepted more than 1 px off */
+    gint beyond_3_sigma;  /* measured stripes off by more than 3 (6) times */
+    gint beyond_6_sigma;  /* their stated uncertainty */
+    gdouble sum2;         /* squared errors of the measured */
+    gdouble worst;
+} RawTally;
+
+static gboolean
+truly_in_reference(const FramePair *pair, gint first, gint end, gdouble dx, gdouble dy)
+{
+    gdouble rows = MIN(end, pair->yres + dy) - MAX(first, dy), cols = pair->xres - fabs(dx);
+
+    return rows > 0.0 && cols > 0.0 && rows*cols >= 0.5*(end - first)*(gdouble)pair->xres;
+}
+
+static void
+register_raw_pair(guint32 seed, RawTally *tally)
+{
+    enum { N = 16 };
+    GRand *rng = g_rand_new_with_seed(seed);
+    FramePairSpec spec;
+    FramePair *pair;
+    StripeShift shifts[N];
+    gdouble tx[N], ty[N], e;
+    gint s, first, end;
+
+    frame_pair_spec_init(&spec);
+    spec.drift = FALSE;
+    spec.shift_x = g_rand_double_range(rng, 0.05, 0.35)*spec.xres*(g_rand_boolean(rng) ? 1 : -1);
+    spec.shift_y = g_rand_double_range(rng, 0.05, 0.30)*spec.yres*(g_rand_boolean(rng) ? 1 : -1);
+    spec.velocity_x = g_rand_double_range(rng, -0.02, 0.02);
+    spec.velocity_y = g_rand_double_range(rng, -0.02, 0.02);
+    if (g_rand_boolean(rng)) {
+        gdouble size = g_rand_double_range(rng, 3.0, 10.0), angle = g_rand_double_range(rng, 0.0, 2.0*G_PI);
+
+        spec.jump_row = g_rand_int_range(rng, spec.yres/4, 3*spec.yres/4);
+        spec.jump_x = size*cos(angle);
+        spec.jump_y = size*sin(angle);
+    }
+    pair = frame_pair_generate(&spec, seed);
+    frame_pair_add_raw_artefacts(pair, 1.0, seed);
+    register_pair(pair, N, shifts);
+    frame_pair_stripe_truth(pair, N, tx, ty);
+    for (s = 0; s < N; s++) {
+        first = s*spec.yres/N;
+        end = (s + 1)*spec.yres/N;
+        if (spec.jump_row > first && spec.jump_row < end)
+            continue;
+        e = hypot(shifts[s].dx - tx[s], shifts[s].dy - ty[s]);
+        if (!truly_in_reference(pair, first, end, tx[s], ty[s])) {
+            tally->wrong_outside += (shifts[s].accepted && e > 1.0);
+            continue;
+        }
+        tally->in_reference++;
+        if (!shifts[s].accepted)
+            continue;
+        tally->measured++;
+        tally->beyond_3_sigma += (e > 3.0*shifts[s].sigma);
+        tally->beyond_6_sigma += (e > 6.0*shifts[s].sigma);
+        tally->sum2 += e*e;
+        tally->worst = MAX(tally->worst, e);
+    }
+    frame_pair_free(pair);
+    g_rand_free(rng);
+}
+
+/* What is guaranteed on such pairs today is honesty: no stripe outside the
+ * reference gets a value, and the stated uncertainty covers the error of
+ * the measured ones (in 60 runs, 1060 stripes: one beyond 3 sigma, at 5.1).
+ * How many are measured and how precisely is printed: with each frame's
+ * plane and bow left in the frames the fine match uses, about a third of
+ * the stripes, rms ~1 px (issue 9 asks for 95 % and 0.05 px). */
+START_TEST(test_raw_pairs_large_offsets)
+{
+    enum { PAIRS = 8 };
+    RawTally tally = { 0, 0, 0, 0, 0, 0.0, 0.0 };
+    gdouble rms;
+    gint i;
+
+    for (i = 0; i < PAIRS; i++)
+        register_raw_pair(test_seed + 7919u*i, &tally);
+    rms = tally.measured ? sqrt(tally.sum2/tally.measured) : 0.0;
+    printf("raw pairs: %d of %d stripes in the reference measured, rms %.4f px, worst %.4f px, "
+           "%d beyond 3 sigma, %d wrong outside\n", tally.measured, tally.in_reference, rms, tally.worst,
+           tally.beyond_3_sigma, tally.wrong_outside);
+    ck_assert_msg(tally.beyond_3_sigma <= 1 && tally.beyond_6_sigma == 0,
+                  "%d measured stripes beyond 3 sigma, %d beyond 6 (seed %u)", tally.beyond_3_sigma,
+                  tally.beyond_6_sigma, test_seed);
+    ck_assert_msg(tally.wrong_outside == 0, "%d stripes outside the reference given a wrong value (seed %u)",
+                  tally.wrong_outside, test_seed);
 }
 END_TEST
 
@@ -474,6 +575,7 @@ registration_suite(void)
     tcase_add_test(tc, test_table);
     tcase_add_test(tc, test_table_for_fields);
     tcase_add_test(tc, test_bad_arguments);
+    tcase_add_test(tc, test_raw_pairs_large_offsets);
     tcase_add_test(tc, test_flat_image);
     return suite;
 }

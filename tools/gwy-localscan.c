@@ -38,6 +38,9 @@
 
 #define STRIPES_UNSET G_MININT
 
+/* The largest --search (px): beyond any image Gwyddion handles. */
+#define SEARCH_MAX 100000
+
 enum {
     EXIT_OK    = 0,
     EXIT_ERROR = 1,   /* bad input, table, module or output */
@@ -52,6 +55,10 @@ typedef struct {
     gchar *write_drift;
     gchar *reference;
     gint stripes;
+    gchar *search_arg;
+    gdouble search_x;            /* px, 0: the whole frame */
+    gdouble search_y;
+    gboolean accept_partial;
     gchar *line_time_arg;
     gchar *direction_name;
     gchar *frame_start_arg;
@@ -102,6 +109,13 @@ static GOptionEntry option_table[] = {
          "channel ID of INPUT.  Not with -d"), N_("FILE[:ID]") },
     { "stripes", 0, 0, G_OPTION_ARG_INT, &options.stripes,
       NULL, N_("N") },   /* stripes_help() */
+    { "search", 0, 0, G_OPTION_ARG_STRING, &options.search_arg,
+      N_("With --reference: search shifts up to PX columns and PY rows (PY defaults to PX; "
+         "default: 45 % of the frame in each axis)"), N_("PX[,PY]") },
+    { "accept-partial", 0, 0, G_OPTION_ARG_NONE, &options.accept_partial,
+      N_("With --reference: use the stripes measured even when they cannot support the result "
+         "(fewer than two, or fewer than half of those whose content lies in the reference); "
+         "without it such a registration is refused"), NULL },
     { "line-time", 0, 0, G_OPTION_ARG_STRING, &options.line_time_arg,
       N_("Continuous mode: seconds per scan line, trace and retrace, where the "
          "file's metadata does not give it (the metadata wins; default 1)"), N_("S") },
@@ -178,6 +192,7 @@ free_options(void)
     g_free(options.mode_name);
     g_free(options.write_drift);
     g_free(options.reference);
+    g_free(options.search_arg);
     g_free(options.line_time_arg);
     g_free(options.direction_name);
     g_free(options.frame_start_arg);
@@ -262,6 +277,32 @@ find_mode(const gchar *name, GError **error)
     g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
                 _("unknown mode '%s' (known: paper, continuous)"), name);
     return NULL;
+}
+
+/* --search PX[,PY]: at least 1 and at most SEARCH_MAX px each. */
+static gboolean
+parse_search(const gchar *arg, GError **error)
+{
+    gchar **parts = g_strsplit(arg, ",", 0);
+    gdouble values[2];
+    gint n = g_strv_length(parts), i;
+    gboolean ok = (n == 1 || n == 2);
+
+    for (i = 0; ok && i < n; i++) {
+        gchar *end = NULL;
+
+        values[i] = g_ascii_strtod(parts[i], &end);
+        ok = (end != parts[i] && *end == '\0' && values[i] >= 1.0 && values[i] <= SEARCH_MAX);
+    }
+    g_strfreev(parts);
+    if (!ok) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("--search takes PX or PX,PY, each from 1 to %d px"), SEARCH_MAX);
+        return FALSE;
+    }
+    options.search_x = values[0];
+    options.search_y = (n == 2) ? values[1] : values[0];
+    return TRUE;
 }
 
 /* FILE[:ID] (channel-spec.h); an empty FILE is the INPUT. */
@@ -408,6 +449,13 @@ check_command_line(GError **error)
     }
     if (options.reference && !parse_reference(options.reference, &reference_spec, error))
         return NULL;
+    if ((options.search_arg || options.accept_partial) && !options.reference) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
+                    _("%s needs --reference"), options.search_arg ? "--search" : "--accept-partial");
+        return NULL;
+    }
+    if (options.search_arg && !parse_search(options.search_arg, error))
+        return NULL;
     if (!parse_timing_options(error))
         return NULL;
     if (options.interpolation_name
@@ -487,6 +535,28 @@ describe_channel(const gchar *filename, gint id)
     return g_strdup_printf(_("%s channel %d"), filename, id);
 }
 
+/* A registration the measured stripes cannot support is refused, unless
+ * the user accepts it knowingly; then it is said on stderr. */
+static gboolean
+check_support(const StripeRegistrationSupport *support, const gchar *image_name, GError **error)
+{
+    gchar *why = stripe_registration_support_message(support);
+
+    if (!why)
+        return TRUE;
+    if (!options.accept_partial) {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_NO_MATCH,
+                    _("the registration of %s does not support a result: %s "
+                      "(--accept-partial uses them anyway)"), image_name, why);
+        g_free(why);
+        return FALSE;
+    }
+    g_printerr(_("gwy-localscan: warning: the registration of %s does not support a result: %s\n"),
+               image_name, why);
+    g_free(why);
+    return TRUE;
+}
+
 /* Registration's own messages name neither image nor reference; the one
  * a user meets most often gets both names. */
 static DriftTable*
@@ -494,11 +564,20 @@ register_stripes(GwyDataField *image, const gchar *image_name,
                  GwyDataField *reference, const gchar *reference_name,
                  gint n, const CompensationMode *mode, GError **error)
 {
+    StripeRegistrationOptions regopts;
+    StripeRegistrationSupport support;
     GError *err = NULL;
     DriftTable *table;
 
-    table = stripe_registration_table_for_fields(image, reference, n, NULL,
-                                                 mode->whole_pixels, NULL, &err);
+    stripe_registration_options_init(&regopts);
+    regopts.search_x = options.search_x;
+    regopts.search_y = options.search_y;
+    table = stripe_registration_table_for_fields(image, reference, n, &regopts,
+                                                 mode->whole_pixels, &support, &err);
+    if (table && !check_support(&support, image_name, error)) {
+        drift_table_free(table);
+        return NULL;
+    }
     if (table)
         return table;
     if (g_error_matches(err, STRIPE_REGISTRATION_ERROR,
