@@ -63,6 +63,7 @@ typedef struct {
     GwyAppDataId reference;
     gint stripes;
     DriftTable *table;     /* px, exact (not rounded) */
+    StripeRegistrationSupport support;
     GError *error;
 } MeasuredDrift;
 
@@ -101,7 +102,8 @@ typedef struct {
     GwyContainer *data;
     GwyGraphModel *drift_gmodel;
     GtkWidget *reference_combo;
-    GtkWidget *preview_status;   /* under the drift graph, empty for now */
+    GtkWidget *preview_status;   /* under the drift graph: what a registration
+                                    measured */
     GtkWidget *export_button;
     GtkListStore *references;
     LocalscanTimingFound timing_in_meta;
@@ -479,6 +481,37 @@ measured_drift_clear(MeasuredDrift *measured)
     gwy_clear(measured, 1);
 }
 
+/* A registration that measured too few of the stripes it could measure
+ * cannot support a result: it is an unusable drift source, in the dialog
+ * (its reason shown, OK insensitive) as in a batch run (one line). */
+static void
+refuse_unsupported(MeasuredDrift *measured)
+{
+    gchar *why;
+
+    if (!measured->table || !(why = stripe_registration_support_message(&measured->support)))
+        return;
+    g_set_error(&measured->error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_NO_MATCH,
+                _("The registration does not support a result: %s."), why);
+    g_free(why);
+    drift_table_free(measured->table);
+    measured->table = NULL;
+}
+
+/* What the registration measured, for the dialog; NULL when the drift does
+ * not come from one. */
+static gchar*
+format_registration_status(const MeasuredDrift *measured)
+{
+    const StripeRegistrationSupport *support = &measured->support;
+
+    if (!measured->valid || !measured->table)
+        return NULL;
+    return g_strdup_printf(_("Registration: %d of the %d stripes whose content lies in the reference "
+                             "measured, median score %.2f."),
+                           support->measured, support->in_reference, support->median_score);
+}
+
 /* The exact table registering image against reference measured, from the
  * last registration when it had the same reference and stripe count (its
  * failure is kept just as well). */
@@ -492,8 +525,9 @@ measure_drift(MeasuredDrift *measured, GwyDataField *image, GwyDataField *refere
         g_debug("%s: registering %d stripes against channel %d (%d x %d px)",
                 LOCALSCAN_FUNCTION_NAME, n, refid.id,
                 gwy_data_field_get_xres(image), gwy_data_field_get_yres(image));
-        measured->table = stripe_registration_table_for_fields(image, reference, n, NULL, FALSE, NULL,
-                                                               &measured->error);
+        measured->table = stripe_registration_table_for_fields(image, reference, n, NULL, FALSE,
+                                                               &measured->support, &measured->error);
+        refuse_unsupported(measured);
         measured->valid = TRUE;
         measured->reference = refid;
         measured->stripes = n;
@@ -1585,6 +1619,21 @@ execute_preview(ModuleGUI *gui, GError **error)
     return ok;
 }
 
+static void
+update_registration_status(ModuleGUI *gui, gboolean ok)
+{
+    ModuleArgs *args = gui->args;
+    const MeasuredDrift *measured = (preview_field_is_reduced(gui->preview)
+                                     ? &gui->preview_measured : &args->measured);
+    gchar *text = NULL;
+
+    if (ok && gwy_params_get_enum(args->params, PARAM_SOURCE) == LOCALSCAN_SOURCE_REFERENCE)
+        text = format_registration_status(measured);
+    gtk_label_set_text(GTK_LABEL(gui->preview_status), text ? text : "");
+    gtk_widget_set_visible(gui->preview_status, text != NULL);
+    g_free(text);
+}
+
 /* An unusable drift source leaves the source image in the preview, the
  * parser's own message in the dialog and OK insensitive. */
 static void
@@ -1619,6 +1668,7 @@ preview(gpointer user_data)
     g_free(text);
     gtk_dialog_set_response_sensitive(GTK_DIALOG(gui->dialog), GTK_RESPONSE_OK, ok);
     gtk_widget_set_sensitive(gui->export_button, ok);
+    update_registration_status(gui, ok);
     gwy_data_field_data_changed(preview_field_result(gui->preview));
     gwy_data_field_data_changed(preview_field_mask(gui->preview));
     if (ok)
