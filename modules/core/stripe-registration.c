@@ -329,7 +329,6 @@ polish_peak(Level *level, gint s, gint reach, Peak *peak)
 
         peak->polished = stripe_subpixel_refine(level->subpixel, first, end, peak->ky, peak->kx,
                                                 reach, &peak->dy, &peak->dx, &peak->sigma);
-        g_debug("polish stripe %d levelled %s (%.4f, %.4f)", s, peak->polished ? "ok" : "FAILED", peak->dy, peak->dx);
         if (!peak->polished && level->subpixel_band) {
             peak->polished = stripe_subpixel_refine(level->subpixel_band, first, end, peak->ky, peak->kx,
                                                     reach, &peak->dy, &peak->dx, &peak->sigma);
