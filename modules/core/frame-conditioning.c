@@ -246,11 +246,39 @@ blur_axis(gdouble *data, gint len, gint count, gint stride, gint step, gdouble s
     g_free(tmp);
 }
 
+/* dst (cols x rows) = src (rows x cols) transposed, in cache-sized tiles. */
+static void
+transpose(const gdouble *src, gint rows, gint cols, gdouble *dst)
+{
+    enum { TILE = 32 };
+    gint r0, c0, r, c;
+
+    for (r0 = 0; r0 < rows; r0 += TILE) {
+        for (c0 = 0; c0 < cols; c0 += TILE) {
+            for (r = r0; r < MIN(rows, r0 + TILE); r++) {
+                for (c = c0; c < MIN(cols, c0 + TILE); c++)
+                    dst[(gsize)c*rows + r] = src[(gsize)r*cols + c];
+            }
+        }
+    }
+}
+
+/* Columns are blurred as rows of the transposed frame: the same sums in
+ * the same order, without a cache miss per value on large frames (the
+ * strided column pass was a fifth of a 1024 x 1024 registration). */
 static void
 blur(gdouble *data, gint xres, gint yres, gdouble sigma_x, gdouble sigma_y)
 {
+    gdouble *columns;
+
     blur_axis(data, xres, yres, 1, xres, sigma_x);
-    blur_axis(data, yres, xres, xres, 1, sigma_y);
+    if (sigma_y < 0.2 || yres < 2)
+        return;
+    columns = g_new(gdouble, (gsize)xres*yres);
+    transpose(data, yres, xres, columns);
+    blur_axis(columns, yres, xres, 1, yres, sigma_y);
+    transpose(columns, xres, yres, data);
+    g_free(columns);
 }
 
 /* The normalised blur of the valid values: where no valid pixel is within
