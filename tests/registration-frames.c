@@ -286,29 +286,24 @@ add_frame_undulation(gdouble *data, gint xres, gint yres, gdouble size, GRand *r
     g_free(along_x);
 }
 
-typedef void (*FrameArtefact)(gdouble *data, gint xres, gint yres, gdouble size, GRand *rng);
-
-/* Each frame gets its own draw of the artefact. */
-static void
-add_to_both_frames(FramePair *pair, FrameArtefact add, gdouble size, guint32 seed)
-{
-    GRand *rng = g_rand_new_with_seed(seed);
-
-    add(pair->reference, pair->xres, pair->yres, size, rng);
-    add(pair->image, pair->xres, pair->yres, size, rng);
-    g_rand_free(rng);
-}
-
 void
 frame_pair_add_raw_artefacts(FramePair *pair, gdouble size, guint32 seed)
 {
-    add_to_both_frames(pair, add_frame_artefacts, size, seed ^ 0x5eedu);
+    GRand *rng = g_rand_new_with_seed(seed ^ 0x5eedu);
+
+    add_frame_artefacts(pair->reference, pair->xres, pair->yres, size, rng);
+    add_frame_artefacts(pair->image, pair->xres, pair->yres, size, rng);
+    g_rand_free(rng);
 }
 
 void
 frame_pair_add_undulation(FramePair *pair, gdouble size, guint32 seed)
 {
-    add_to_both_frames(pair, add_frame_undulation, size, seed ^ 0x0dd1u);
+    GRand *rng = g_rand_new_with_seed(seed ^ 0x0dd1u);
+
+    add_frame_undulation(pair->reference, pair->xres, pair->yres, size, rng);
+    add_frame_undulation(pair->image, pair->xres, pair->yres, size, rng);
+    g_rand_free(rng);
 }
 
 void
