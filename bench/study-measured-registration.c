@@ -38,23 +38,26 @@ typedef struct {
     StripeRegistrationSupport support;
 } PairResult;
 
-static GwyDataField*
-load_channel(const gchar *path, gint id, GwyContainer **keep)
+static GwyContainer*
+load_file(const gchar *path)
 {
     GError *error = NULL;
     GwyContainer *data = gwy_file_load(path, GWY_RUN_NONINTERACTIVE, &error);
-    GwyDataField *field;
 
     if (!data) {
         fprintf(stderr, "study-measured-registration: %s: %s\n", path, error ? error->message : "unreadable");
         exit(1);
     }
-    field = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
-    *keep = data;
-    return field;
+    return data;
 }
 
-/* One registration; FALSE (and nothing measured) when it found nothing. */
+static GwyDataField*
+channel(GwyContainer *data, gint id)
+{
+    return gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
+}
+
+/* One registration; nothing measured when it found nothing. */
 static void
 register_pair(GwyDataField *image, GwyDataField *reference, gint n, PairResult *result)
 {
@@ -118,7 +121,7 @@ fastscan(const gchar *dir)
 {
     static const gint pairs[3][2] = { { 0, 1 }, { 1, 2 }, { 0, 2 } };
     static const gint stripe_counts[2] = { 8, 16 };
-    GwyContainer *keep[3][FASTSCAN_CHANNELS];
+    GwyContainer *files[3];
     GwyDataField *fields[3][FASTSCAN_CHANNELS];
     PairResult results[3][FASTSCAN_CHANNELS];
     gint f, ch, p, k, s, a, b, n, agree, both, total_measured, total_in;
@@ -127,8 +130,9 @@ fastscan(const gchar *dir)
     for (f = 0; f < 3; f++) {
         gchar *path = g_build_filename(dir, "fastscan-series", fastscan_files[f], NULL);
 
+        files[f] = load_file(path);
         for (ch = 0; ch < FASTSCAN_CHANNELS; ch++)
-            fields[f][ch] = load_channel(path, ch, &keep[f][ch]);
+            fields[f][ch] = channel(files[f], ch);
         g_free(path);
     }
     printf("== FastScan raw channels (dx, dy ± sigma_px per measured stripe)\n");
@@ -182,10 +186,8 @@ fastscan(const gchar *dir)
                 printf("N=%d %s closure: not every pair measured\n", n, channel_names[ch]);
         }
     }
-    for (f = 0; f < 3; f++) {
-        for (ch = 0; ch < FASTSCAN_CHANNELS; ch++)
-            g_object_unref(keep[f][ch]);
-    }
+    for (f = 0; f < 3; f++)
+        g_object_unref(files[f]);
 }
 
 static void
@@ -193,22 +195,19 @@ hsafm_movie(const gchar *dir, const gchar *file)
 {
     static const gint pairs[4][2] = { { 0, 1 }, { 1, 2 }, { 0, 3 }, { 3, 6 } };
     gchar *path = g_build_filename(dir, "hsafm-minicircles", file, NULL);
-    GwyContainer *keep[2];
+    GwyContainer *data = load_file(path);
     PairResult result;
     gint p;
 
     printf("== HS-AFM %s, 8 stripes, frame j against frame i\n", file);
     for (p = 0; p < 4; p++) {
-        GwyDataField *reference = load_channel(path, pairs[p][0], keep + 0);
-        GwyDataField *image = load_channel(path, pairs[p][1], keep + 1);
         gchar *what = g_strdup_printf("frames %d->%d", pairs[p][0], pairs[p][1]);
 
-        register_pair(image, reference, 8, &result);
+        register_pair(channel(data, pairs[p][1]), channel(data, pairs[p][0]), 8, &result);
         print_pair(what, 8, &result);
         g_free(what);
-        g_object_unref(keep[0]);
-        g_object_unref(keep[1]);
     }
+    g_object_unref(data);
     g_free(path);
 }
 

@@ -180,18 +180,24 @@ kernel_line(gdouble *line, gint len, gint stride, const gdouble *kernel, gint h,
     }
 }
 
+/* Whether a blur of sigma (px) along lines of len values changes them. */
+static gboolean
+blur_reaches(gdouble sigma, gint len)
+{
+    return sigma >= 0.2 && len >= 2;
+}
+
 /* Unnormalised blur (zero outside) of one axis: lines of len values with
  * stride, count of them, first values step apart. */
 static void
 blur_axis(gdouble *data, gint len, gint count, gint stride, gint step, gdouble sigma)
 {
-    gdouble *tmp = g_new(gdouble, len + 1), *kernel = NULL;
+    gdouble *tmp, *kernel = NULL;
     gint l, pass, h = 0;
 
-    if (sigma < 0.2 || len < 2) {
-        g_free(tmp);
+    if (!blur_reaches(sigma, len))
         return;
-    }
+    tmp = g_new(gdouble, len + 1);
     if (sigma >= BOX_FROM_SIGMA)
         h = box_half_width(sigma);
     else
@@ -236,7 +242,7 @@ blur(gdouble *data, gint xres, gint yres, gdouble sigma_x, gdouble sigma_y)
     gdouble *columns;
 
     blur_axis(data, xres, yres, 1, xres, sigma_x);
-    if (sigma_y < 0.2 || yres < 2)
+    if (!blur_reaches(sigma_y, yres))
         return;
     columns = g_new(gdouble, (gsize)xres*yres);
     transpose(data, yres, xres, columns);
