@@ -242,21 +242,18 @@ add_wander(gdouble *out, gint len, gdouble rms, GRand *rng)
 
 /* An instrument's 1/f noise is a time series sampled in raster order: a
  * line takes milliseconds, so within it the noise hardly moves, and it
- * shows between lines (offsets wandering from line to line); the surface
- * and the scanner add slow undulation over the frame. */
+ * shows between lines (offsets wandering from line to line).  The scanner
+ * adds a plane and a bow along x. */
 static void
 add_frame_artefacts(gdouble *data, gint xres, gint yres, gdouble size, GRand *rng)
 {
     gdouble tilt_x = g_rand_double_range(rng, -1.0, 1.0)*size*4.0/xres;
     gdouble tilt_y = g_rand_double_range(rng, -1.0, 1.0)*size*4.0/yres;
     gdouble bow = g_rand_double_range(rng, -1.0, 1.0)*size*2.0;
-    gdouble *line_wander = g_new0(gdouble, yres), *along_x = g_new0(gdouble, xres);
-    gdouble *along_y = g_new0(gdouble, yres);
+    gdouble *line_wander = g_new0(gdouble, yres);
     gint r, c;
 
     add_wander(line_wander, yres, 0.5*size, rng);
-    add_wander(along_x, xres, 0.3*size, rng);
-    add_wander(along_y, yres, 0.3*size, rng);
     for (r = 0; r < yres; r++) {
         gdouble *row = data + (gsize)r*xres;
         gdouble offset = line_wander[r] + 0.3*size*gaussian(rng);
@@ -264,22 +261,54 @@ add_frame_artefacts(gdouble *data, gint xres, gint yres, gdouble size, GRand *rn
         for (c = 0; c < xres; c++) {
             gdouble x = 2.0*c/(xres - 1) - 1.0;
 
-            row[c] += tilt_x*c + tilt_y*r + bow*x*x + offset + along_x[c]*along_y[r]/(0.3*size);
+            row[c] += tilt_x*c + tilt_y*r + bow*x*x + offset;
         }
+    }
+    g_free(line_wander);
+}
+
+/* A pattern fixed to the frame, separable 1/f along x and y over every
+ * octave: what differs between the frames beyond noise and looks like
+ * texture at every scale. */
+static void
+add_frame_undulation(gdouble *data, gint xres, gint yres, gdouble size, GRand *rng)
+{
+    gdouble *along_x = g_new0(gdouble, xres), *along_y = g_new0(gdouble, yres);
+    gint r, c;
+
+    add_wander(along_x, xres, 0.3*size, rng);
+    add_wander(along_y, yres, 0.3*size, rng);
+    for (r = 0; r < yres; r++) {
+        for (c = 0; c < xres; c++)
+            data[(gsize)r*xres + c] += along_x[c]*along_y[r]/(0.3*size);
     }
     g_free(along_y);
     g_free(along_x);
-    g_free(line_wander);
+}
+
+typedef void (*FrameArtefact)(gdouble *data, gint xres, gint yres, gdouble size, GRand *rng);
+
+/* Each frame gets its own draw of the artefact. */
+static void
+add_to_both_frames(FramePair *pair, FrameArtefact add, gdouble size, guint32 seed)
+{
+    GRand *rng = g_rand_new_with_seed(seed);
+
+    add(pair->reference, pair->xres, pair->yres, size, rng);
+    add(pair->image, pair->xres, pair->yres, size, rng);
+    g_rand_free(rng);
 }
 
 void
 frame_pair_add_raw_artefacts(FramePair *pair, gdouble size, guint32 seed)
 {
-    GRand *rng = g_rand_new_with_seed(seed ^ 0x5eedu);
+    add_to_both_frames(pair, add_frame_artefacts, size, seed ^ 0x5eedu);
+}
 
-    add_frame_artefacts(pair->reference, pair->xres, pair->yres, size, rng);
-    add_frame_artefacts(pair->image, pair->xres, pair->yres, size, rng);
-    g_rand_free(rng);
+void
+frame_pair_add_undulation(FramePair *pair, gdouble size, guint32 seed)
+{
+    add_to_both_frames(pair, add_frame_undulation, size, seed ^ 0x0dd1u);
 }
 
 void

@@ -51,12 +51,16 @@ FramePair*  frame_pair_generate    (const FramePairSpec *spec, guint32 seed);
 void        frame_pair_free        (FramePair *pair);
 
 /* What raw instrument channels carry on top of the sample, drawn anew for
- * each frame: a plane, an offset on every scan line, a bow along x, 1/f
- * noise in scan time (line offsets wandering from line to line) and a slow
- * 1/f undulation over the frame, of the given size relative to the
- * particles' heights (~1). */
+ * each frame: a plane, an offset on every scan line, a bow along x and 1/f
+ * noise in scan time (line offsets wandering from line to line), of the
+ * given size relative to the particles' heights (~1). */
 void        frame_pair_add_raw_artefacts(FramePair *pair, gdouble size,
                                          guint32 seed);
+/* A separable 1/f pattern fixed to each frame, over every octave (rms
+ * about 0.3 size): frame-fixed texture no conditioning can tell from the
+ * sample's. */
+void        frame_pair_add_undulation(FramePair *pair, gdouble size,
+                                      guint32 seed);
 
 /* The true drift of each of n stripes: the mean over its rows. */
 void        frame_pair_stripe_truth(const FramePair *pair, gint n,

@@ -342,9 +342,10 @@ END_TEST
 
 /* Pairs offset by up to 35 % of the frame in x and 30 % in y (either sign),
  * the drift changing smoothly over the frame, a jump of 3-10 px between
- * two rows in half of the pairs, with raw-channel artefacts of the given
- * size drawn anew for each frame (0: none).  Stripes holding the jump row
- * are left out of the figures (their truth is a mean of two drifts). */
+ * two rows in half of the pairs, with raw-channel artefacts and a
+ * frame-fixed undulation of the given sizes drawn anew for each frame (0:
+ * none).  Stripes holding the jump row are left out of the figures (their
+ * truth is a mean of two drifts). */
 typedef struct {
     gint in_reference;    /* stripes whose content lies in the reference */
     gint measured;        /* of those, accepted */
@@ -365,7 +366,7 @@ truly_in_reference(const FramePair *pair, gint first, gint end, gdouble dx, gdou
 }
 
 static void
-register_raw_pair(guint32 seed, gdouble artefacts, RawTally *tally)
+register_raw_pair(guint32 seed, gdouble artefacts, gdouble undulation, RawTally *tally)
 {
     enum { N = 16 };
     GRand *rng = g_rand_new_with_seed(seed);
@@ -391,6 +392,8 @@ register_raw_pair(guint32 seed, gdouble artefacts, RawTally *tally)
     pair = frame_pair_generate(&spec, seed);
     if (artefacts > 0.0)
         frame_pair_add_raw_artefacts(pair, artefacts, seed);
+    if (undulation > 0.0)
+        frame_pair_add_undulation(pair, undulation, seed);
     register_pair(pair, N, shifts);
     frame_pair_stripe_truth(pair, N, tx, ty);
     for (s = 0; s < N; s++) {
@@ -419,31 +422,92 @@ register_raw_pair(guint32 seed, gdouble artefacts, RawTally *tally)
     g_rand_free(rng);
 }
 
-/* The search over any offset, on pairs without raw-channel artefacts:
- * every stripe whose content lies in the reference is measured, wherever
- * the frames lie.  The errors are printed, not asserted, because of a
- * known gap (issue 9 is open on it, docs/registration.md): stripes with
- * much of their content near or beyond the reference's edge, where this
- * generator's content is smooth roughness, can be given a confident wrong
- * value when a band of such content misleads the coarse stage (seed
- * 1774757575: two stripes 26 and 31 px off; rms 0.03-0.09 px in other
- * runs).  Peak sharpness must enter the confidence first. */
-START_TEST(test_large_offsets)
+static void
+print_raw_tally(const gchar *what, const RawTally *tally)
+{
+    printf("%s: %d of %d stripes in the reference measured, rms %.4f px, worst %.4f px, "
+           "%d beyond 3 sigma, %d beyond 6; %d stripes outside the reference given a value its "
+           "sigma does not cover\n", what, tally->measured, tally->in_reference,
+           tally->measured ? sqrt(tally->sum2/tally->measured) : 0.0, tally->worst,
+           tally->beyond_3_sigma, tally->beyond_6_sigma, tally->wrong_outside);
+}
+
+/* PAIRS pairs (register_raw_pair) from test_seed, with raw-channel
+ * artefacts of a size drawn from 0.5 to max_artefacts and a frame-fixed
+ * undulation from 0.1 to max_undulation (0: none); prints the tally. */
+static void
+register_raw_pairs(const gchar *what, gdouble max_artefacts, gdouble max_undulation, guint32 salt,
+                   RawTally *tally)
 {
     enum { PAIRS = 8 };
-    RawTally tally = { 0, 0, 0, 0, 0, 0.0, 0.0 };
-    gdouble rms;
+    GRand *rng = g_rand_new_with_seed(test_seed ^ salt);
+    gdouble artefacts, undulation;
     gint i;
 
-    for (i = 0; i < PAIRS; i++)
-        register_raw_pair(test_seed + 7919u*i, 0.0, &tally);
-    rms = tally.measured ? sqrt(tally.sum2/tally.measured) : 0.0;
-    printf("large offsets: %d of %d stripes in the reference measured, rms %.4f px, worst %.4f px, "
-           "%d beyond 3 sigma; %d stripes outside the reference given a value its sigma does not cover\n",
-           tally.measured, tally.in_reference, rms, tally.worst, tally.beyond_3_sigma, tally.wrong_outside);
-    ck_assert_msg(tally.measured >= 0.95*tally.in_reference,
-                  "only %d of %d stripes in the reference measured (seed %u)", tally.measured,
-                  tally.in_reference, test_seed);
+    gwy_clear(tally, 1);
+    for (i = 0; i < PAIRS; i++) {
+        artefacts = (max_artefacts > 0.0) ? g_rand_double_range(rng, 0.5, max_artefacts) : 0.0;
+        undulation = (max_undulation > 0.0) ? g_rand_double_range(rng, 0.1, max_undulation) : 0.0;
+        register_raw_pair(test_seed + 7919u*i, artefacts, undulation, tally);
+    }
+    print_raw_tally(what, tally);
+    g_rand_free(rng);
+}
+
+/* What issue 9 asks of pairs offset by up to a third of the frame: at
+ * least 95 % of the stripes whose content lies in the reference measured,
+ * rms at most 0.05 px, none off by more than 1 px. */
+static void
+assert_large_offset_figures(const RawTally *tally)
+{
+    gdouble rms = sqrt(tally->sum2/MAX(tally->measured, 1));
+
+    ck_assert_msg(tally->measured >= 0.95*tally->in_reference,
+                  "only %d of %d stripes in the reference measured (seed %u)", tally->measured,
+                  tally->in_reference, test_seed);
+    ck_assert_msg(rms <= 0.05, "rms %g px (seed %u)", rms, test_seed);
+    ck_assert_msg(tally->worst <= 1.0, "a stripe %g px off (seed %u)", tally->worst, test_seed);
+}
+
+/* The search over any offset, on pairs without raw-channel artefacts.  A
+ * band mostly off the reference once led two stripes 26 and 31 px astray
+ * (seed 1774757575; reject_bands_gaining_overlap). */
+START_TEST(test_large_offsets)
+{
+    RawTally tally;
+
+    register_raw_pairs("large offsets", 0.0, 0.0, 0, &tally);
+    assert_large_offset_figures(&tally);
+}
+END_TEST
+
+/* The same pairs as raw channels: a plane, line offsets, a bow and 1/f
+ * noise in scan time, different in the two frames, of a size drawn from
+ * half to three times the particles' height.  Conditioning takes them out
+ * exactly (on 100 pairs of size 1 and of size 3: 100 % measured, rms
+ * 0.040-0.041 px, worst 0.17 px, as on clean pairs); without it 15 % and
+ * 2 % of the stripes were measured. */
+START_TEST(test_raw_artefacts)
+{
+    RawTally tally;
+
+    register_raw_pairs("raw artefacts", 3.0, 0.0, 0x7a3u, &tally);
+    assert_large_offset_figures(&tally);
+}
+END_TEST
+
+/* Frame-fixed texture at every scale, unlike either frame's content and as
+ * strong as the sample's roughness or more, looks like the sample to any
+ * registration; what is asked here is honesty: a value it gives is
+ * within its stated uncertainty (fewer stripes are measured, and those
+ * less precisely). */
+START_TEST(test_undulation_honest)
+{
+    RawTally tally;
+
+    register_raw_pairs("frame-fixed undulation", 3.0, 1.0, 0x0ddu, &tally);
+    ck_assert_msg(tally.beyond_6_sigma == 0, "%d stripes beyond 6 sigma (seed %u)",
+                  tally.beyond_6_sigma, test_seed);
 }
 END_TEST
 
@@ -590,6 +654,8 @@ registration_suite(void)
     tcase_add_test(tc, test_table_for_fields);
     tcase_add_test(tc, test_bad_arguments);
     tcase_add_test(tc, test_large_offsets);
+    tcase_add_test(tc, test_raw_artefacts);
+    tcase_add_test(tc, test_undulation_honest);
     tcase_add_test(tc, test_flat_image);
     return suite;
 }

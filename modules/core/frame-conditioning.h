@@ -18,13 +18,14 @@ typedef struct {
     gdouble *data;           /* yres x xres, unit RMS, 0 where missing */
     gdouble *weight;         /* yres x xres, 1 where valid, 0 where missing */
     gdouble *levelled;       /* the same without the band-pass's wide cut
-                                (line offsets and strokes removed, the
-                                narrow blur, line medians, clipped, unit
-                                RMS), for the fine stages of registration:
-                                a wide cut is what a search over large
-                                shifts needs, and it paints texture into
-                                featureless regions and, near the edges,
-                                moves content; NULL in a downsampled frame */
+                                (line offsets, strokes and the column trend
+                                removed, the narrow blur, line medians,
+                                unit RMS), for the fine stages of
+                                registration: the wide cut, which a search
+                                over large shifts needs, paints texture
+                                into featureless regions and moves content
+                                near the frame's edges; NULL in a
+                                downsampled frame */
     gdouble valid_fraction;  /* of the pixels */
     gdouble narrow_sigma;    /* px, the band-pass's narrow blur: within
                                 about twice this of the frame's edge the
@@ -34,7 +35,9 @@ typedef struct {
 /* Conditions data (yres x xres, row-major): NaN and infinite pixels, and
  * pixels where exclude (may be NULL) is above 0.5, are missing and carry no
  * weight.  Then, on the valid pixels: per-scan-line offsets (medians of the
- * differences of adjacent lines), strokes one line tall, and a band-pass that keeps features between a pixel or more (more
+ * differences of adjacent lines), strokes one line tall, the plane along x
+ * and the bow (a quadratic fitted to the column medians), and a band-pass
+ * that keeps features between a pixel or more (more
  * where pixel noise outweighs them) and a twentieth of the frame (against
  * 1/f noise, planes and bows).  pixel_aspect is the physical height of
  * a pixel over its width, so that the band is the same physical size along

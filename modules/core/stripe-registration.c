@@ -617,6 +617,50 @@ interpolate_bands(const StripeShift *bands, gint nb, gint yres, gdouble y, gdoub
     return TRUE;
 }
 
+/* The fine search's reach (px) around a stripe's predicted shift: the
+ * coarse stage is good to about a coarse pixel, and a stripe may have
+ * jumped away from its band's shift. */
+static gint
+fine_radius(gint factor)
+{
+    return MAX(FINE_MIN_RADIUS, 2*factor + 4);
+}
+
+/* Whether at least IN_REFERENCE_FRACTION of stripe s lies on the reference
+ * at the shift (dy, dx). */
+static gboolean
+stripe_in_reference(gint s, gint n, gint xres, gint yres, gdouble dy, gdouble dx)
+{
+    gint first = stripe_first_row(s, n, yres), end = stripe_end_row(s, n, yres);
+    gdouble rows = MIN(end, yres + dy) - MAX(first, dy), cols = xres - fabs(dx);
+
+    return (rows > 0.0 && cols > 0.0
+            && rows*cols >= IN_REFERENCE_FRACTION*(end - first)*(gdouble)xres);
+}
+
+/* A band mostly off the reference at the whole frame's shift has little
+ * of its content to match there, and its best peak is often a shift that
+ * brings more of it onto the reference, matched on texture alone (a band
+ * 28 px from both the whole frame and its neighbours at score 0.34 led
+ * two stripes 26 and 31 px astray).  Such a band is believed only within
+ * the fine search's reach of the whole frame's shift; beyond it, its
+ * stripes are predicted from the other bands. */
+static void
+reject_bands_gaining_overlap(StripeShift *bands, gint nb, gint xres, gint yres, gdouble gy, gdouble gx,
+                             gdouble reach)
+{
+    gint b;
+
+    for (b = 0; b < nb; b++) {
+        if (bands[b].accepted && !stripe_in_reference(b, nb, xres, yres, gy, gx)
+            && (fabs(bands[b].dy - gy) > reach || fabs(bands[b].dx - gx) > reach)) {
+            g_debug("registration: band %d/%d off the reference at the whole frame's shift and "
+                    "(%.1f, %.1f) coarse px from it: rejected", b, nb, bands[b].dx - gx, bands[b].dy - gy);
+            bands[b].accepted = FALSE;
+        }
+    }
+}
+
 /* Bands searched blind (the whole frame gave no shift) are believed only
  * when another accepted band agrees within the reach a band may differ by:
  * one band's peak over a blind search of a third of the frame is too
@@ -695,6 +739,10 @@ predict_coarsely(const ConditionedFrame *image, const ConditionedFrame *referenc
             reject_uncorroborated_bands(bands, nb, MAX(3, (gint)ceil(BAND_REACH*small_image->yres)),
                                         MAX(3, (gint)ceil(BAND_REACH*small_image->xres)));
         }
+        else {
+            reject_bands_gaining_overlap(bands, nb, small_image->xres, small_image->yres, gy, gx,
+                                         fine_radius(f)/(gdouble)f);
+        }
         for (s = 0; s < nb; s++) {
             g_debug("registration: band %d/%d (%.2f, %.2f) coarse px, peak %.3f, rival %.3f, "
                     "score %.3f%s", s, nb, bands[s].dx, bands[s].dy, bands[s].peak, bands[s].rival,
@@ -754,18 +802,6 @@ measure_fine(const ConditionedFrame *image, const ConditionedFrame *reference, g
     level_free(&level);
 }
 
-/* Whether at least IN_REFERENCE_FRACTION of stripe s lies on the reference
- * at the shift (dy, dx). */
-static gboolean
-stripe_in_reference(gint s, gint n, gint xres, gint yres, gdouble dy, gdouble dx)
-{
-    gint first = stripe_first_row(s, n, yres), end = stripe_end_row(s, n, yres);
-    gdouble rows = MIN(end, yres + dy) - MAX(first, dy), cols = xres - fabs(dx);
-
-    return (rows > 0.0 && cols > 0.0
-            && rows*cols >= IN_REFERENCE_FRACTION*(end - first)*(gdouble)xres);
-}
-
 static gboolean
 check_frames(const ConditionedFrame *image, const ConditionedFrame *reference, gint n, GError **error)
 {
@@ -816,10 +852,7 @@ stripe_registration_measure_conditioned(const ConditionedFrame *image, const Con
         }
     }
     else {
-        /* The coarse shift is good to about a coarse pixel; a stripe may
-         * have jumped away from its band's. */
-        radius = MAX(FINE_MIN_RADIUS, 2*factor + 4);
-        radius = MIN(radius, MIN(image->xres, image->yres)/2);
+        radius = MIN(fine_radius(factor), MIN(image->xres, image->yres)/2);
         measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, shifts);
         for (s = 0; s < n; s++)
             shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres, pdy[s], pdx[s]);

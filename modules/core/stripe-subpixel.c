@@ -28,7 +28,12 @@
  *
  * The model is: the reference, sampled with Keys' cubic kernel at
  * (r - dy - vy t, c - dx - vx t), t = r - centre, equals gain*stripe + offset
- * over the stripe's pixels, weighted by the column window.  Linearised about
+ * + trend(c) over the stripe's pixels, weighted by the column window,
+ * with trend a sum of slow cosines along x.  The two frames of a raw channel
+ * carry planes and bows of their own (the scanner's tilt and bow, slow
+ * undulation), which no levelling can take from one frame without moving
+ * with its content; fitted here, as nuisances beside the shift, they take
+ * no part in it.  Linearised about
  * the current shift with the stripe's own gradients, the unknowns gain,
  * offset and gain times the steps of dy, dx, vy, vx are a linear
  * least-squares problem whose matrix depends only on the stripe and the rows
@@ -39,11 +44,19 @@
  * on the approximation.
  */
 
-/* Unknowns: gain, offset, and gain times the steps of dy, dx, vy, vx. */
+/* Unknowns: gain, offset, gain times the steps of dy, dx, the x trend's
+ * coefficients and gain times the steps of vy, vx. */
+/* The x trend: cosines of 1 to TREND_TERMS half periods over the frame's
+ * width, down to half the width for 4 (a plane and a bow take the first
+ * two; slow undulation the rest); more cost time and precision. */
+#define TREND_TERMS 4
+
 enum {
-    ROW_REGRESSORS = 4,   /* stripe, 1, d/dy, d/dx; the last two times t too */
+    ROW_REGRESSORS = 4 + TREND_TERMS,  /* stripe, 1, d/dy, d/dx, the x trend;
+                                          d/dy and d/dx times t too */
     ROW_TERMS = ROW_REGRESSORS*(ROW_REGRESSORS + 1)/2,
-    MAX_PARAMS = 6,
+    BASE_PARAMS = ROW_REGRESSORS,
+    MAX_PARAMS = ROW_REGRESSORS + 2,
 };
 
 #define MAX_ITERATIONS 32
@@ -87,6 +100,7 @@ struct _StripeSubpixel {
     gdouble *row_normal;      /* max_height x ROW_TERMS: each row's products
                                  of the row regressors, upper triangle */
     gdouble *column;          /* xres: reference interpolated along y */
+    gdouble *trend;           /* TREND_TERMS x xres: the x trend's terms */
     gdouble *residual;        /* max_height x xres: weighted residual of the
                                  final match, for its uncertainty */
     gboolean *row_dropped;    /* max_height: rows that left the reference */
@@ -96,7 +110,8 @@ typedef struct {
     gint first;               /* the stripe's image rows */
     gint height;
     gdouble centre;           /* t = i - centre for row first + i */
-    gint nparams;             /* 4, or 6 with the velocity */
+    gint nparams;             /* BASE_PARAMS, or MAX_PARAMS with the
+                                 velocity */
     gint col_lo;              /* columns matched, [col_lo, col_hi) */
     gint col_hi;
 } StripeSpan;
@@ -133,6 +148,11 @@ stripe_subpixel_new(const gdouble *image, const gdouble *reference, const gdoubl
     sp->row_normal = g_new(gdouble, (gsize)max_height*ROW_TERMS);
     sp->row_offset = g_new(gdouble, (gsize)max_height*ROW_REGRESSORS);
     sp->column = g_new(gdouble, xres);
+    sp->trend = g_new(gdouble, TREND_TERMS*(gsize)xres);
+    for (gint k = 0; k < TREND_TERMS; k++) {
+        for (gint c = 0; c < xres; c++)
+            sp->trend[k*xres + c] = cos((k + 1)*G_PI*(c + 0.5)/xres);
+    }
     sp->row_dropped = g_new(gboolean, max_height);
     return sp;
 }
@@ -150,6 +170,7 @@ stripe_subpixel_free(StripeSubpixel *sp)
     g_free(sp->row_normal);
     g_free(sp->row_offset);
     g_free(sp->column);
+    g_free(sp->trend);
     g_free(sp->row_dropped);
     g_free(sp);
 }
@@ -214,11 +235,11 @@ centre_row_terms(StripeSubpixel *sp, gint i)
 }
 
 /* Row i's weighted stripe and gradients, and its products of the row
- * regressors (stripe, 1, d/dy, d/dx), upper triangle by rows. */
+ * regressors (stripe, 1, d/dy, d/dx, the x trend), upper triangle by rows. */
 static void
 prepare_row(StripeSubpixel *sp, const StripeSpan *span, gint i)
 {
-    gint xres = sp->xres, r = span->first + i, c;
+    gint xres = sp->xres, r = span->first + i, c, a, b;
     const gdouble *row = sp->image + (gsize)r*xres;
     const gdouble *above = image_row_clamped(sp, r - 1), *below = image_row_clamped(sp, r + 1);
     gdouble *pw = sp->pixel_weight + (gsize)i*xres;
@@ -227,39 +248,28 @@ prepare_row(StripeSubpixel *sp, const StripeSpan *span, gint i)
     gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
     gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS;
     gdouble inv_dist = 1.0/(MIN(r + 1, sp->yres - 1) - MAX(r - 1, 0));
-    gdouble vv = 0.0, v1 = 0.0, vy = 0.0, vx = 0.0, w1 = 0.0, y1 = 0.0, x1 = 0.0;
-    gdouble yy = 0.0, yx = 0.0, xx = 0.0, w, v, gy, gx;
+    gdouble reg[ROW_REGRESSORS], w;
 
+    memset(terms, 0, ROW_TERMS*sizeof(gdouble));
     for (c = span->col_lo; c < span->col_hi; c++) {
         w = sp->window[c]*tap_validity(sp, r, c);
         pw[c] = w;
-        v = row[c];
-        gy = (below[c] - above[c])*inv_dist;
-        gx = 0.5*(row[c+1] - row[c-1]);
-        wv[c] = w*v;
-        wgy[c] = w*gy;
-        wgx[c] = w*gx;
-        vv += wv[c]*v;
-        v1 += wv[c];
-        vy += wv[c]*gy;
-        vx += wv[c]*gx;
-        w1 += w;
-        y1 += wgy[c];
-        x1 += wgx[c];
-        yy += wgy[c]*gy;
-        yx += wgy[c]*gx;
-        xx += wgx[c]*gx;
+        reg[0] = row[c];
+        reg[1] = 1.0;
+        reg[2] = (below[c] - above[c])*inv_dist;
+        reg[3] = 0.5*(row[c+1] - row[c-1]);
+        for (a = 0; a < TREND_TERMS; a++)
+            reg[4 + a] = sp->trend[a*xres + c];
+        wv[c] = w*reg[0];
+        wgy[c] = w*reg[2];
+        wgx[c] = w*reg[3];
+        for (a = 0; a < ROW_REGRESSORS; a++) {
+            gdouble wa = w*reg[a];
+
+            for (b = a; b < ROW_REGRESSORS; b++)
+                terms[row_term(a, b)] += wa*reg[b];
+        }
     }
-    terms[row_term(0, 0)] = vv;
-    terms[row_term(0, 1)] = v1;
-    terms[row_term(0, 2)] = vy;
-    terms[row_term(0, 3)] = vx;
-    terms[row_term(1, 1)] = w1;
-    terms[row_term(1, 2)] = y1;
-    terms[row_term(1, 3)] = x1;
-    terms[row_term(2, 2)] = yy;
-    terms[row_term(2, 3)] = yx;
-    terms[row_term(3, 3)] = xx;
     centre_row_terms(sp, i);
 }
 
@@ -268,7 +278,7 @@ static gint
 row_regressor_of(gint a, gint *t_power)
 {
     *t_power = (a >= ROW_REGRESSORS);
-    return (a >= ROW_REGRESSORS) ? a - 2 : a;
+    return (a >= ROW_REGRESSORS) ? a - ROW_REGRESSORS + 2 : a;
 }
 
 /* Adds row i's share (at offset t from the centre) to the normal matrix. */
@@ -332,21 +342,20 @@ solve_normal(gdouble normal[MAX_PARAMS][MAX_PARAMS], const gdouble *rhs, gint n,
     return TRUE;
 }
 
-/* The row's dot products with the reference's samples, centred like its
- * regressors (centre_row_terms); dots[1] becomes 0 and dots[4] the sum of
- * the centred samples' squares. */
+/* The row's dot products with the reference's samples (sums[a] for
+ * regressor a, sums[ROW_REGRESSORS] of the samples' squares), centred like
+ * its regressors (centre_row_terms): dots[1] becomes 0 and
+ * dots[ROW_REGRESSORS] the sum of the centred samples' squares. */
 static void
-centre_row_dots(const StripeSubpixel *sp, gint i, gdouble s0, gdouble s1, gdouble s2, gdouble s3,
-                gdouble s4, gdouble *dots)
+centre_row_dots(const StripeSubpixel *sp, gint i, const gdouble *sums, gdouble *dots)
 {
     const gdouble *offset = sp->row_offset + (gsize)i*ROW_REGRESSORS;
-    gdouble w1 = offset[1], mean = (w1 > 0.0) ? s1/w1 : 0.0;
+    gdouble w1 = offset[1], mean = (w1 > 0.0) ? sums[1]/w1 : 0.0;
+    gint a;
 
-    dots[0] = s0 - offset[0]*mean;
-    dots[1] = 0.0;
-    dots[2] = s2 - offset[2]*mean;
-    dots[3] = s3 - offset[3]*mean;
-    dots[4] = s4 - s1*mean;
+    for (a = 0; a < ROW_REGRESSORS; a++)
+        dots[a] = (a == 1) ? 0.0 : sums[a] - offset[a]*mean;
+    dots[ROW_REGRESSORS] = sums[ROW_REGRESSORS] - sums[1]*mean;
 }
 
 /* The row's residual without its own offset: its weighted mean removed. */
@@ -373,9 +382,14 @@ static gdouble
 row_model(const StripeSubpixel *sp, const gdouble *p, gint i, gint c, gdouble t)
 {
     gsize k = (gsize)i*sp->xres + c;
+    gdouble pw = sp->pixel_weight[k], trend = p[1];
+    gint a;
 
-    return (p[0]*sp->weighted_value[k] + p[1]*sp->pixel_weight[k]
-            + (p[2] + t*p[4])*sp->weighted_grad_y[k] + (p[3] + t*p[5])*sp->weighted_grad_x[k]);
+    for (a = 0; a < TREND_TERMS; a++)
+        trend += p[4 + a]*sp->trend[a*sp->xres + c];
+    return (p[0]*sp->weighted_value[k] + pw*trend
+            + (p[2] + t*p[BASE_PARAMS])*sp->weighted_grad_y[k]
+            + (p[3] + t*p[BASE_PARAMS + 1])*sp->weighted_grad_x[k]);
 }
 
 /* Dot products of row i's weighted regressors with the reference sampled
@@ -393,7 +407,9 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     const gdouble *wv = sp->weighted_value + (gsize)i*xres;
     const gdouble *wgy = sp->weighted_grad_y + (gsize)i*xres;
     const gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
-    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, s4 = 0.0, v;
+    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], sums[ROW_REGRESSORS + 1], trend[TREND_TERMS];
+    gdouble s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, ss = 0.0, v, pv;
+    gint a;
     gdouble *col = sp->column;
 
     /* Taps near the reference's edge would read what the filters moved
@@ -410,17 +426,28 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     for (c = span->col_lo + kx - 1; c < span->col_hi + kx + 2; c++)
         col[c] = wy[0]*r0[c] + wy[1]*r1[c] + wy[2]*r2[c] + wy[3]*r3[c];
     col += kx;
+    memset(trend, 0, sizeof(trend));
     for (c = span->col_lo; c < span->col_hi; c++) {
         v = wx[0]*col[c-1] + wx[1]*col[c] + wx[2]*col[c+1] + wx[3]*col[c+2];
+        pv = pw[c]*v;
         s0 += wv[c]*v;
-        s1 += pw[c]*v;
+        s1 += pv;
         s2 += wgy[c]*v;
         s3 += wgx[c]*v;
-        s4 += pw[c]*v*v;
+        for (a = 0; a < TREND_TERMS; a++)
+            trend[a] += pv*sp->trend[a*xres + c];
+        ss += pv*v;
         if (fit)
-            sp->residual[(gsize)i*xres + c] = pw[c]*v - row_model(sp, fit, i, c, t);
+            sp->residual[(gsize)i*xres + c] = pv - row_model(sp, fit, i, c, t);
     }
-    centre_row_dots(sp, i, s0, s1, s2, s3, s4, dots);
+    sums[0] = s0;
+    sums[1] = s1;
+    sums[2] = s2;
+    sums[3] = s3;
+    for (a = 0; a < TREND_TERMS; a++)
+        sums[4 + a] = trend[a];
+    sums[ROW_REGRESSORS] = ss;
+    centre_row_dots(sp, i, sums, dots);
     if (fit)
         centre_row_residual(sp, span, i);
     return TRUE;
@@ -461,8 +488,8 @@ match_step(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, St
         return FALSE;
     step->dy = p[2]/p[0];
     step->dx = p[3]/p[0];
-    step->vy = (n > 4) ? p[4]/p[0] : 0.0;
-    step->vx = (n > 4) ? p[5]/p[0] : 0.0;
+    step->vy = (n > BASE_PARAMS) ? p[BASE_PARAMS]/p[0] : 0.0;
+    step->vx = (n > BASE_PARAMS) ? p[BASE_PARAMS + 1]/p[0] : 0.0;
     return TRUE;
 }
 
@@ -596,9 +623,9 @@ iterate_match(StripeSubpixel *sp, StripeSpan *span, gint anchor_dy, gint anchor_
     for (iter = 0; iter < MAX_ITERATIONS; iter++) {
         /* Once the match moves the stripe half off the reference, it keeps
          * one shift for good (no switching back and forth). */
-        if (span->nparams > 4
+        if (span->nparams > BASE_PARAMS
             && rows_on_reference(sp, span, m->dy) < MIN_VELOCITY_FRACTION*span->height) {
-            span->nparams = 4;
+            span->nparams = BASE_PARAMS;
             m->vy = m->vx = 0.0;
         }
         if (!motion_within_reach(span, m, anchor_dy, anchor_dx, reach)
@@ -617,18 +644,16 @@ iterate_match(StripeSubpixel *sp, StripeSpan *span, gint anchor_dy, gint anchor_
     return iter < MAX_ITERATIONS && motion_within_reach(span, m, anchor_dy, anchor_dx, reach);
 }
 
-gboolean
-stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy, gint anchor_dx,
-                       gint reach, gdouble *dy, gdouble *dx, gdouble *sigma)
+/* The match of image rows first .. end-1 (see stripe_subpixel_refine). */
+static gboolean
+refine_rows(StripeSubpixel *sp, gint first, gint end, gint anchor_dy, gint anchor_dx,
+            gint reach, gdouble *dy, gdouble *dx, gdouble *sigma)
 {
     StripeSpan span;
     StripeMotion m;
     gint margin, i;
     gboolean converged;
 
-    g_return_val_if_fail(sp && first >= 0 && end <= sp->yres, FALSE);
-    g_return_val_if_fail(end - first >= 1 && end - first <= sp->max_height, FALSE);
-    g_return_val_if_fail(reach >= 0, FALSE);
     span.first = first;
     span.height = end - first;
     span.centre = 0.5*(span.height - 1);
@@ -645,16 +670,16 @@ stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy,
     m.dy = *dy;
     m.dx = *dx;
     m.vy = m.vx = 0.0;
-    span.nparams = (span.height >= MIN_ROWS_FOR_VELOCITY) ? MAX_PARAMS : 4;
+    span.nparams = (span.height >= MIN_ROWS_FOR_VELOCITY) ? MAX_PARAMS : BASE_PARAMS;
     converged = iterate_match(sp, &span, anchor_dy, anchor_dx, reach, &m);
     /* Where the frames differ by more than noise, the change of the shift
      * over the rows can be too weakly determined to converge; one shift
      * for the whole stripe still is. */
-    if (!converged && span.nparams > 4) {
+    if (!converged && span.nparams > BASE_PARAMS) {
         m.dy = *dy;
         m.dx = *dx;
         m.vy = m.vx = 0.0;
-        span.nparams = 4;
+        span.nparams = BASE_PARAMS;
         converged = iterate_match(sp, &span, anchor_dy, anchor_dx, reach, &m);
     }
     if (!converged || (sigma && !match_uncertainty(sp, &span, &m, sigma)))
@@ -662,4 +687,26 @@ stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy,
     *dy = m.dy;
     *dx = m.dx;
     return TRUE;
+}
+
+gboolean
+stripe_subpixel_refine(StripeSubpixel *sp, gint first, gint end, gint anchor_dy, gint anchor_dx,
+                       gint reach, gdouble *dy, gdouble *dx, gdouble *sigma)
+{
+    gint m;
+
+    g_return_val_if_fail(sp && first >= 0 && end <= sp->yres, FALSE);
+    g_return_val_if_fail(end - first >= 1 && end - first <= sp->max_height, FALSE);
+    g_return_val_if_fail(reach >= 0, FALSE);
+    /* The filters that conditioned the frames reach edge_margin rows
+     * across the stripe's border, where the drift may have jumped: rows
+     * that near carry a neighbour's shift (0.2-0.7 px off beside a 4-9 px
+     * jump).  They are left out, as many at each end, so the stripe's
+     * centre row stays where it was; where too few rows are left to match
+     * (a stripe half off the reference), the whole stripe is matched. */
+    m = sp->edge_margin;
+    if (end - first - 2*m >= MIN_ROWS_FOR_VELOCITY
+        && refine_rows(sp, first + m, end - m, anchor_dy, anchor_dx, reach, dy, dx, sigma))
+        return TRUE;
+    return refine_rows(sp, first, end, anchor_dy, anchor_dx, reach, dy, dx, sigma);
 }
