@@ -148,6 +148,8 @@ typedef struct {
     const gdouble *t;          /* knot times */
     const gdouble *count;      /* measurements per knot */
     gdouble *robust;           /* robustness weight of each knot, 0 .. 1 */
+    const gboolean *held;      /* knots left out of every fit (weight 0);
+                                  NULL: none */
     gdouble *w;                /* count times robust */
     PenaltyBandRow *coeff;     /* D, row r at columns r .. r+PENALTY_ORDER */
     PenaltyBandRow *band;      /* D'D: band[i][k] = (D'D)_{i,i+k} */
@@ -343,6 +345,7 @@ smoother_init(Smoother *smoother, gint n, const gdouble *t,
     smoother->n = n;
     smoother->t = t;
     smoother->count = count;
+    smoother->held = NULL;
     smoother->coeff = g_new0(PenaltyBandRow, n - PENALTY_ORDER);
     smoother->band = g_new0(PenaltyBandRow, n);
     smoother->lower = g_new0(PenaltyBandRow, n);
@@ -516,6 +519,8 @@ smoother_reweight(Smoother *smoother, const gdouble *y, gboolean redescending)
                                     *(1.0 - a*a/(TUKEY_C*TUKEY_C)) : 0.0);
         else
             weight = (a <= HUBER_K ? 1.0 : HUBER_K/a);
+        if (smoother->held && smoother->held[i])
+            weight = 0.0;
         smoother->change = fmax(smoother->change,
                                 fabs(weight - smoother->robust[i]));
         smoother->robust[i] = weight;
@@ -558,8 +563,8 @@ smoother_fit_robust(Smoother *smoother, const gdouble *y, gdouble lambda,
     gdouble trace, e;
 
     for (i = 0; i < n; i++) {
-        smoother->robust[i] = 1.0;
-        smoother->w[i] = smoother->count[i];
+        smoother->robust[i] = (smoother->held && smoother->held[i]) ? 0.0 : 1.0;
+        smoother->w[i] = smoother->count[i]*smoother->robust[i];
     }
     for (iter = 0; iter < ROBUST_MAX_ITERATIONS; iter++) {
         smoother_fit_weighted(smoother, y, lambda);
@@ -893,30 +898,86 @@ check_measurements(const DriftMeasurement *meas, gint n, GError **error)
     return TRUE;
 }
 
+/* Fits every axis's measured values (2 x n) into trajectory->value;
+ * robust becomes each knot's robustness weight, the smaller of the two
+ * axes'. */
+static void
+smooth_axes(DriftTrajectory *trajectory, Smoother *smoother, const gdouble *measured,
+            gdouble *robust, gdouble *variance, gboolean *cv_interpolates)
+{
+    gint n = trajectory->n, axis, j;
+
+    for (j = 0; j < n; j++)
+        robust[j] = 1.0;
+    for (axis = 0; axis < 2; axis++) {
+        variance[axis] = smoother_fit(smoother, measured + axis*n);
+        cv_interpolates[axis] = smoother->cv_interpolates;
+        memcpy(trajectory->value[axis], smoother->fit, n*sizeof(gdouble));
+        for (j = 0; j < n; j++)
+            robust[j] = fmin(robust[j], smoother->robust[j]);
+    }
+}
+
+/* A local scan that found a wrong particle is wrong on both axes, though
+ * on one of them perhaps by little: two such scans side by side at the
+ * frame's end, 5 and 11 px off in x but 0.5 and 0.9 px in y, outvoted the
+ * good scan beside them on y, which the y fit rejected instead (three
+ * knots at an end cannot tell a bend of the drift from two errors).  So
+ * every knot rejected on either axis is left out of both, the rest fitted,
+ * and a left-out knot taken back where it lies on that fit on both axes
+ * (within the range Tukey's weights give any weight).  FALSE when none is
+ * taken back (the first fit stands). */
+static gboolean
+readmit_knots(DriftTrajectory *trajectory, Smoother *smoother, const gdouble *measured,
+              gboolean *held)
+{
+    gint n = trajectory->n, axis, j;
+    gboolean *fits = g_new(gboolean, n), any = FALSE;
+    gdouble scale;
+
+    for (j = 0; j < n; j++)
+        fits[j] = held[j];
+    smoother->held = held;
+    for (axis = 0; axis < 2; axis++) {
+        smoother_fit(smoother, measured + axis*n);
+        scale = smoother_standardise(smoother, measured + axis*n);
+        for (j = 0; j < n; j++) {
+            fits[j] = fits[j] && (fabs(measured[axis*n + j] - smoother->fit[j])*sqrt(smoother->count[j])
+                                  < TUKEY_C*scale);
+        }
+    }
+    for (j = 0; j < n; j++) {
+        any = any || fits[j];
+        held[j] = held[j] && !fits[j];
+    }
+    g_free(fits);
+    return any;
+}
+
 /* Smooths the knot values of both axes (count: measurements per knot),
  * or interpolates the trusted ones where the estimated noise is the
  * smoothing's bias (interpolate_if_exact()); robust becomes each knot's
- * robustness weight, the smaller of the two axes'. */
+ * robustness weight, the smaller of the two axes'.  Knots rejected on one
+ * axis get a second look (readmit_knots()). */
 static void
 smooth_knots(DriftTrajectory *trajectory, const gdouble *count,
              gdouble *robust)
 {
     gint n = trajectory->n, axis, j;
     gdouble *measured = g_new(gdouble, 2*n), variance[2];
-    gboolean cv_interpolates[2];
+    gboolean cv_interpolates[2], *held = g_new(gboolean, n), any_held = FALSE;
     Smoother smoother;
 
     smoother_init(&smoother, n, trajectory->t, count);
-    for (j = 0; j < n; j++)
-        robust[j] = 1.0;
-    for (axis = 0; axis < 2; axis++) {
+    for (axis = 0; axis < 2; axis++)
         memcpy(measured + axis*n, trajectory->value[axis], n*sizeof(gdouble));
-        variance[axis] = smoother_fit(&smoother, trajectory->value[axis]);
-        cv_interpolates[axis] = smoother.cv_interpolates;
-        memcpy(trajectory->value[axis], smoother.fit, n*sizeof(gdouble));
-        for (j = 0; j < n; j++)
-            robust[j] = fmin(robust[j], smoother.robust[j]);
+    smooth_axes(trajectory, &smoother, measured, robust, variance, cv_interpolates);
+    for (j = 0; j < n; j++) {
+        held[j] = (robust[j] < DRIFT_TRAJECTORY_DOWNWEIGHTED);
+        any_held = any_held || held[j];
     }
+    if (any_held && readmit_knots(trajectory, &smoother, measured, held))
+        smooth_axes(trajectory, &smoother, measured, robust, variance, cv_interpolates);
     smoother_clear(&smoother);
     for (axis = 0; axis < 2; axis++) {
         if (cv_interpolates[axis]) {
@@ -924,6 +985,7 @@ smooth_knots(DriftTrajectory *trajectory, const gdouble *count,
                                  variance[axis], trajectory->value[axis]);
         }
     }
+    g_free(held);
     g_free(measured);
 }
 
