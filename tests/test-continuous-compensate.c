@@ -372,13 +372,14 @@ END_TEST
  * stripe does not: over 300 seeds the ratio had p99 0.044 and max 0.055,
  * the particle error max 0.107 px, so 0.05 and 0.1 failed about one seed
  * in a hundred without anything being wrong.  Loop 1: anywhere, also the
- * first two stripes, which leaves the top of the frame, where settling
- * bends most, to extrapolation: still far better than paper mode.  Not the
- * first three: a settling drift bends mostly within its first 20-40 % of
- * the frame (tau), and with no measurement before 35 % of it no method
- * knows how (a 500-seed soak drew them 3 times: particles 0.41-0.57 px
- * off, paper mode 1.8-2.6 px); that is an extrapolation of unobserved
- * drift, not the bridging of blank stripes this test is about. */
+ * first or the second stripe, which leaves the top of the frame, where
+ * settling bends most, to extrapolation: still far better than paper mode.
+ * Not both: a settling drift bends mostly within its first 20-40 % of the
+ * frame (tau), and with no measurement before 25 % of it no method knows
+ * how (soaks of 500 and 400 seeds drew stripes 0, 1 and 2 three times and
+ * 0, 1 and 6 once: particles 0.41-0.58 px off, paper mode 1.8-2.6 px);
+ * that is an extrapolation of unobserved drift, not the bridging of blank
+ * stripes this test is about. */
 START_TEST(test_accuracy_blank_stripes)
 {
     GRand *rng = test_rand(30 + _i);
@@ -393,7 +394,7 @@ START_TEST(test_accuracy_blank_stripes)
             s = g_rand_int_range(rng, 0, 10);
         } while (blank[s]
                  || (_i == 0 && (s == 0 || s == 9 || blank[s-1] || blank[s+1]))
-                 || (s <= 2 && blank[0] + blank[1] + blank[2] == 2));
+                 || (s <= 1 && blank[1 - s]));
         blank[s] = TRUE;
     }
     printf("blank stripes:");
