@@ -407,8 +407,7 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     const gdouble *wv = sp->weighted_value + (gsize)i*xres;
     const gdouble *wgy = sp->weighted_grad_y + (gsize)i*xres;
     const gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
-    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], sums[ROW_REGRESSORS + 1], trend[TREND_TERMS];
-    gdouble s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, ss = 0.0, v, pv;
+    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], sums[ROW_REGRESSORS + 1], v, pv;
     gint a;
     gdouble *col = sp->column;
 
@@ -426,27 +425,20 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     for (c = span->col_lo + kx - 1; c < span->col_hi + kx + 2; c++)
         col[c] = wy[0]*r0[c] + wy[1]*r1[c] + wy[2]*r2[c] + wy[3]*r3[c];
     col += kx;
-    memset(trend, 0, sizeof(trend));
+    memset(sums, 0, sizeof(sums));
     for (c = span->col_lo; c < span->col_hi; c++) {
         v = wx[0]*col[c-1] + wx[1]*col[c] + wx[2]*col[c+1] + wx[3]*col[c+2];
         pv = pw[c]*v;
-        s0 += wv[c]*v;
-        s1 += pv;
-        s2 += wgy[c]*v;
-        s3 += wgx[c]*v;
+        sums[0] += wv[c]*v;
+        sums[1] += pv;
+        sums[2] += wgy[c]*v;
+        sums[3] += wgx[c]*v;
         for (a = 0; a < TREND_TERMS; a++)
-            trend[a] += pv*sp->trend[a*xres + c];
-        ss += pv*v;
+            sums[4 + a] += pv*sp->trend[a*xres + c];
+        sums[ROW_REGRESSORS] += pv*v;
         if (fit)
             sp->residual[(gsize)i*xres + c] = pv - row_model(sp, fit, i, c, t);
     }
-    sums[0] = s0;
-    sums[1] = s1;
-    sums[2] = s2;
-    sums[3] = s3;
-    for (a = 0; a < TREND_TERMS; a++)
-        sums[4 + a] = trend[a];
-    sums[ROW_REGRESSORS] = ss;
     centre_row_dots(sp, i, sums, dots);
     if (fit)
         centre_row_residual(sp, span, i);
