@@ -29,7 +29,7 @@
  * The model is: the reference, sampled with Keys' cubic kernel at
  * (r - dy - vy t, c - dx - vx t), t = r - centre, equals gain*stripe + offset
  * + trend(c) over the stripe's pixels, weighted by the column window,
- * with trend a sum of slow cosines along x.  The two frames of a raw channel
+ * with trend a polynomial of low degree along x.  The two frames of a raw channel
  * carry planes and bows of their own (the scanner's tilt and bow, slow
  * undulation), which no levelling can take from one frame without moving
  * with its content; fitted here, as nuisances beside the shift, they take
@@ -44,13 +44,15 @@
  * on the approximation.
  */
 
-/* Unknowns: gain, offset, gain times the steps of dy, dx, the x trend's
- * coefficients and gain times the steps of vy, vx. */
-/* The x trend: cosines of 1 to TREND_TERMS half periods over the frame's
- * width, down to half the width for 4 (a plane and a bow take the first
- * two; slow undulation the rest); more cost time and precision. */
+/* The x trend: Legendre polynomials of degree 1 to TREND_TERMS in the
+ * column scaled to [-1, 1].  A plane and a bow take the first two, exactly,
+ * as the conditioning removes them from one frame and perhaps not from
+ * the other (frame-conditioning.c); slow undulation the rest.  More terms
+ * cost time and precision. */
 #define TREND_TERMS 4
 
+/* Unknowns: gain, offset, gain times the steps of dy, dx, the x trend's
+ * coefficients and gain times the steps of vy, vx. */
 enum {
     ROW_REGRESSORS = 4 + TREND_TERMS,  /* stripe, 1, d/dy, d/dx, the x trend;
                                           d/dy and d/dx times t too */
@@ -149,9 +151,16 @@ stripe_subpixel_new(const gdouble *image, const gdouble *reference, const gdoubl
     sp->row_offset = g_new(gdouble, (gsize)max_height*ROW_REGRESSORS);
     sp->column = g_new(gdouble, xres);
     sp->trend = g_new(gdouble, TREND_TERMS*(gsize)xres);
-    for (gint k = 0; k < TREND_TERMS; k++) {
-        for (gint c = 0; c < xres; c++)
-            sp->trend[k*xres + c] = cos((k + 1)*G_PI*(c + 0.5)/xres);
+    for (gint c = 0; c < xres; c++) {
+        gdouble u = (xres > 1) ? 2.0*c/(xres - 1) - 1.0 : 0.0, p0 = 1.0, p1 = u, p2;
+
+        /* Bonnet's recursion: (k + 1) P_{k+1} = (2k + 1) u P_k - k P_{k-1}. */
+        for (gint k = 1; k <= TREND_TERMS; k++) {
+            sp->trend[(k - 1)*xres + c] = p1;
+            p2 = ((2*k + 1)*u*p1 - k*p0)/(k + 1);
+            p0 = p1;
+            p1 = p2;
+        }
     }
     sp->row_dropped = g_new(gboolean, max_height);
     return sp;
