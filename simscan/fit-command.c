@@ -14,6 +14,7 @@
 #include "option-values.h"
 #include "output-files.h"
 #include "frame-series-load.h"
+#include "series-options.h"
 #include "fit-command.h"
 #include "quoted-input.h"
 
@@ -25,17 +26,13 @@
 /* Lines a registered block needs at least. */
 #define MIN_BLOCK_LINES 4
 
-/* Options of the command line.  Numbers stay text until checked, so that an
- * option given with any value counts as given. */
+/* Options of the command line beyond the series' (series-options.h).
+ * Numbers stay text until checked, so that an option given with any value
+ * counts as given. */
 typedef struct {
     gchar *json;
-    gchar *line_time;
-    gchar *frame_times;
-    gchar *direction;
-    gchar *channel;
-    gchar *channels;
+    SeriesArgs series;
     gchar *blocks;
-    gboolean keep_duplicates;
     gchar *bic_margin;
 } FitArgs;
 
@@ -46,16 +43,10 @@ typedef struct {
 } FitNumbers;
 
 static gboolean
-parse_fit_numbers(const FitArgs *args, FrameSeriesOptions *options,
-                  FitNumbers *numbers, GError **error)
+parse_fit_numbers(const FitArgs *args, FitNumbers *numbers, GError **error)
 {
     numbers->blocks = 0;
     numbers->bic_margin = -1.0;
-    if (args->line_time
-        && !option_value_parse_double(args->line_time, 0.0, 1e6, TRUE,
-                                      "line-time", &options->line_time,
-                                      error))
-        return FALSE;
     if (args->bic_margin
         && !option_value_parse_double(args->bic_margin, 0.0, 1e6, FALSE,
                                       "bic-margin", &numbers->bic_margin,
@@ -97,93 +88,11 @@ choose_blocks(const FrameSeries *series, gint wanted, gint *n_blocks,
 }
 
 static gboolean
-parse_frame_times(const gchar *text, FrameSeriesOptions *options,
-                  GError **error)
-{
-    gchar **parts = g_strsplit(text, ",", -1);
-    gint i, n = g_strv_length(parts);
-
-    options->frame_times = g_new(gdouble, MAX(n, 1));
-    options->n_frame_times = n;
-    for (i = 0; i < n; i++) {
-        gchar *end;
-
-        options->frame_times[i] = g_ascii_strtod(parts[i], &end);
-        if (end == parts[i] || *end || !isfinite(options->frame_times[i])) {
-            gchar *quoted = quoted_input_excerpt(parts[i], -1);
-
-            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
-                        _("--frame-times: '%s' is not a number"), quoted);
-            g_free(quoted);
-            g_strfreev(parts);
-            return FALSE;
-        }
-    }
-    g_strfreev(parts);
-    return TRUE;
-}
-
-static gboolean
-parse_channel_id(const gchar *text, gint *id)
-{
-    guint64 v;
-
-    if (!g_ascii_string_to_unsigned(text, 10, 0, G_MAXINT, &v, NULL))
-        return FALSE;
-    *id = (gint)v;
-    return TRUE;
-}
-
-static gboolean
-parse_channel_range(const gchar *text, FrameSeriesOptions *options,
-                    GError **error)
-{
-    const gchar *dash = strchr(text, '-');
-    gchar *first = dash ? g_strndup(text, dash - text) : g_strdup(text);
-    gboolean ok;
-
-    ok = parse_channel_id(first, &options->first_id);
-    if (ok && dash)
-        ok = parse_channel_id(dash + 1, &options->last_id);
-    else
-        options->last_id = options->first_id;
-    g_free(first);
-    if (!ok || options->last_id < options->first_id) {
-        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
-                    _("--channels: '%s' is not a range FIRST-LAST of "
-                      "channel ids"), text);
-        return FALSE;
-    }
-    return TRUE;
-}
-
-static gboolean
 args_to_options(const FitArgs *args, FrameSeriesOptions *options,
                 FitNumbers *numbers, GError **error)
 {
-    frame_series_options_init(options);
-    if (!parse_fit_numbers(args, options, numbers, error))
-        return FALSE;
-    if (args->direction) {
-        if (g_ascii_strcasecmp(args->direction, "down") == 0)
-            options->direction = SCAN_DIRECTION_DOWN;
-        else if (g_ascii_strcasecmp(args->direction, "up") == 0)
-            options->direction = SCAN_DIRECTION_UP;
-        else {
-            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
-                        _("--direction must be down or up, not '%s'"),
-                        args->direction);
-            return FALSE;
-        }
-    }
-    options->channel = args->channel;
-    options->keep_duplicates = args->keep_duplicates;
-    if (args->channels && !parse_channel_range(args->channels, options, error))
-        return FALSE;
-    if (args->frame_times && !parse_frame_times(args->frame_times, options,
-                                                error))
-        return FALSE;
-    return TRUE;
+    return (series_args_to_options(&args->series, options, error)
+            && parse_fit_numbers(args, numbers, error));
 }
 
 static gboolean
@@ -256,7 +165,7 @@ run_fit(const FitArgs *args, gchar **files, gint n_files, GError **error)
 end:
     fit_report_clear(&report);
     frame_series_free(series);
-    g_free(soptions.frame_times);
+    series_args_clear(NULL, &soptions);
     return ok;
 }
 
@@ -295,27 +204,14 @@ ensure_gwyddion(void)
 int
 simscan_fit_main(int argc, char **argv)
 {
-    FitArgs args = { NULL, NULL, NULL, NULL, NULL, NULL, NULL, FALSE, NULL };
+    FitArgs args;
     gchar **files = NULL;
     GOptionEntry entries[] = {
         { "json", 0, 0, G_OPTION_ARG_FILENAME, &args.json,
           N_("Write the JSON to FILE (default: standard output)"), N_("FILE") },
-        { "line-time", 0, 0, G_OPTION_ARG_STRING, &args.line_time,
-          N_("Seconds per scan line, trace and retrace together"), N_("S") },
-        { "frame-times", 0, 0, G_OPTION_ARG_STRING, &args.frame_times,
-          N_("Start time of each frame, seconds"), N_("T0,T1,...") },
-        { "direction", 0, 0, G_OPTION_ARG_STRING, &args.direction,
-          N_("Slow-scan direction"), N_("down|up") },
-        { "channel", 0, 0, G_OPTION_ARG_STRING, &args.channel,
-          N_("Channel title (a one-file series: the title followed by a "
-             "number matches too)"), N_("TITLE") },
-        { "channels", 0, 0, G_OPTION_ARG_STRING, &args.channels,
-          N_("Channel ids of a one-file series"), N_("FIRST-LAST") },
         { "blocks", 0, 0, G_OPTION_ARG_STRING, &args.blocks,
           N_("Blocks of lines registered per frame, each at least 4 lines "
              "(default 16, fewer in frames under 64 lines)"), N_("N") },
-        { "keep-duplicates", 0, 0, G_OPTION_ARG_NONE, &args.keep_duplicates,
-          N_("Keep frames whose data are identical"), NULL },
         { "bic-margin", 0, 0, G_OPTION_ARG_STRING, &args.bic_margin,
           N_("BIC gain an effect needs over constant drift, 0 or more "
              "(default 20)"),
@@ -328,11 +224,14 @@ simscan_fit_main(int argc, char **argv)
     GError *error = NULL;
     gint status = 1;
 
+    memset(&args, 0, sizeof(args));
+
     /* The FRAME... entry names the arguments itself. */
     context = g_option_context_new(_("- fit drift models to a time series of "
                                      "frames"));
     g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
     g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
+    series_args_add_entries(context, &args.series);
     if (!g_option_context_parse(context, &argc, &argv, &error))
         goto end;
     if (!files || !files[0]) {
@@ -354,11 +253,7 @@ end:
     g_option_context_free(context);
     g_strfreev(files);
     g_free(args.json);
-    g_free(args.frame_times);
-    g_free(args.direction);
-    g_free(args.channel);
-    g_free(args.channels);
-    g_free(args.line_time);
+    series_args_clear(&args.series, NULL);
     g_free(args.blocks);
     g_free(args.bic_margin);
     return status;

@@ -27,6 +27,7 @@
 #include "library-log.h"
 #include "quoted-input.h"
 #include "safe-output.h"
+#include "series-command.h"
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -921,6 +922,11 @@ main(int argc, char *argv[])
 
     init_i18n();
     library_log_capture(PROGRAM_NAME, FALSE);
+    if (argc > 1 && strcmp(argv[1], "series") == 0) {
+        status = series_command_main(argc - 1, argv + 1);
+        gwy_app_settings_free();
+        return status;
+    }
     if (!parse_options(&argc, &argv, &error)) {
         status = EXIT_USAGE;
         goto end;

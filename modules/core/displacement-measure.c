@@ -19,7 +19,7 @@ displacement_options_init(DisplacementOptions *options)
     options->max_shift = 0.25;
     options->block_range = 0.08;
     options->min_score = 0.3;
-    options->all_pairs = TRUE;
+    options->pair_reach = 0;
     options->smooth = 0.01;
 }
 
@@ -229,8 +229,10 @@ displacement_measure_series(const FrameSeries *series,
      * may exceed any blind search range. */
     for (k = 1; k < nf; k++)
         measure_pair(series, k, k-1, options, NULL, step + 3*k, out);
-    for (k = 2; k < nf && options->all_pairs; k++) {
-        for (j = k-2; j >= 0; j--) {
+    for (k = 2; k < nf; k++) {
+        gint reach = options->pair_reach > 0 ? options->pair_reach : k;
+
+        for (j = k-2; j >= MAX(k - reach, 0); j--) {
             guess[0] = guess[1] = 0.0;
             if (j == k-2) {
                 guess[0] = step[3*k] + step[3*(k-1)];

@@ -22,8 +22,9 @@ typedef struct {
                                (default 0.08, at least 4 px) */
     gdouble min_score;      /* accepted blocks correlating worse are
                                dropped too (0.3) */
-    gboolean all_pairs;     /* every earlier frame as reference (default);
-                               else only the previous one */
+    gint pair_reach;        /* frames are registered against the earlier
+                               frames up to this many apart; 0 (default):
+                               every earlier frame */
     gdouble smooth;         /* Gaussian blur before registration, fraction of
                                the smaller physical side (default 0.01) */
 } DisplacementOptions;

@@ -153,13 +153,11 @@ add_frames(JsonBuilder *b, const FrameSeries *series)
     json_builder_end_array(b);
 }
 
-gchar*
-fit_report_to_json(const FitReport *report, const FrameSeries *series)
+void
+fit_report_add_members(JsonBuilder *b, const FitReport *report)
 {
-    JsonBuilder *b = json_builder_new();
     gint i, used = 0;
 
-    json_builder_begin_object(b);
     json_builder_set_member_name(b, "effect");
     json_builder_add_string_value(b, report->chosen >= 0
                                   ? drift_model_type_name(report->fits[report->chosen].type)
@@ -173,6 +171,15 @@ fit_report_to_json(const FitReport *report, const FrameSeries *series)
     json_builder_add_int_value(b, report->n_meas);
     json_builder_set_member_name(b, "n_measurements_used");
     json_builder_add_int_value(b, used);
+}
+
+gchar*
+fit_report_to_json(const FitReport *report, const FrameSeries *series)
+{
+    JsonBuilder *b = json_builder_new();
+
+    json_builder_begin_object(b);
+    fit_report_add_members(b, report);
     if (series)
         add_frames(b, series);
     json_builder_end_object(b);

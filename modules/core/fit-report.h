@@ -9,6 +9,7 @@
 #define LOCALSCAN_FIT_REPORT_H
 
 #include <glib.h>
+#include <json-glib/json-glib.h>
 #include "frame-series.h"
 #include "displacement-measure.h"
 #include "drift-fit.h"
@@ -33,6 +34,10 @@ gboolean  fit_report_compute  (const FrameSeries *series,
                                const DriftFitOptions *foptions,
                                FitReport *report);
 void      fit_report_clear    (FitReport *report);
+/* The fit's members of that JSON (effect, parameters, velocity_nm_per_s,
+ * models, measurement counts) into an object being built. */
+void      fit_report_add_members(JsonBuilder *builder,
+                                 const FitReport *report);
 /* The JSON of docs/cli.md (plus frames, notes and measurement counts). */
 gchar*    fit_report_to_json  (const FitReport *report,
                                const FrameSeries *series);

@@ -164,7 +164,8 @@ fields_identical(GwyDataField *a, GwyDataField *b)
 /* Appends one channel as a frame, with its metadata timing. */
 static void
 append_channel(FrameSeries *series, GwyContainer *data, gint id,
-               const gchar *filename, gboolean with_title, MetaTiming *mts)
+               const gchar *filename, gint file_index, gboolean with_title,
+               MetaTiming *mts)
 {
     GwyDataField *field = localscan_channel_item(data, id, "data");
     gchar *base = g_path_get_basename(filename);
@@ -176,6 +177,7 @@ append_channel(FrameSeries *series, GwyContainer *data, gint id,
                        : g_strdup(base);
     frame_series_append(series, field, label, NULL);
     series->frames[series->n_frames-1].channel_id = id;
+    series->frames[series->n_frames-1].file_index = file_index;
     read_meta_timing(localscan_channel_item(data, id, "meta"),
                      gwy_data_field_get_yres(field), mt);
     g_free(label);
@@ -196,6 +198,43 @@ first_channel_id(GwyContainer *data, const gchar *wanted)
     }
     g_free(ids);
     return found;
+}
+
+static gboolean
+has_channel(GwyContainer *data, gint id)
+{
+    return id >= 0 && localscan_channel_item(data, id, "data") != NULL;
+}
+
+/* The channels listed by id, in the order given. */
+static gboolean
+load_listed_channels(FrameSeries *series, GwyContainer *data,
+                     const gchar *filename, const FrameSeriesOptions *options,
+                     MetaTiming **mts, GError **error)
+{
+    GwyDataField *first = NULL, *field;
+    gint i, id;
+
+    *mts = g_new0(MetaTiming, options->n_channel_ids + 1);
+    for (i = 0; i < options->n_channel_ids; i++) {
+        id = options->channel_ids[i];
+        if (!has_channel(data, id)) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                        _("%s: no channel %d"), filename, id);
+            return FALSE;
+        }
+        field = localscan_channel_item(data, id, "data");
+        if (first && !fields_alike(first, field)) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
+                        _("%s: channel %d (%s) differs in size or pixel size "
+                          "from the first frame"),
+                        filename, id, localscan_channel_title(data, id));
+            return FALSE;
+        }
+        first = first ? first : field;
+        append_channel(series, data, id, filename, 0, TRUE, *mts);
+    }
+    return TRUE;
 }
 
 static gboolean
@@ -235,7 +274,7 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
             g_free(ids);
             return FALSE;
         }
-        append_channel(series, data, ids[i], filename, TRUE, *mts);
+        append_channel(series, data, ids[i], filename, 0, TRUE, *mts);
     }
     g_free(ids);
     return TRUE;
@@ -251,7 +290,17 @@ load_one_channel_per_file(FrameSeries *series, gchar **filenames, gint n_files,
 
     *mts = g_new0(MetaTiming, MAX(n_files, 1));
     for (k = 0; k < n_files; k++) {
-        id = first_channel_id(datas[k], options->channel);
+        if (options->n_channel_ids) {
+            id = options->channel_ids[0];
+            if (!has_channel(datas[k], id)) {
+                g_set_error(error, FRAME_SERIES_ERROR,
+                            FRAME_SERIES_ERROR_CHANNEL,
+                            _("%s: no channel %d"), filenames[k], id);
+                return FALSE;
+            }
+        }
+        else
+            id = first_channel_id(datas[k], options->channel);
         if (id < 0) {
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                         _("%s: no channel %s"), filenames[k],
@@ -265,7 +314,7 @@ load_one_channel_per_file(FrameSeries *series, gchar **filenames, gint n_files,
                           "from %s"), filenames[k], filenames[0]);
             return FALSE;
         }
-        append_channel(series, datas[k], id, filenames[k], FALSE, *mts);
+        append_channel(series, datas[k], id, filenames[k], k, FALSE, *mts);
     }
     return TRUE;
 }
@@ -430,7 +479,10 @@ frame_series_from_files(GwyContainer **datas, gchar **filenames,
                     _("no frames given"));
         goto fail;
     }
-    if (n_files == 1)
+    if (n_files == 1 && options->n_channel_ids)
+        ok = load_listed_channels(series, datas[0], filenames[0], options,
+                                  &mts, error);
+    else if (n_files == 1)
         ok = load_channels_of_one_file(series, datas[0], filenames[0],
                                        options, &mts, error);
     else

@@ -37,6 +37,7 @@ typedef struct {
     GwyDataField *field;          /* a reference is held */
     gchar *label;                 /* "file" or "file:channel title" */
     gint channel_id;
+    gint file_index;              /* the file it came from */
     ScanTiming timing;            /* frame_start relative to the first frame */
     gdouble absolute_start;       /* s, metadata clock (NaN when unknown) */
     FrameTimeSource start_source;
@@ -62,6 +63,10 @@ typedef struct {
                                      frame_series_from_files */
     gint first_id, last_id;       /* channel id range in a one-file series;
                                      -1: no limit */
+    const gint *channel_ids;      /* a one-file series: these channels, in
+                                     this order; several files: the first
+                                     names the channel of every file */
+    gint n_channel_ids;           /* 0: not given */
     gboolean keep_duplicates;     /* keep frames with bit-identical data */
 } FrameSeriesOptions;
 

@@ -1,0 +1,44 @@
+/*
+ *  The options that say which frames form a series and when they were
+ *  scanned, shared by `gwy-localscan series` and `simscan fit`
+ *  (docs/series.md): one parser, one set of messages.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef LOCALSCAN_SERIES_OPTIONS_H
+#define LOCALSCAN_SERIES_OPTIONS_H
+
+#include <glib.h>
+#include "frame-series.h"
+
+G_BEGIN_DECLS
+
+/* The options as given: text until series_args_to_options() checks it, so
+ * that an option given with any value counts as given. */
+typedef struct {
+    gchar *line_time;
+    gchar *frame_times;
+    gchar *direction;
+    gchar *channel;
+    gchar *channels;
+    gboolean keep_duplicates;
+} SeriesArgs;
+
+/* Adds --line-time, --frame-times, --direction, -c/--channel, --channels
+ * and --keep-duplicates to the context's main group. */
+void      series_args_add_entries (GOptionContext *context,
+                                   SeriesArgs *args);
+
+/* Checks the options into options (initialised here); the frame time and
+ * channel id arrays belong to options until series_args_clear(). */
+gboolean  series_args_to_options  (const SeriesArgs *args,
+                                   FrameSeriesOptions *options,
+                                   GError **error);
+
+/* Frees what args (may be NULL) and options (may be NULL) hold. */
+void      series_args_clear       (SeriesArgs *args,
+                                   FrameSeriesOptions *options);
+
+G_END_DECLS
+
+#endif
