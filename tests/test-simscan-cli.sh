@@ -186,9 +186,9 @@ fit_bad_case() {
     [ ! -e "$tmp/fit-e.json" ] || fail "fit $* wrote its JSON"
 }
 fit_timing="--line-time 1 --frame-times 0,100,200"
-fit_bad_case "--line-time: " --line-time 0 --frame-times 0,100,200 $fit_frames
-fit_bad_case "--line-time: " --line-time -0 --frame-times 0,100,200 $fit_frames
-fit_bad_case "--line-time: " --line-time nan --frame-times 0,100,200 $fit_frames
+fit_bad_case "--line-time must be a number of seconds" --line-time 0 --frame-times 0,100,200 $fit_frames
+fit_bad_case "--line-time must be a number of seconds" --line-time -0 --frame-times 0,100,200 $fit_frames
+fit_bad_case "--line-time must be a number of seconds" --line-time nan --frame-times 0,100,200 $fit_frames
 fit_bad_case "--bic-margin" $fit_timing --bic-margin nan $fit_frames
 fit_bad_case "--bic-margin" $fit_timing --bic-margin -1 $fit_frames
 fit_bad_case "--blocks" $fit_timing --blocks 0 $fit_frames

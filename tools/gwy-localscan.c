@@ -28,6 +28,7 @@
 #include "quoted-input.h"
 #include "safe-output.h"
 #include "series-command.h"
+#include "series-options.h"
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -362,52 +363,30 @@ check_outputs_distinct(GError **error)
     return ok;
 }
 
-/* A whole argument that is a finite number within [min, max]. */
-static gboolean
-parse_seconds(const gchar *option, const gchar *arg, gdouble min, gdouble max, gdouble *value,
-              GError **error)
-{
-    gchar *end;
-    gdouble v = g_ascii_strtod(arg, &end);
-
-    if (end == arg || *end || !isfinite(v) || v < min || v > max) {
-        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
-                    _("%s must be a number of seconds from %g to %g, not '%s'"),
-                    option, min, max, arg);
-        return FALSE;
-    }
-    *value = v;
-    return TRUE;
-}
-
 static gboolean
 parse_timing_options(GError **error)
 {
     TimingFallback *tf = &timing_fallback;
 
     if (options.line_time_arg) {
-        if (!parse_seconds("--line-time", options.line_time_arg,
+        if (!series_options_parse_seconds("--line-time", options.line_time_arg,
                            LOCALSCAN_LINE_TIME_MIN, LOCALSCAN_LINE_TIME_MAX, &tf->line_time, error))
             return FALSE;
         tf->given |= LOCALSCAN_TIMING_LINE_TIME;
     }
     if (options.frame_start_arg) {
-        if (!parse_seconds("--frame-start", options.frame_start_arg,
+        if (!series_options_parse_seconds("--frame-start", options.frame_start_arg,
                            LOCALSCAN_FRAME_START_MIN, LOCALSCAN_FRAME_START_MAX,
                            &tf->frame_start, error))
             return FALSE;
         tf->given |= LOCALSCAN_TIMING_FRAME_START;
     }
     if (options.direction_name) {
-        if (gwy_strequal(options.direction_name, "down"))
-            tf->direction = SCAN_DIRECTION_DOWN;
-        else if (gwy_strequal(options.direction_name, "up"))
-            tf->direction = SCAN_DIRECTION_UP;
-        else {
-            g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
-                        _("unknown direction '%s' (known: down, up)"), options.direction_name);
+        gint direction;
+
+        if (!series_options_parse_direction(options.direction_name, &direction, error))
             return FALSE;
-        }
+        tf->direction = direction;
         tf->given |= LOCALSCAN_TIMING_DIRECTION;
     }
     return TRUE;

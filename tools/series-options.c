@@ -7,11 +7,9 @@
 #include <string.h>
 #include <math.h>
 #include "quoted-input.h"
+#include "localscan-params.h"
 #include "series-options.h"
 #include "localscan-intl.h"
-
-/* Longer than any scan line of any instrument, and squares stay finite. */
-#define LINE_TIME_MAX 1e6
 
 void
 series_args_add_entries(GOptionContext *context, SeriesArgs *args)
@@ -46,21 +44,49 @@ refuse(const gchar *option, const gchar *text, const gchar *what,
 {
     gchar *quoted = quoted_input_excerpt(text, -1);
 
-    g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+    g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
                 "--%s: '%s' %s", option, quoted, what);
     g_free(quoted);
     return FALSE;
 }
 
-static gboolean
-parse_number(const gchar *option, const gchar *text, gdouble *value,
-             GError **error)
+gboolean
+series_options_parse_seconds(const gchar *option, const gchar *text,
+                             gdouble min, gdouble max, gdouble *value,
+                             GError **error)
 {
-    gchar *end;
+    gchar *end, *quoted;
+    gdouble v = g_ascii_strtod(text, &end);
 
-    *value = g_ascii_strtod(text, &end);
-    if (end == text || *end || !isfinite(*value))
-        return refuse(option, text, _("is not a number"), error);
+    if (end == text || *end || !isfinite(v) || v < min || v > max) {
+        quoted = quoted_input_excerpt(text, -1);
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("%s must be a number of seconds from %g to %g, not '%s'"),
+                    option, min, max, quoted);
+        g_free(quoted);
+        return FALSE;
+    }
+    *value = v;
+    return TRUE;
+}
+
+gboolean
+series_options_parse_direction(const gchar *text, gint *direction,
+                               GError **error)
+{
+    gchar *quoted;
+
+    if (g_ascii_strcasecmp(text, "down") == 0)
+        *direction = SCAN_DIRECTION_DOWN;
+    else if (g_ascii_strcasecmp(text, "up") == 0)
+        *direction = SCAN_DIRECTION_UP;
+    else {
+        quoted = quoted_input_excerpt(text, -1);
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("unknown direction '%s' (known: down, up)"), quoted);
+        g_free(quoted);
+        return FALSE;
+    }
     return TRUE;
 }
 
@@ -74,8 +100,10 @@ parse_frame_times(const gchar *text, FrameSeriesOptions *options,
     options->frame_times = g_new(gdouble, MAX(n, 1));
     options->n_frame_times = n;
     for (i = 0; i < n; i++) {
-        if (!parse_number("frame-times", parts[i], options->frame_times + i,
-                          error)) {
+        if (!series_options_parse_seconds("--frame-times", parts[i],
+                                          LOCALSCAN_FRAME_START_MIN,
+                                          LOCALSCAN_FRAME_START_MAX,
+                                          options->frame_times + i, error)) {
             g_strfreev(parts);
             return FALSE;
         }
@@ -136,31 +164,6 @@ parse_channels(const gchar *text, FrameSeriesOptions *options,
     return TRUE;
 }
 
-static gboolean
-parse_direction(const gchar *text, FrameSeriesOptions *options,
-                GError **error)
-{
-    if (g_ascii_strcasecmp(text, "down") == 0)
-        options->direction = SCAN_DIRECTION_DOWN;
-    else if (g_ascii_strcasecmp(text, "up") == 0)
-        options->direction = SCAN_DIRECTION_UP;
-    else
-        return refuse("direction", text, _("is neither down nor up"), error);
-    return TRUE;
-}
-
-static gboolean
-parse_line_time(const gchar *text, FrameSeriesOptions *options,
-                GError **error)
-{
-    if (!parse_number("line-time", text, &options->line_time, error))
-        return FALSE;
-    if (!(options->line_time > 0.0 && options->line_time <= LINE_TIME_MAX))
-        return refuse("line-time", text,
-                      _("is not a time above 0 and up to 1e6 s"), error);
-    return TRUE;
-}
-
 gboolean
 series_args_to_options(const SeriesArgs *args, FrameSeriesOptions *options,
                        GError **error)
@@ -169,9 +172,15 @@ series_args_to_options(const SeriesArgs *args, FrameSeriesOptions *options,
 
     frame_series_options_init(options);
     options->keep_duplicates = args->keep_duplicates;
-    if (args->line_time && !parse_line_time(args->line_time, options, error))
+    if (args->line_time
+        && !series_options_parse_seconds("--line-time", args->line_time,
+                                         LOCALSCAN_LINE_TIME_MIN,
+                                         LOCALSCAN_LINE_TIME_MAX,
+                                         &options->line_time, error))
         return FALSE;
-    if (args->direction && !parse_direction(args->direction, options, error))
+    if (args->direction
+        && !series_options_parse_direction(args->direction,
+                                           &options->direction, error))
         return FALSE;
     if (args->frame_times
         && !parse_frame_times(args->frame_times, options, error))

@@ -24,6 +24,19 @@ typedef struct {
     gboolean keep_duplicates;
 } SeriesArgs;
 
+/* A whole argument that is a finite number of seconds within [min, max];
+ * the message names option ("--line-time"). */
+gboolean  series_options_parse_seconds  (const gchar *option,
+                                         const gchar *text,
+                                         gdouble min,
+                                         gdouble max,
+                                         gdouble *value,
+                                         GError **error);
+/* "down" or "up" (any case) as a ScanDirection. */
+gboolean  series_options_parse_direction(const gchar *text,
+                                         gint *direction,
+                                         GError **error);
+
 /* Adds --line-time, --frame-times, --direction, -c/--channel, --channels
  * and --keep-duplicates to the context's main group. */
 void      series_args_add_entries (GOptionContext *context,
