@@ -306,6 +306,16 @@ frame_pair_add_raw_artefacts(FramePair *pair, gdouble size, guint32 seed)
 }
 
 void
+frame_add_raw_artefacts(gdouble *data, gint xres, gint yres, gdouble size,
+                        guint32 seed)
+{
+    GRand *rng = g_rand_new_with_seed(seed ^ 0x5eedu);
+
+    add_frame_artefacts(data, xres, yres, size, rng);
+    g_rand_free(rng);
+}
+
+void
 frame_pair_add_undulation(FramePair *pair, gdouble size, guint32 seed)
 {
     add_to_both_frames(pair, add_frame_undulation, size, seed ^ 0x0dd1u);

@@ -56,6 +56,9 @@ void        frame_pair_free        (FramePair *pair);
  * given size relative to the particles' heights (~1). */
 void        frame_pair_add_raw_artefacts(FramePair *pair, gdouble size,
                                          guint32 seed);
+/* The same artefacts on one frame (size in the data's own unit). */
+void        frame_add_raw_artefacts(gdouble *data, gint xres, gint yres,
+                                    gdouble size, guint32 seed);
 /* A separable 1/f pattern fixed to each frame, over every octave (rms
  * about 0.3 size): frame-fixed texture no conditioning can tell from the
  * sample's. */

@@ -204,6 +204,7 @@ measure_pair(const FrameSeries *series, gint ka, gint kb,
         m.group = s;
         m.frame_a = ka;
         m.frame_b = kb;
+        m.span = (r1 - r0)*fa->timing.line_time;
         g_array_append_val(out, m);
     }
     g_free(dx);

@@ -20,6 +20,7 @@
 typedef struct {
     gint n;
     gdouble *ta, *tb, *d[2], *w;
+    gdouble *half;         /* half the span of each measurement */
     gint n_used;
     gdouble t_min;         /* earliest time */
     gdouble t_max;         /* latest time */
@@ -85,27 +86,53 @@ drift_fit_min_period(gdouble line_time, gint lines, gint n_blocks)
     return 3.0*line_time*lines/MAX(n_blocks, 1);
 }
 
-/* Basis functions of the trajectory at t for nonlinear parameter theta. */
-static gint
-model_basis(FitKind kind, gdouble theta, gdouble t, gdouble *f)
+/* sinh(x)/x and sin(x)/x, exact near 0. */
+static gdouble
+sinhc(gdouble x)
 {
+    return fabs(x) < 1e-4 ? 1.0 + x*x/6.0 : sinh(x)/x;
+}
+
+static gdouble
+sinc(gdouble x)
+{
+    return fabs(x) < 1e-4 ? 1.0 - x*x/6.0 : sin(x)/x;
+}
+
+/* Basis functions of the trajectory for nonlinear parameter theta,
+ * averaged over [t - h, t + h] (h = 0: at t). */
+static gint
+model_basis_mean(FitKind kind, gdouble theta, gdouble t, gdouble h,
+                 gdouble *f)
+{
+    gdouble w;
+
     f[0] = t;
     switch (kind) {
         case DRIFT_MODEL_SETTLING:
-        f[1] = -theta*expm1(-t/theta);
+        /* The mean of exp(-s/theta) is exp(-t/theta) sinh(h/theta)/(h/theta);
+         * so long a span that it overflows averages nothing (the basis is
+         * then the point value). */
+        w = sinhc(h/theta);
+        f[1] = isfinite(w) ? theta*(1.0 - exp(-t/theta)*w)
+                           : -theta*expm1(-t/theta);
         return 2;
 
         case DRIFT_MODEL_OSCILLATION:
-        f[1] = sin(2.0*G_PI*t/theta);
-        f[2] = cos(2.0*G_PI*t/theta);
+        w = sinc(2.0*G_PI*h/theta);
+        f[1] = w*sin(2.0*G_PI*t/theta);
+        f[2] = w*cos(2.0*G_PI*t/theta);
         return 3;
 
         case DRIFT_MODEL_JUMP:
-        f[1] = (t >= theta) ? 1.0 : 0.0;
+        if (h > 0.0)
+            f[1] = CLAMP((t + h - theta)/(2.0*h), 0.0, 1.0);
+        else
+            f[1] = (t >= theta) ? 1.0 : 0.0;
         return 2;
 
         case KIND_ACCELERATION:
-        f[1] = t*t;
+        f[1] = t*t + h*h/3.0;
         return 2;
 
         case KIND_LOG_CREEP:
@@ -116,6 +143,7 @@ model_basis(FitKind kind, gdouble theta, gdouble t, gdouble *f)
         return 1;
     }
 }
+
 
 static gboolean
 model_has_nonlinear(FitKind kind)
@@ -171,6 +199,7 @@ prepared_free(Prepared *pm)
     g_free(pm->d[0]);
     g_free(pm->d[1]);
     g_free(pm->w);
+    g_free(pm->half);
 }
 
 /* mask: when not NULL, measurements with mask[i] FALSE are left out. */
@@ -187,6 +216,7 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
     pm->d[0] = g_new(gdouble, n);
     pm->d[1] = g_new(gdouble, n);
     pm->w = g_new(gdouble, n);
+    pm->half = g_new(gdouble, n);
     pm->n_used = 0;
     pm->periods_given = FALSE;
     pm->t_min = G_MAXDOUBLE;
@@ -203,6 +233,7 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
 
         pm->ta[i] = m->t_a;
         pm->tb[i] = m->t_b;
+        pm->half[i] = (m->span > 0.0 && isfinite(m->span)) ? 0.5*m->span : 0.0;
         pm->d[0][i] = usable ? 1e9*m->dx : 0.0;
         pm->d[1][i] = usable ? 1e9*m->dy : 0.0;
         pm->w[i] = usable ? m->weight : 0.0;
@@ -303,8 +334,8 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
     for (i = 0; i < pm->n; i++) {
         if (pm->w[i] <= 0.0)
             continue;
-        k = model_basis(kind, theta, pm->ta[i], fa);
-        model_basis(kind, theta, pm->tb[i], fb);
+        k = model_basis_mean(kind, theta, pm->ta[i], pm->half[i], fa);
+        model_basis_mean(kind, theta, pm->tb[i], pm->half[i], fb);
         for (j = 0; j < k; j++)
             row[j] = fa[j] - fb[j];
         for (j = 0; j < k; j++) {
@@ -325,8 +356,8 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
     for (i = 0; i < pm->n; i++) {
         if (pm->w[i] <= 0.0)
             continue;
-        model_basis(kind, theta, pm->ta[i], fa);
-        model_basis(kind, theta, pm->tb[i], fb);
+        model_basis_mean(kind, theta, pm->ta[i], pm->half[i], fa);
+        model_basis_mean(kind, theta, pm->tb[i], pm->half[i], fb);
         for (ax = 0; ax < 2; ax++) {
             gdouble r = pm->d[ax][i];
             for (j = 0; j < k; j++)
@@ -625,17 +656,27 @@ drift_fit_model(const DriftMeasurement *meas, gint n, DriftModelType type,
     return fit_masked(meas, n, NULL, type, options, fit);
 }
 
-void
-drift_fit_eval(const DriftFit *fit, gdouble t, gdouble *px, gdouble *py)
+/* p at t averaged over [t - h, t + h], nm. */
+static void
+eval_mean(const DriftFit *fit, gdouble t, gdouble h, gdouble *p)
 {
-    gdouble f[MAX_BASIS], p[2] = { 0.0, 0.0 };
+    gdouble f[MAX_BASIS];
     gint j, k, ax;
 
-    k = model_basis(fit_kind(fit), fit->nonlinear, t, f);
+    k = model_basis_mean(fit_kind(fit), fit->nonlinear, t, h, f);
     for (ax = 0; ax < 2; ax++) {
+        p[ax] = 0.0;
         for (j = 0; j < MIN(k, fit->n_basis); j++)
             p[ax] += fit->coef[ax][j]*f[j];
     }
+}
+
+void
+drift_fit_eval(const DriftFit *fit, gdouble t, gdouble *px, gdouble *py)
+{
+    gdouble p[2];
+
+    eval_mean(fit, t, 0.0, p);
     *px = 1e-9*p[0];
     *py = 1e-9*p[1];
 }
@@ -644,12 +685,12 @@ void
 drift_fit_predict(const DriftFit *fit, const DriftMeasurement *m,
                   gdouble *dx, gdouble *dy)
 {
-    gdouble ax, ay, bx, by;
+    gdouble a[2], b[2], h = (m->span > 0.0 && isfinite(m->span)) ? 0.5*m->span : 0.0;
 
-    drift_fit_eval(fit, m->t_a, &ax, &ay);
-    drift_fit_eval(fit, m->t_b, &bx, &by);
-    *dx = ax - bx;
-    *dy = ay - by;
+    eval_mean(fit, m->t_a, h, a);
+    eval_mean(fit, m->t_b, h, b);
+    *dx = 1e-9*(a[0] - b[0]);
+    *dy = 1e-9*(a[1] - b[1]);
 }
 
 static gdouble

@@ -153,7 +153,8 @@ void           drift_fit_eval         (const DriftFit *fit,
                                        gdouble t,
                                        gdouble *px,
                                        gdouble *py);
-/* Predicted p(t_a) - p(t_b) of a measurement, metres. */
+/* Predicted p(t_a) - p(t_b) of a measurement, metres, each averaged over
+ * the measurement's span. */
 void           drift_fit_predict      (const DriftFit *fit,
                                        const DriftMeasurement *m,
                                        gdouble *dx,

@@ -21,7 +21,11 @@ G_BEGIN_DECLS
  * later and the earlier frame (drift-fit.h, metres).  The constant p0
  * cancels.  weight and group matter to the fit only; the trajectory treats
  * every measurement alike.  The field order keeps { t_a, t_b, dx, dy }
- * initialisers valid.
+ * initialisers valid.  A block of lines registered as a whole moves by the
+ * drift averaged over the time it took to scan: span says how long, and
+ * the fit compares it with the model averaged alike (an oscillation read
+ * at points would come out too small by the sinc of its phase over the
+ * block).
  */
 typedef struct {
     gdouble t_a, t_b;      /* s */
@@ -29,6 +33,10 @@ typedef struct {
     gdouble weight;        /* >= 0, relative confidence (0 = ignore) */
     gint group;            /* unit held out together in cross-validation */
     gint frame_a, frame_b; /* frames the times belong to (informative) */
+    gdouble span;          /* s, the measurement averages the displacement
+                              over [t - span/2, t + span/2] around t_a and
+                              t_b (a registered block of lines); 0: at the
+                              moments themselves */
 } DriftMeasurement;
 
 G_END_DECLS

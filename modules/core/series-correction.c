@@ -312,12 +312,36 @@ series_correction_eval(const SeriesCorrection *correction, gdouble t,
     *dy_px = (y - y0)/correction->ystep;
 }
 
-/* The trajectory over frame k sampled at every line, as a spline the
- * continuous compensation can follow: t_b = 0 makes t = 0 the moment
- * the corrected frame shows. */
+/* Which side of a jump a trajectory follows: the fit itself, the drift
+ * without the step, or with the step from the start. */
+typedef enum {
+    JUMP_AS_FITTED,
+    JUMP_NEVER,
+    JUMP_ALWAYS,
+} JumpSide;
+
+static void
+eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
+          gdouble *dx, gdouble *dy)
+{
+    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
+    gdouble sign = 0.0;
+
+    series_correction_eval(correction, t, dx, dy);
+    if (side == JUMP_NEVER && t >= fit->nonlinear)
+        sign = -1.0;
+    else if (side == JUMP_ALWAYS && t < fit->nonlinear)
+        sign = 1.0;
+    *dx += sign*1e-9*fit->coef[0][1]/correction->xstep;
+    *dy += sign*1e-9*fit->coef[1][1]/correction->ystep;
+}
+
+/* The trajectory over a frame sampled at every line, as a spline the
+ * continuous compensation can follow: t_b = 0 makes t = 0 the moment the
+ * corrected frame shows. */
 static DriftTrajectory*
 frame_trajectory(const SeriesCorrection *correction, const ScanTiming *timing,
-                 GError **error)
+                 JumpSide side, GError **error)
 {
     gint yres = timing->yres, n = yres + 2, r;
     DriftMeasurement *meas = g_new0(DriftMeasurement, n);
@@ -332,13 +356,81 @@ frame_trajectory(const SeriesCorrection *correction, const ScanTiming *timing,
             m->t_a = scan_timing_frame_end(timing);
         else
             m->t_a = scan_timing_rows_time(timing, r-1, r);
-        series_correction_eval(correction, m->t_a, &m->dx, &m->dy);
+        eval_side(correction, m->t_a, side, &m->dx, &m->dy);
         m->weight = 1.0;
     }
     /* Scanning up, the rows' times fall; the spline sorts by time. */
     trajectory = drift_trajectory_new_interpolating(meas, n, error);
     g_free(meas);
     return trajectory;
+}
+
+/* A fitted jump while this frame was scanned, or not. */
+static gboolean
+jump_in_frame(const SeriesCorrection *correction, const ScanTiming *timing)
+{
+    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
+    gdouble t0 = timing->frame_start, t1 = scan_timing_frame_end(timing);
+
+    return (fit->type == DRIFT_MODEL_JUMP && fit->creep == DRIFT_FIT_CREEP_NONE
+            && fit->nonlinear > t0 && fit->nonlinear < t1);
+}
+
+static gboolean
+compensate_with(const SeriesCorrection *correction, const gdouble *data,
+                const ScanTiming *timing, JumpSide side,
+                GwyInterpolationType interpolation, gdouble fill,
+                gdouble *result, gdouble *mask, GError **error)
+{
+    DriftTrajectory *trajectory;
+    gboolean ok;
+
+    if (!(trajectory = frame_trajectory(correction, timing, side, error)))
+        return FALSE;
+    ok = continuous_compensate_trajectory(data, timing->xres, timing->yres,
+                                          trajectory, timing, interpolation,
+                                          fill, result, mask, error);
+    drift_trajectory_free(trajectory);
+    return ok;
+}
+
+/* No trajectory through a jump can be followed line by line: the lines
+ * before it are corrected with the drift before it (continued), the lines
+ * after with the drift after it, each from its own lines only (the others
+ * missing), and the two joined. */
+static gboolean
+compensate_across_jump(const SeriesCorrection *correction,
+                       const gdouble *data, const ScanTiming *timing,
+                       GwyInterpolationType interpolation, gdouble fill,
+                       gdouble *result, gdouble *mask, GError **error)
+{
+    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
+    gint xres = timing->xres, yres = timing->yres, r, c, side;
+    gsize n = (gsize)xres*yres;
+    gdouble *part = g_new(gdouble, 3*n), *pres = part + n, *pmask = pres + n;
+    gboolean ok = TRUE;
+
+    for (side = 0; side < 2 && ok; side++) {
+        for (r = 0; r < yres; r++) {
+            gboolean after = (scan_timing_rows_time(timing, r, r+1)
+                              >= fit->nonlinear);
+
+            for (c = 0; c < xres; c++)
+                part[r*xres + c] = (after == side) ? data[r*xres + c] : NAN;
+        }
+        ok = compensate_with(correction, part, timing,
+                             side ? JUMP_ALWAYS : JUMP_NEVER, interpolation,
+                             fill, side ? pres : result,
+                             side ? pmask : mask, error);
+    }
+    for (c = 0; ok && c < (gint)n; c++) {
+        if (mask[c] > 0.0 && pmask[c] <= 0.0) {
+            result[c] = pres[c];
+            mask[c] = 0.0;
+        }
+    }
+    g_free(part);
+    return ok;
 }
 
 gboolean
@@ -348,9 +440,10 @@ series_correction_correct_field(const SeriesCorrection *correction,
                                 GwyDataField *result, GwyDataField *mask,
                                 GError **error)
 {
-    DriftTrajectory *trajectory;
     gint xres = gwy_data_field_get_xres(field);
     gint yres = gwy_data_field_get_yres(field);
+    const gdouble *data = gwy_data_field_get_data_const(field);
+    gdouble fill = gwy_data_field_get_avg(field);
     gboolean ok;
 
     g_return_val_if_fail(timing->xres == xres && timing->yres == yres, FALSE);
@@ -359,16 +452,15 @@ series_correction_correct_field(const SeriesCorrection *correction,
     gwy_data_field_copy(field, result, FALSE);
     gwy_data_field_copy(field, mask, FALSE);
     gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(mask), NULL);
-    if (!(trajectory = frame_trajectory(correction, timing, error)))
-        return FALSE;
-    ok = continuous_compensate_trajectory(gwy_data_field_get_data_const(field),
-                                          xres, yres, trajectory, timing,
-                                          interpolation,
-                                          gwy_data_field_get_avg(field),
-                                          gwy_data_field_get_data(result),
-                                          gwy_data_field_get_data(mask),
-                                          error);
-    drift_trajectory_free(trajectory);
+    if (jump_in_frame(correction, timing))
+        ok = compensate_across_jump(correction, data, timing, interpolation,
+                                    fill, gwy_data_field_get_data(result),
+                                    gwy_data_field_get_data(mask), error);
+    else
+        ok = compensate_with(correction, data, timing, JUMP_AS_FITTED,
+                             interpolation, fill,
+                             gwy_data_field_get_data(result),
+                             gwy_data_field_get_data(mask), error);
     gwy_data_field_invalidate(result);
     gwy_data_field_invalidate(mask);
     return ok;

@@ -1,0 +1,58 @@
+/*
+ *  Simulated frame series with a random drift effect, corrected by the
+ *  core's series correction and judged against the simulator's truth:
+ *  shared by tests/test-series-correction and bench/study-series.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef TESTS_SERIES_CASES_H
+#define TESTS_SERIES_CASES_H
+
+#include <glib.h>
+#include "drift-model.h"
+#include "frame-series.h"
+#include "series-correction.h"
+
+G_BEGIN_DECLS
+
+#define SERIES_CASE_FRAMES 5
+#define SERIES_CASE_EFFECTS 4   /* none, settling, oscillation, jump */
+
+typedef struct {
+    gboolean raw;           /* raw-channel artefacts on every frame */
+    gint disturbed;         /* this frame's content is disturbed; -1: none */
+} SeriesCaseOptions;
+
+/* What the correction achieved against the truth. */
+typedef struct {
+    gdouble trajectory_rms_px;   /* over every scan line of every frame,
+                                    lines within 3 of a jump left out */
+    gdouble trajectory_worst_px;
+    gdouble stripe_worst_px;     /* the drift a stripe of 16 lines of a
+                                    corrected frame keeps, worst of all */
+    gdouble frame_worst_px;      /* corrected frames registered as a whole
+                                    against the drift-free truth, worst */
+    gboolean effect_named;       /* the fit named the drawn effect */
+    gint flagged;                /* frames flagged */
+    gboolean disturbed_flagged;  /* the disturbed frame among them */
+} SeriesCaseResult;
+
+/* The drift of case i is hidden_case_draw()'s (hidden-effect-cases.h):
+ * effect i % SERIES_CASE_EFFECTS at the hidden effect tests' sizes.
+ * The frames scanned under model; truth (may be NULL) gets the drift-free
+ * frames (references held by the caller). */
+FrameSeries*  series_case_scan    (guint32 base_seed, gint i,
+                                   const DriftModel *model,
+                                   const SeriesCaseOptions *options,
+                                   GwyDataField ***truth);
+/* Corrects the series with the core and judges it; FALSE when the
+ * correction failed. */
+gboolean      series_case_judge   (const FrameSeries *series,
+                                   GwyDataField **truth,
+                                   const DriftModel *model,
+                                   const SeriesCaseOptions *options,
+                                   SeriesCaseResult *result);
+
+G_END_DECLS
+
+#endif
