@@ -21,6 +21,13 @@
 #define FLAG_RATIO 4.0
 #define FLAG_FLOOR_PX 1.0
 
+/* Leaving a disturbed frame out makes the others agree this many times
+ * better. */
+#define LEAVE_OUT_GAIN 2.0
+/* Candidates this close in the others' agreement are told apart by the
+ * simplicity of the others' model. */
+#define LEAVE_OUT_TIE 1.5
+
 /* A pair counts as registered with this many accepted blocks. */
 #define PAIR_MIN_BLOCKS 3
 
@@ -80,9 +87,9 @@ median_of(gdouble *values, gint n)
 
 /* |measured - fitted| of a measurement in pixels. */
 static gdouble
-residual_px(const SeriesCorrection *correction, const DriftMeasurement *m)
+residual_px(const SeriesCorrection *correction, const DriftFit *fit,
+            const DriftMeasurement *m)
 {
-    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
     gdouble dx, dy;
 
     drift_fit_predict(fit, m, &dx, &dy);
@@ -90,74 +97,228 @@ residual_px(const SeriesCorrection *correction, const DriftMeasurement *m)
                  (m->dy - dy)/correction->ystep);
 }
 
-/* Each frame's residual is that of its best-agreeing pair: a disturbed
- * frame disagrees with every partner, its partners agree with others. */
+/* Frame k against a fit: the residual of its best-agreeing pair (the median
+ * over the pair's registered blocks) with a frame not flagged, or with any
+ * when all its partners are flagged.  A disturbed frame disagrees with
+ * every partner; its partners agree with others.  *n_pairs gets the
+ * number of registered pairs of k. */
+static gdouble
+frame_residual(const SeriesCorrection *correction, const DriftFit *fit,
+               gint k, const gdouble *registered, gint *n_pairs,
+               gdouble *values)
+{
+    const FitReport *report = &correction->fit;
+    gdouble best[2] = { NAN, NAN }, r;
+    gint i, j, count, partner_flagged;
+
+    *n_pairs = 0;
+    for (j = 0; j < correction->n_frames; j++) {
+        if (j == k)
+            continue;
+        count = 0;
+        for (i = 0; i < report->n_meas; i++) {
+            const DriftMeasurement *m = report->meas + i;
+
+            if (registered[i] > 0.0
+                && ((m->frame_a == k && m->frame_b == j)
+                    || (m->frame_a == j && m->frame_b == k)))
+                values[count++] = residual_px(correction, fit, m);
+        }
+        if (count < PAIR_MIN_BLOCKS)
+            continue;
+        (*n_pairs)++;
+        r = median_of(values, count);
+        partner_flagged = correction->frames[j].flagged;
+        if (!(best[partner_flagged] <= r))
+            best[partner_flagged] = r;
+    }
+    return isnan(best[0]) ? best[1] : best[0];
+}
+
+/* Every frame's residual against the chosen fit; typical_px the median of
+ * those not flagged. */
 static void
 judge_frames(SeriesCorrection *correction, const gdouble *registered)
 {
-    const FitReport *fit = &correction->fit;
-    gint nf = correction->n_frames, i, a, b, count;
-    gdouble *values = g_new(gdouble, MAX(fit->n_meas, nf) + 1), r;
+    const FitReport *report = &correction->fit;
+    const DriftFit *fit = report->fits + report->chosen;
+    gint nf = correction->n_frames, k, count = 0;
+    gdouble *values = g_new(gdouble, report->n_meas + nf + 1);
+    gdouble *typical = values + report->n_meas;
 
-    for (a = 0; a < nf; a++) {
-        correction->frames[a].residual_px = NAN;
-        correction->frames[a].n_pairs = 0;
-    }
-    for (a = 1; a < nf; a++) {
-        for (b = 0; b < a; b++) {
-            count = 0;
-            for (i = 0; i < fit->n_meas; i++) {
-                const DriftMeasurement *m = fit->meas + i;
+    for (k = 0; k < nf; k++) {
+        SeriesFrameVerdict *v = correction->frames + k;
 
-                if (m->frame_a == a && m->frame_b == b && registered[i] > 0.0)
-                    values[count++] = residual_px(correction, m);
-            }
-            if (count < PAIR_MIN_BLOCKS)
-                continue;
-            r = median_of(values, count);
-            for (i = 0; i < 2; i++) {
-                SeriesFrameVerdict *v = correction->frames + (i ? b : a);
-
-                v->n_pairs++;
-                if (!(v->residual_px <= r))
-                    v->residual_px = r;
-            }
-        }
+        v->residual_px = frame_residual(correction, fit, k, registered,
+                                        &v->n_pairs, values);
+        if (!v->flagged && isfinite(v->residual_px))
+            typical[count++] = v->residual_px;
     }
-    count = 0;
-    for (a = 0; a < nf; a++) {
-        if (isfinite(correction->frames[a].residual_px))
-            values[count++] = correction->frames[a].residual_px;
-    }
-    correction->typical_px = median_of(values, count);
+    correction->typical_px = median_of(typical, count);
     g_free(values);
 }
 
 static void
-flag_frames(SeriesCorrection *correction)
+flag_frame(SeriesFrameVerdict *v, gdouble residual, gdouble typical)
 {
-    gdouble limit = MAX(FLAG_RATIO*correction->typical_px, FLAG_FLOOR_PX);
-    gint a;
+    v->flagged = TRUE;
+    v->reason = g_strdup_printf(_("disagrees with the trajectory of the "
+                                  "other frames by %.2f px (typical "
+                                  "%.2f px)"), residual, typical);
+}
 
-    for (a = 0; a < correction->n_frames; a++) {
-        SeriesFrameVerdict *v = correction->frames + a;
+static gboolean
+beyond_limit(gdouble residual, gdouble typical)
+{
+    return residual > MAX(FLAG_RATIO*typical, FLAG_FLOOR_PX);
+}
 
-        if (v->flagged)
-            continue;
-        if (!v->n_pairs) {
+/* Frames registered against no other frame. */
+static void
+flag_unregistered(SeriesCorrection *correction)
+{
+    gint k;
+
+    for (k = 0; k < correction->n_frames; k++) {
+        SeriesFrameVerdict *v = correction->frames + k;
+
+        if (!v->flagged && !v->n_pairs) {
             v->flagged = TRUE;
             v->reason = g_strdup(_("could not be registered against any "
                                    "other frame"));
         }
-        else if (v->residual_px > limit) {
-            v->flagged = TRUE;
-            v->reason = g_strdup_printf(_("disagrees with the trajectory of "
-                                          "the other frames by %.2f px "
-                                          "(typical %.2f px)"),
-                                        v->residual_px,
-                                        correction->typical_px);
-        }
     }
+}
+
+/* A long series: frames far from the fit of all (judge_frames first). */
+static void
+flag_outlying(SeriesCorrection *correction)
+{
+    gint k;
+
+    for (k = 0; k < correction->n_frames; k++) {
+        SeriesFrameVerdict *v = correction->frames + k;
+
+        if (!v->flagged && v->n_pairs
+            && beyond_limit(v->residual_px, correction->typical_px))
+            flag_frame(v, v->residual_px, correction->typical_px);
+    }
+}
+
+/* The fit of the frames neither k nor flagged: frame k's residual
+ * against it, and the typical residual of the others. */
+static gboolean
+fit_leaving_out(const SeriesCorrection *correction, gint k,
+                const gdouble *registered, DriftMeasurement *work,
+                gdouble *values, gdouble *residual, gdouble *typical,
+                gint *n_params)
+{
+    const FitReport *report = &correction->fit;
+    DriftFit fits[FIT_REPORT_MAX_MODELS];
+    DriftFitOptions options = report->fit_options;
+    gint nf = correction->n_frames, i, j, chosen, n_pairs, count = 0;
+    gdouble *others = g_new(gdouble, nf), r;
+
+    memcpy(work, report->meas, report->n_meas*sizeof(DriftMeasurement));
+    for (i = 0; i < report->n_meas; i++) {
+        gint a = work[i].frame_a, b = work[i].frame_b;
+
+        work[i].weight = registered[i];
+        if (a == k || b == k || correction->frames[a].flagged
+            || correction->frames[b].flagged)
+            work[i].weight = 0.0;
+    }
+    chosen = drift_fit_select(work, report->n_meas, &options, fits);
+    if (chosen >= 0) {
+        *n_params = fits[chosen].n_params;
+        *residual = frame_residual(correction, fits + chosen, k, registered,
+                                   &n_pairs, values);
+        for (j = 0; j < nf; j++) {
+            if (j == k || correction->frames[j].flagged)
+                continue;
+            r = frame_residual(correction, fits + chosen, j, registered,
+                               &n_pairs, values);
+            if (isfinite(r))
+                others[count++] = r;
+        }
+        *typical = median_of(others, count);
+    }
+    g_free(others);
+    return chosen >= 0 && count >= 2 && isfinite(*residual);
+}
+
+/* A frame left out, as a candidate for flagging. */
+typedef struct {
+    gint frame;
+    gdouble residual;     /* its residual against the others' fit */
+    gdouble typical;      /* the others' typical residual */
+    gint n_params;        /* of the model the others chose */
+} LeftOut;
+
+/* Of candidates nearly as consistent as the most consistent, the one whose
+ * others need the simplest model: a slip in frame 1 of a steady series
+ * can be read as frame 0 cut off by a jump, or as frame 1 out of line. */
+static gint
+pick_left_out(const LeftOut *cand, gint n)
+{
+    gdouble lowest = G_MAXDOUBLE;
+    gint i, best = -1;
+
+    for (i = 0; i < n; i++)
+        lowest = MIN(lowest, cand[i].typical);
+    for (i = 0; i < n; i++) {
+        if (cand[i].typical > LEAVE_OUT_TIE*lowest)
+            continue;
+        if (best < 0 || cand[i].n_params < cand[best].n_params
+            || (cand[i].n_params == cand[best].n_params
+                && cand[i].typical < cand[best].typical))
+            best = i;
+    }
+    return best;
+}
+
+/* A short series: a frame is flagged when it lies far from the trajectory
+ * of the others, and it stood out already (far from the fit of all) or the
+ * others agree much better without it (a disturbed frame bends the models
+ * that can bend towards itself).  A frame that merely holds an effect of
+ * its own (settling in the first frame, a jump) is no such frame: the fit
+ * of all explained it, and the others agreed as well with it as without
+ * it.  The rest are then judged again without it. */
+static void
+flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
+{
+    const FitReport *report = &correction->fit;
+    gint nf = correction->n_frames, k, round, n, best;
+    DriftMeasurement *work = g_new(DriftMeasurement, MAX(report->n_meas, 1));
+    gdouble *values = g_new(gdouble, report->n_meas + 1);
+    gdouble agreement = correction->typical_px, *in_all = g_new(gdouble, nf);
+    LeftOut *cand = g_new(LeftOut, nf), c;
+
+    for (k = 0; k < nf; k++)
+        in_all[k] = correction->frames[k].residual_px;
+    for (round = 0; round < MAX(nf/3, 1); round++) {
+        n = 0;
+        for (k = 0; k < nf; k++) {
+            c.frame = k;
+            if (correction->frames[k].flagged
+                || !fit_leaving_out(correction, k, registered, work, values,
+                                    &c.residual, &c.typical, &c.n_params))
+                continue;
+            if (beyond_limit(c.residual, c.typical)
+                && (agreement > LEAVE_OUT_GAIN*c.typical
+                    || beyond_limit(in_all[k], agreement)))
+                cand[n++] = c;
+        }
+        if ((best = pick_left_out(cand, n)) < 0)
+            break;
+        c = cand[best];
+        flag_frame(correction->frames + c.frame, c.residual, c.typical);
+        agreement = c.typical;
+    }
+    g_free(cand);
+    g_free(in_all);
+    g_free(work);
+    g_free(values);
 }
 
 /* The measurements of flagged frames get weight 0; TRUE when any did. */
@@ -205,6 +366,187 @@ warn_about_fit(SeriesCorrection *correction, const gdouble *registered)
                                       "between the measurements: the "
                                       "corrected frames keep drift of that "
                                       "order"), rms_px));
+}
+
+/* Which side of a jump a trajectory follows: the fit itself, the drift
+ * without the step, or with the step from the start. */
+typedef enum {
+    JUMP_AS_FITTED,
+    JUMP_NEVER,
+    JUMP_ALWAYS,
+} JumpSide;
+
+static void
+eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
+          gdouble *dx, gdouble *dy)
+{
+    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
+    gdouble sign = 0.0;
+
+    series_correction_eval(correction, t, dx, dy);
+    if (side == JUMP_NEVER && t >= fit->nonlinear)
+        sign = -1.0;
+    else if (side == JUMP_ALWAYS && t < fit->nonlinear)
+        sign = 1.0;
+    *dx += sign*1e-9*fit->coef[0][1]/correction->xstep;
+    *dy += sign*1e-9*fit->coef[1][1]/correction->ystep;
+}
+
+/* How many block spans on either side of the fitted jump time the jump is
+ * looked for line by line. */
+#define JUMP_SEARCH_BLOCKS 3.0
+
+/* Content of frame k's line r as frame j shows it, with the drift of line
+ * r taken from `side`: each pixel's true position, then where frame j saw
+ * it (its row's own time found by two fixed-point steps), sampled
+ * bilinearly; NAN outside frame j. */
+static void
+predict_line(const SeriesCorrection *correction, const SeriesFrame *fk,
+             const SeriesFrame *fj, gint r, JumpSide side, gdouble *line)
+{
+    const gdouble *ref = gwy_data_field_get_data_const(fj->field);
+    gint xres = fk->timing.xres, yres = fk->timing.yres, c, it, x0, y0;
+    gdouble t, dx, dy, x, y, yj, tj, jx, jy, fx, fy;
+
+    for (c = 0; c < xres; c++) {
+        t = scan_timing_pixel_time(&fk->timing, r, c);
+        eval_side(correction, t, side, &dx, &dy);
+        x = c - dx;
+        y = r - dy;
+        yj = y;
+        jx = jy = 0.0;
+        for (it = 0; it < 2; it++) {
+            tj = scan_timing_pixel_time(&fj->timing, yj, x + jx);
+            eval_side(correction, tj, JUMP_AS_FITTED, &jx, &jy);
+            yj = y + jy;
+        }
+        x += jx;
+        x0 = (gint)floor(x);
+        y0 = (gint)floor(yj);
+        if (x0 < 0 || y0 < 0 || x0 + 1 >= xres || y0 + 1 >= yres) {
+            line[c] = NAN;
+            continue;
+        }
+        fx = x - x0;
+        fy = yj - y0;
+        line[c] = ((1.0 - fy)*((1.0 - fx)*ref[y0*xres + x0] + fx*ref[y0*xres + x0 + 1])
+                   + fy*((1.0 - fx)*ref[(y0 + 1)*xres + x0]
+                         + fx*ref[(y0 + 1)*xres + x0 + 1]));
+    }
+}
+
+/* 1 - the normalised correlation of a line with its prediction (over the
+ * predicted pixels); line offsets and gains do not count.  NAN when too
+ * little of the line is predicted. */
+static gdouble
+line_mismatch(const gdouble *data, const gdouble *pred, gint n)
+{
+    gdouble sa = 0.0, sb = 0.0, saa = 0.0, sbb = 0.0, sab = 0.0, va, vb;
+    gint c, m = 0;
+
+    for (c = 0; c < n; c++) {
+        if (isnan(pred[c]))
+            continue;
+        sa += data[c];
+        sb += pred[c];
+        saa += data[c]*data[c];
+        sbb += pred[c]*pred[c];
+        sab += data[c]*pred[c];
+        m++;
+    }
+    if (m < 8)
+        return NAN;
+    va = saa - sa*sa/m;
+    vb = sbb - sb*sb/m;
+    if (!(va > 0.0 && vb > 0.0))
+        return NAN;
+    return 1.0 - (sab - sa*sb/m)/sqrt(va*vb);
+}
+
+/* How well line r of frame k matches its neighbouring frames (those not
+ * flagged) with the drift of `side`: the mean mismatch, 0 when neither
+ * shows the line's content (no evidence either way). */
+static gdouble
+line_cost(const SeriesCorrection *correction, const FrameSeries *series,
+          gint k, gint r, JumpSide side, gdouble *line)
+{
+    const SeriesFrame *fk = series->frames + k;
+    const gdouble *data = gwy_data_field_get_data_const(fk->field)
+                          + (gsize)r*fk->timing.xres;
+    gdouble sum = 0.0, e;
+    gint j, count = 0;
+
+    for (j = k-1; j <= k+1; j += 2) {
+        if (j < 0 || j >= series->n_frames || correction->frames[j].flagged)
+            continue;
+        predict_line(correction, fk, series->frames + j, r, side, line);
+        e = line_mismatch(data, line, fk->timing.xres);
+        if (!isnan(e)) {
+            sum += e;
+            count++;
+        }
+    }
+    return count ? sum/count : 0.0;
+}
+
+/* The fit places a jump within a block or so (blocks straddling it register
+ * to either side).  Line by line, against a neighbouring frame, the lines
+ * before the jump match the drift without the step and those after it the
+ * drift with it: the jump goes where the two runs meet best.  Lines of
+ * every frame within the search window count (a jump near a frame's end
+ * may lie in the next). */
+static void
+localise_jump(SeriesCorrection *correction, const FrameSeries *series,
+              gdouble block_span)
+{
+    DriftFit *fit = correction->fit.fits + correction->fit.chosen;
+    gint nf = series->n_frames, k, r, i, n = 0, first = 0, last = 0, most = 0;
+    gdouble *line, *after, *before, *when, total, lowest, window, t;
+
+    if (fit->type != DRIFT_MODEL_JUMP || nf < 2)
+        return;
+    window = JUMP_SEARCH_BLOCKS*block_span;
+    for (k = 0; k < nf; k++)
+        most += series->frames[k].timing.yres;
+    line = g_new(gdouble, series->frames[0].timing.xres);
+    after = g_new(gdouble, 3*most);
+    before = after + most;
+    when = before + most;
+    /* The lines around the jump in the order they were scanned. */
+    for (k = 0; k < nf; k++) {
+        const SeriesFrame *fk = series->frames + k;
+
+        for (i = 0; i < fk->timing.yres; i++) {
+            r = (fk->timing.direction == SCAN_DIRECTION_UP) ? fk->timing.yres-1 - i : i;
+            t = scan_timing_rows_time(&fk->timing, r, r+1);
+            if (fabs(t - fit->nonlinear) > window)
+                continue;
+            before[n] = line_cost(correction, series, k, r, JUMP_NEVER, line);
+            after[n] = line_cost(correction, series, k, r, JUMP_ALWAYS, line);
+            when[n] = scan_timing_row_start(&fk->timing, r);
+            n++;
+        }
+    }
+    /* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it; of
+     * equally good splits (lines without evidence) the middle one. */
+    total = 0.0;
+    for (i = 0; i < n; i++)
+        total += after[i];
+    lowest = total;
+    for (i = 0; i < n; i++) {
+        total += before[i] - after[i];
+        if (total < lowest - 1e-12) {
+            lowest = total;
+            first = last = i + 1;
+        }
+        else if (total <= lowest + 1e-12 && last == i)
+            last = i + 1;
+    }
+    i = (first + last)/2;
+    if (n >= 2 && i > 0 && i < n)
+        fit->nonlinear = when[i];
+    g_free(line);
+    g_free(after);
 }
 
 static void
@@ -259,11 +601,15 @@ series_correction_compute(const FrameSeries *series,
     weights = registered + MAX(fit->n_meas, 1);
     for (i = 0; i < (guint)fit->n_meas; i++)
         registered[i] = fit->meas[i].weight;
-    /* Disturbed frames are judged against the fit of all, then left out;
-     * the frames are judged again against the fit without them. */
+    /* Frames that disagree with the rest are found first, then the
+     * trajectory is fitted without them. */
     if ((ok = fit_models(correction, registered))) {
         judge_frames(correction, registered);
-        flag_frames(correction);
+        flag_unregistered(correction);
+        if (series->n_frames <= SERIES_CORRECTION_LEAVE_OUT_UP_TO)
+            flag_by_leaving_out(correction, registered);
+        else
+            flag_outlying(correction);
         if (drop_flagged(correction, registered, weights)
             && !fit_models(correction, weights)) {
             /* Too little was left: keep every frame in the fit. */
@@ -271,8 +617,13 @@ series_correction_compute(const FrameSeries *series,
         }
     }
     if (ok) {
+        localise_jump(correction, series,
+                      series->frames[0].timing.yres*series->frames[0].timing.line_time/d.n_blocks);
         judge_frames(correction, registered);
-        flag_frames(correction);
+        if (series->n_frames > SERIES_CORRECTION_LEAVE_OUT_UP_TO) {
+            flag_outlying(correction);
+            judge_frames(correction, registered);
+        }
         warn_about_fit(correction, registered);
     }
     else
@@ -310,30 +661,6 @@ series_correction_eval(const SeriesCorrection *correction, gdouble t,
     drift_fit_eval(fit, 0.0, &x0, &y0);
     *dx_px = (x - x0)/correction->xstep;
     *dy_px = (y - y0)/correction->ystep;
-}
-
-/* Which side of a jump a trajectory follows: the fit itself, the drift
- * without the step, or with the step from the start. */
-typedef enum {
-    JUMP_AS_FITTED,
-    JUMP_NEVER,
-    JUMP_ALWAYS,
-} JumpSide;
-
-static void
-eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
-          gdouble *dx, gdouble *dy)
-{
-    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
-    gdouble sign = 0.0;
-
-    series_correction_eval(correction, t, dx, dy);
-    if (side == JUMP_NEVER && t >= fit->nonlinear)
-        sign = -1.0;
-    else if (side == JUMP_ALWAYS && t < fit->nonlinear)
-        sign = 1.0;
-    *dx += sign*1e-9*fit->coef[0][1]/correction->xstep;
-    *dy += sign*1e-9*fit->coef[1][1]/correction->ystep;
 }
 
 /* The trajectory over a frame sampled at every line, as a spline the

@@ -51,6 +51,9 @@ typedef struct {
  * many earlier ones.  Short series register every pair. */
 #define SERIES_CORRECTION_PAIR_REACH 3
 #define SERIES_CORRECTION_ALL_PAIRS_UP_TO 16
+/* Up to this many frames, each is judged by the fit of the others (a fit
+ * per frame); longer series by the fit of all. */
+#define SERIES_CORRECTION_LEAVE_OUT_UP_TO 8
 
 GQuark    series_correction_error_quark(void);
 
