@@ -11,6 +11,7 @@
 #include "json-values.h"
 #include "continuous-compensate.h"
 #include "drift-trajectory.h"
+#include "frame-conditioning.h"
 #include "series-correction.h"
 #include "localscan-intl.h"
 
@@ -402,9 +403,9 @@ eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
  * bilinearly; NAN outside frame j. */
 static void
 predict_line(const SeriesCorrection *correction, const SeriesFrame *fk,
-             const SeriesFrame *fj, gint r, JumpSide side, gdouble *line)
+             const SeriesFrame *fj, const gdouble *ref, gint r, JumpSide side,
+             gdouble *line)
 {
-    const gdouble *ref = gwy_data_field_get_data_const(fj->field);
     gint xres = fk->timing.xres, yres = fk->timing.yres, c, it, x0, y0;
     gdouble t, dx, dy, x, y, yj, tj, jx, jy, fx, fy;
 
@@ -463,24 +464,42 @@ line_mismatch(const gdouble *data, const gdouble *pred, gint n)
     return 1.0 - (sab - sa*sb/m)/sqrt(va*vb);
 }
 
+/* Frame k conditioned as registration sees it (frame-conditioning.h):
+ * raw line offsets, bows and 1/f noise would outweigh a jump's few
+ * pixels.  Made when first asked for. */
+static const gdouble*
+conditioned(const FrameSeries *series, ConditionedFrame **cache, gint k,
+            gdouble aspect)
+{
+    const SeriesFrame *f = series->frames + k;
+
+    if (!cache[k])
+        cache[k] = frame_condition(gwy_data_field_get_data_const(f->field),
+                                   NULL, f->timing.xres, f->timing.yres,
+                                   aspect);
+    return cache[k] ? cache[k]->data : NULL;
+}
+
 /* How well line r of frame k matches its neighbouring frames (those not
  * flagged) with the drift of `side`: the mean mismatch, 0 when neither
  * shows the line's content (no evidence either way). */
 static gdouble
 line_cost(const SeriesCorrection *correction, const FrameSeries *series,
-          gint k, gint r, JumpSide side, gdouble *line)
+          ConditionedFrame **cache, gint k, gint r, JumpSide side,
+          gdouble *line)
 {
     const SeriesFrame *fk = series->frames + k;
-    const gdouble *data = gwy_data_field_get_data_const(fk->field)
-                          + (gsize)r*fk->timing.xres;
-    gdouble sum = 0.0, e;
+    gdouble aspect = correction->ystep/correction->xstep, sum = 0.0, e;
+    const gdouble *data = conditioned(series, cache, k, aspect), *ref;
     gint j, count = 0;
 
-    for (j = k-1; j <= k+1; j += 2) {
-        if (j < 0 || j >= series->n_frames || correction->frames[j].flagged)
+    for (j = k-1; j <= k+1 && data; j += 2) {
+        if (j < 0 || j >= series->n_frames || correction->frames[j].flagged
+            || !(ref = conditioned(series, cache, j, aspect)))
             continue;
-        predict_line(correction, fk, series->frames + j, r, side, line);
-        e = line_mismatch(data, line, fk->timing.xres);
+        predict_line(correction, fk, series->frames + j, ref, r, side, line);
+        e = line_mismatch(data + (gsize)r*fk->timing.xres, line,
+                          fk->timing.xres);
         if (!isnan(e)) {
             sum += e;
             count++;
@@ -502,9 +521,11 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     DriftFit *fit = correction->fit.fits + correction->fit.chosen;
     gint nf = series->n_frames, k, r, i, n = 0, first = 0, last = 0, most = 0;
     gdouble *line, *after, *before, *when, total, lowest, window, t;
+    ConditionedFrame **cache;
 
     if (fit->type != DRIFT_MODEL_JUMP || nf < 2)
         return;
+    cache = g_new0(ConditionedFrame*, nf);
     window = JUMP_SEARCH_BLOCKS*block_span;
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
@@ -521,8 +542,10 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
             t = scan_timing_rows_time(&fk->timing, r, r+1);
             if (fabs(t - fit->nonlinear) > window)
                 continue;
-            before[n] = line_cost(correction, series, k, r, JUMP_NEVER, line);
-            after[n] = line_cost(correction, series, k, r, JUMP_ALWAYS, line);
+            before[n] = line_cost(correction, series, cache, k, r,
+                                  JUMP_NEVER, line);
+            after[n] = line_cost(correction, series, cache, k, r,
+                                 JUMP_ALWAYS, line);
             when[n] = scan_timing_row_start(&fk->timing, r);
             n++;
         }
@@ -545,6 +568,11 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     i = (first + last)/2;
     if (n >= 2 && i > 0 && i < n)
         fit->nonlinear = when[i];
+    for (k = 0; k < nf; k++) {
+        if (cache[k])
+            conditioned_frame_free(cache[k]);
+    }
+    g_free(cache);
     g_free(line);
     g_free(after);
 }
