@@ -50,6 +50,7 @@ typedef struct {
 
 /* What the run produced, for the output file. */
 typedef struct {
+    FrameSeriesOptions options;
     gint n_files;
     GwyContainer **datas;
     FrameSeries *series;
@@ -147,6 +148,8 @@ check_args(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
     if (args->all_channels && n_files == 1)
         return refuse_usage(error, _("--all-channels needs one file per "
                                      "frame"));
+    if (!series_args_to_options(&args->series, &run->options, error))
+        return FALSE;
     roles = g_new(OutputFilesRole, n_files + 3);
     for (i = 0; i < n_files; i++) {
         roles[i].role = _("frame");
@@ -169,24 +172,17 @@ check_args(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
 static gboolean
 load_series(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
 {
-    FrameSeriesOptions options;
     gint k;
-    gboolean ok = FALSE;
 
-    if (!series_args_to_options(&args->series, &options, error))
-        goto end;
     run->n_files = g_strv_length(args->files);
     run->datas = g_new0(GwyContainer*, run->n_files);
     for (k = 0; k < run->n_files; k++) {
         if (!(run->datas[k] = isolated_load(args->files[k], error)))
-            goto end;
+            return FALSE;
     }
     run->series = frame_series_from_files(run->datas, args->files,
-                                          run->n_files, &options, error);
-    ok = (run->series != NULL);
-end:
-    series_args_clear(NULL, &options);
-    return ok;
+                                          run->n_files, &run->options, error);
+    return run->series != NULL;
 }
 
 static gint
@@ -584,6 +580,7 @@ free_run(SeriesRun *run)
             g_object_unref(run->datas[k]);
     }
     g_free(run->datas);
+    series_args_clear(NULL, &run->options);
 }
 
 static void

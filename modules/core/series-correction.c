@@ -22,6 +22,18 @@
 #define FLAG_RATIO 4.0
 #define FLAG_FLOOR_PX 1.0
 
+/* An effect larger than this fraction of the frame's smaller side is not
+ * believed: the frames would not overlap across it. */
+#define PLAUSIBLE_EFFECT 0.5
+
+/* A frame is judged by the fit of the others only when at least this many
+ * others remain: two frames are one pair, which any model fits. */
+#define LEAVE_OUT_MIN_OTHERS 3
+
+/* Lines a registered block has at least: sparse content leaves shorter
+ * blocks empty. */
+#define MIN_BLOCK_LINES 8
+
 /* Leaving a disturbed frame out makes the others agree this many times
  * better. */
 #define LEAVE_OUT_GAIN 2.0
@@ -48,6 +60,54 @@ add_warning(SeriesCorrection *correction, gchar *text)
     g_ptr_array_add(correction->warnings, text);
 }
 
+/* The size of the effect a fit names (nm): a jump's step, an
+ * oscillation's amplitude, settling's excess travel u tau; 0 for none. */
+static gdouble
+effect_size_nm(const DriftFit *fit)
+{
+    DriftFitParameters p;
+
+    drift_fit_parameters(fit, &p);
+    switch (fit->type) {
+        case DRIFT_MODEL_JUMP:
+        return hypot(p.step_nm[0], p.step_nm[1]);
+
+        case DRIFT_MODEL_OSCILLATION:
+        return hypot(p.amplitude_nm[0], p.amplitude_nm[1]);
+
+        case DRIFT_MODEL_SETTLING:
+        return hypot(p.u_nm_per_s[0], p.u_nm_per_s[1])*p.tau_s;
+
+        default:
+        return 0.0;
+    }
+}
+
+/* The chosen fit, or constant drift when the chosen effect is larger than
+ * the frames could show (a fit bending to a few failed registrations). */
+static gint
+plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
+                 gint n_fits, gint chosen, gboolean warn)
+{
+    gdouble size;
+    gint i;
+
+    if (chosen < 0
+        || (size = effect_size_nm(fits + chosen)) <= PLAUSIBLE_EFFECT*correction->frame_nm)
+        return chosen;
+    if (warn)
+        add_warning((SeriesCorrection*)correction,
+                    g_strdup_printf(_("a %s of %.3g nm was fitted and "
+                                      "refused: more than half the frame"),
+                                    drift_model_type_name(fits[chosen].type),
+                                    size));
+    for (i = 0; i < n_fits; i++) {
+        if (fits[i].type == DRIFT_MODEL_NONE && fits[i].ok)
+            return i;
+    }
+    return -1;
+}
+
 /* The fit of every model to the measurements whose weight in `weights` is
  * positive; measurements the fit cuts as gross outliers get weight 0. */
 static gboolean
@@ -61,6 +121,8 @@ fit_models(SeriesCorrection *correction, const gdouble *weights)
         fit->meas[i].weight = weights[i];
     fit->chosen = drift_fit_select_kept(fit->meas, fit->n_meas,
                                         &fit->fit_options, fit->fits, kept);
+    fit->chosen = plausible_choice(correction, fit->fits, fit->n_fits,
+                                   fit->chosen, TRUE);
     for (i = 0; i < fit->n_meas; i++) {
         if (!kept[i])
             fit->meas[i].weight = 0.0;
@@ -206,20 +268,58 @@ flag_outlying(SeriesCorrection *correction)
     }
 }
 
+/* A frame left out, as a candidate for flagging. */
+typedef struct {
+    gint frame;
+    gdouble residual;     /* its residual against the others' fit */
+    gdouble typical;      /* the others' typical residual */
+    gdouble spread;       /* the others' mean block residual */
+    gint n_params;        /* of the model the others chose */
+} LeftOut;
+
+/* The mean residual (px) of the registered blocks between frames neither k
+ * nor flagged, each clipped at ten times their median (and at least a
+ * pixel) so that a failed registration counts as a bad one, not as a
+ * thousand.  Unlike the frames' best-pair residuals it sees a frame that
+ * fits only in part. */
+static gdouble
+others_spread(const SeriesCorrection *correction, const DriftFit *fit, gint k,
+              const gdouble *registered, gdouble *values)
+{
+    const FitReport *report = &correction->fit;
+    gdouble clip, sum = 0.0;
+    gint i, n = 0;
+
+    for (i = 0; i < report->n_meas; i++) {
+        const DriftMeasurement *m = report->meas + i;
+
+        if (registered[i] > 0.0 && m->frame_a != k && m->frame_b != k
+            && !correction->frames[m->frame_a].flagged
+            && !correction->frames[m->frame_b].flagged)
+            values[n++] = residual_px(correction, fit, m);
+    }
+    if (!n)
+        return NAN;
+    clip = MAX(10.0*median_of(values, n), 1.0);
+    for (i = 0; i < n; i++)
+        sum += MIN(values[i], clip);
+    return sum/n;
+}
+
 /* The fit of the frames neither k nor flagged: frame k's residual
- * against it, and the typical residual of the others. */
+ * against it, the typical residual of the others and their spread. */
 static gboolean
 fit_leaving_out(const SeriesCorrection *correction, gint k,
                 const gdouble *registered, DriftMeasurement *work,
-                gdouble *values, gdouble *residual, gdouble *typical,
-                gint *n_params)
+                gdouble *values, LeftOut *result)
 {
     const FitReport *report = &correction->fit;
     DriftFit fits[FIT_REPORT_MAX_MODELS];
     DriftFitOptions options = report->fit_options;
     gint nf = correction->n_frames, i, j, chosen, n_pairs, count = 0;
-    gdouble *others = g_new(gdouble, nf), r;
+    gdouble *others = g_new(gdouble, MAX(nf, 1)), r;
 
+    result->frame = k;
     memcpy(work, report->meas, report->n_meas*sizeof(DriftMeasurement));
     for (i = 0; i < report->n_meas; i++) {
         gint a = work[i].frame_a, b = work[i].frame_b;
@@ -230,10 +330,11 @@ fit_leaving_out(const SeriesCorrection *correction, gint k,
             work[i].weight = 0.0;
     }
     chosen = drift_fit_select(work, report->n_meas, &options, fits);
+    chosen = plausible_choice(correction, fits, report->n_fits, chosen, FALSE);
     if (chosen >= 0) {
-        *n_params = fits[chosen].n_params;
-        *residual = frame_residual(correction, fits + chosen, k, registered,
-                                   &n_pairs, values);
+        result->n_params = fits[chosen].n_params;
+        result->residual = frame_residual(correction, fits + chosen, k,
+                                          registered, &n_pairs, values);
         for (j = 0; j < nf; j++) {
             if (j == k || correction->frames[j].flagged)
                 continue;
@@ -242,23 +343,20 @@ fit_leaving_out(const SeriesCorrection *correction, gint k,
             if (isfinite(r))
                 others[count++] = r;
         }
-        *typical = median_of(others, count);
+        result->typical = median_of(others, count);
+        result->spread = others_spread(correction, fits + chosen, k,
+                                       registered, values);
     }
     g_free(others);
-    return chosen >= 0 && count >= 2 && isfinite(*residual);
+    return (chosen >= 0 && count >= 2 && isfinite(result->residual)
+            && isfinite(result->spread));
 }
 
-/* A frame left out, as a candidate for flagging. */
-typedef struct {
-    gint frame;
-    gdouble residual;     /* its residual against the others' fit */
-    gdouble typical;      /* the others' typical residual */
-    gint n_params;        /* of the model the others chose */
-} LeftOut;
-
-/* Of candidates nearly as consistent as the most consistent, the one whose
- * others need the simplest model: a slip in frame 1 of a steady series
- * can be read as frame 0 cut off by a jump, or as frame 1 out of line. */
+/* Of candidates whose others agree nearly as well as the best, the one
+ * whose others need the simplest model: a slip in frame 1 of a steady
+ * series can be read as frame 0 cut off by a jump, or as frame 1 out of
+ * line.  Agreement is the others' spread, which sees a frame that fits
+ * only in part (a jump inside a slipped frame read as a jump at its end). */
 static gint
 pick_left_out(const LeftOut *cand, gint n)
 {
@@ -266,13 +364,13 @@ pick_left_out(const LeftOut *cand, gint n)
     gint i, best = -1;
 
     for (i = 0; i < n; i++)
-        lowest = MIN(lowest, cand[i].typical);
+        lowest = MIN(lowest, cand[i].spread);
     for (i = 0; i < n; i++) {
-        if (cand[i].typical > LEAVE_OUT_TIE*lowest)
+        if (cand[i].spread > LEAVE_OUT_TIE*lowest)
             continue;
         if (best < 0 || cand[i].n_params < cand[best].n_params
             || (cand[i].n_params == cand[best].n_params
-                && cand[i].typical < cand[best].typical))
+                && cand[i].spread < cand[best].spread))
             best = i;
     }
     return best;
@@ -291,19 +389,25 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
     const FitReport *report = &correction->fit;
     gint nf = correction->n_frames, k, round, n, best;
     DriftMeasurement *work = g_new(DriftMeasurement, MAX(report->n_meas, 1));
-    gdouble *values = g_new(gdouble, report->n_meas + 1);
-    gdouble agreement = correction->typical_px, *in_all = g_new(gdouble, nf);
-    LeftOut *cand = g_new(LeftOut, nf), c;
+    gdouble *values = g_new(gdouble, MAX(report->n_meas, 1));
+    gdouble agreement = correction->typical_px;
+    gdouble *in_all = g_new(gdouble, MAX(nf, 1));
+    LeftOut *cand = g_new(LeftOut, MAX(nf, 1)), c;
 
     for (k = 0; k < nf; k++)
         in_all[k] = correction->frames[k].residual_px;
     for (round = 0; round < MAX(nf/3, 1); round++) {
+        gint others = -1;
+
+        for (k = 0; k < nf; k++)
+            others += !correction->frames[k].flagged;
+        if (others < LEAVE_OUT_MIN_OTHERS)
+            break;
         n = 0;
         for (k = 0; k < nf; k++) {
-            c.frame = k;
             if (correction->frames[k].flagged
                 || !fit_leaving_out(correction, k, registered, work, values,
-                                    &c.residual, &c.typical, &c.n_params))
+                                    &c))
                 continue;
             if (beyond_limit(c.residual, c.typical)
                 && (agreement > LEAVE_OUT_GAIN*c.typical
@@ -396,6 +500,8 @@ eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
 /* How many block spans on either side of the fitted jump time the jump is
  * looked for line by line. */
 #define JUMP_SEARCH_BLOCKS 3.0
+/* Frames this far from a line's own compared with it. */
+#define JUMP_PARTNER_REACH 2
 
 /* Content of frame k's line r as frame j shows it, with the drift of line
  * r taken from `side`: each pixel's true position, then where frame j saw
@@ -480,32 +586,45 @@ conditioned(const FrameSeries *series, ConditionedFrame **cache, gint k,
     return cache[k] ? cache[k]->data : NULL;
 }
 
-/* How well line r of frame k matches its neighbouring frames (those not
- * flagged) with the drift of `side`: the mean mismatch, 0 when neither
- * shows the line's content (no evidence either way). */
-static gdouble
-line_cost(const SeriesCorrection *correction, const FrameSeries *series,
-          ConditionedFrame **cache, gint k, gint r, JumpSide side,
-          gdouble *line)
+/* How well line r of frame k matches the frames near it (those not
+ * flagged, up to JUMP_PARTNER_REACH away: the next frame may be flagged,
+ * the previous one may not show the line's content) with the drift
+ * without the step and with it: the mean mismatches over the frames that
+ * show the line's content under both, 0 and 0 when none does (no evidence
+ * either way: content seen under one only would favour the other). */
+static void
+line_costs(const SeriesCorrection *correction, const FrameSeries *series,
+           ConditionedFrame **cache, gint k, gint r, gdouble *line,
+           gdouble *before, gdouble *after)
 {
     const SeriesFrame *fk = series->frames + k;
-    gdouble aspect = correction->ystep/correction->xstep, sum = 0.0, e;
-    const gdouble *data = conditioned(series, cache, k, aspect), *ref;
-    gint j, count = 0;
+    gdouble aspect = correction->ystep/correction->xstep, eb, ea;
+    const gdouble *data = conditioned(series, cache, k, aspect), *ref, *row;
+    gint j, count = 0, xres = fk->timing.xres;
 
-    for (j = k-1; j <= k+1 && data; j += 2) {
-        if (j < 0 || j >= series->n_frames || correction->frames[j].flagged
+    *before = *after = 0.0;
+    for (j = k - JUMP_PARTNER_REACH; j <= k + JUMP_PARTNER_REACH && data; j++) {
+        if (j == k || j < 0 || j >= series->n_frames
+            || correction->frames[j].flagged
             || !(ref = conditioned(series, cache, j, aspect)))
             continue;
-        predict_line(correction, fk, series->frames + j, ref, r, side, line);
-        e = line_mismatch(data + (gsize)r*fk->timing.xres, line,
-                          fk->timing.xres);
-        if (!isnan(e)) {
-            sum += e;
-            count++;
-        }
+        row = data + (gsize)r*xres;
+        predict_line(correction, fk, series->frames + j, ref, r, JUMP_NEVER,
+                     line);
+        eb = line_mismatch(row, line, xres);
+        predict_line(correction, fk, series->frames + j, ref, r, JUMP_ALWAYS,
+                     line);
+        ea = line_mismatch(row, line, xres);
+        if (isnan(eb) || isnan(ea))
+            continue;
+        *before += eb;
+        *after += ea;
+        count++;
     }
-    return count ? sum/count : 0.0;
+    if (count) {
+        *before /= count;
+        *after /= count;
+    }
 }
 
 /* The fit places a jump within a block or so (blocks straddling it register
@@ -537,15 +656,14 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     for (k = 0; k < nf; k++) {
         const SeriesFrame *fk = series->frames + k;
 
-        for (i = 0; i < fk->timing.yres; i++) {
+        /* A flagged frame's lines are out of line under either drift. */
+        for (i = 0; i < fk->timing.yres && !correction->frames[k].flagged; i++) {
             r = (fk->timing.direction == SCAN_DIRECTION_UP) ? fk->timing.yres-1 - i : i;
             t = scan_timing_rows_time(&fk->timing, r, r+1);
             if (fabs(t - fit->nonlinear) > window)
                 continue;
-            before[n] = line_cost(correction, series, cache, k, r,
-                                  JUMP_NEVER, line);
-            after[n] = line_cost(correction, series, cache, k, r,
-                                 JUMP_ALWAYS, line);
+            line_costs(correction, series, cache, k, r, line, before + n,
+                       after + n);
             when[n] = scan_timing_row_start(&fk->timing, r);
             n++;
         }
@@ -588,7 +706,7 @@ prepare_options(const FrameSeries *series, const DisplacementOptions *doptions,
         *d = *doptions;
     else {
         displacement_options_init(d);
-        d->n_blocks = MIN(d->n_blocks, MAX(timing->yres/4, 1));
+        d->n_blocks = MIN(d->n_blocks, MAX(timing->yres/MIN_BLOCK_LINES, 1));
         if (series->n_frames > SERIES_CORRECTION_ALL_PAIRS_UP_TO)
             d->pair_reach = SERIES_CORRECTION_PAIR_REACH;
     }
@@ -619,6 +737,8 @@ series_correction_compute(const FrameSeries *series,
     correction->warnings = g_ptr_array_new_with_free_func(g_free);
     correction->xstep = frame_series_dx(series);
     correction->ystep = frame_series_dy(series);
+    correction->frame_nm = 1e9*MIN(correction->xstep*series->frames[0].timing.xres,
+                                   correction->ystep*series->frames[0].timing.yres);
     for (i = 0; i < series->notes->len; i++)
         add_warning(correction,
                     g_strdup(g_ptr_array_index(series->notes, i)));
@@ -636,7 +756,8 @@ series_correction_compute(const FrameSeries *series,
         flag_unregistered(correction);
         if (series->n_frames <= SERIES_CORRECTION_LEAVE_OUT_UP_TO)
             flag_by_leaving_out(correction, registered);
-        else
+        if (series->n_frames > SERIES_CORRECTION_LEAVE_OUT_UP_TO
+            || series->n_frames < LEAVE_OUT_MIN_OTHERS + 1)
             flag_outlying(correction);
         if (drop_flagged(correction, registered, weights)
             && !fit_models(correction, weights)) {
@@ -720,12 +841,14 @@ frame_trajectory(const SeriesCorrection *correction, const ScanTiming *timing,
     return trajectory;
 }
 
-/* A fitted jump while this frame was scanned, or not. */
+/* A fitted jump while this frame was scanned, or so close to it that the
+ * compensation, which looks a line beyond the frame, would see it. */
 static gboolean
 jump_in_frame(const SeriesCorrection *correction, const ScanTiming *timing)
 {
     const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
-    gdouble t0 = timing->frame_start, t1 = scan_timing_frame_end(timing);
+    gdouble t0 = timing->frame_start - 2.0*timing->line_time;
+    gdouble t1 = scan_timing_frame_end(timing) + 2.0*timing->line_time;
 
     return (fit->type == DRIFT_MODEL_JUMP && fit->creep == DRIFT_FIT_CREEP_NONE
             && fit->nonlinear > t0 && fit->nonlinear < t1);

@@ -45,6 +45,7 @@ typedef struct {
     gdouble typical_px;     /* the median pair residual of the series, px */
     GPtrArray *warnings;    /* strings */
     gdouble xstep, ystep;   /* pixel size of the frames, m */
+    gdouble frame_nm;       /* the frames' smaller physical side, nm */
 } SeriesCorrection;
 
 /* Pairs of frames registered in a long series: each frame against this

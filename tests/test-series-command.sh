@@ -1,0 +1,162 @@
+#!/bin/sh
+# Tests of `gwy-localscan series` end to end: simulated frames with a
+# drift drawn at random (seeded) are corrected; the output file holds the
+# inputs and one corrected channel per frame, the CSV every scan line with
+# the drawn drift, the JSON the verdicts; every bad command line or input
+# exits non-zero with one line and writes nothing; the measured series
+# (../shared/data/measured) are corrected when present, else SKIPPED.
+# Copyright (C) 2026 The gwy-localscan authors.
+# SPDX-License-Identifier: GPL-2.0-or-later
+set -u
+tool=${GWY_LOCALSCAN:-./tools/gwy-localscan}
+simscan=${SIMSCAN:-./simscan/simscan}
+for v in tool simscan; do
+    eval "p=\$$v"
+    case $p in /*) ;; *) eval "$v=\$(pwd)/\$p" ;; esac
+done
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+failures=0
+checks=0
+skipped=0
+fail() {
+    echo "FAIL: $*"
+    failures=$((failures + 1))
+}
+check() {
+    checks=$((checks + 1))
+}
+
+seed=${LOCALSCAN_TEST_SEED:-$(od -An -N4 -tu4 /dev/urandom | tr -d ' ')}
+echo "test-series-command: seed $seed (LOCALSCAN_TEST_SEED overrides)"
+# A steady drift drawn from the seed: vx, vy in nm/s (the frames are
+# 2.5 um, 128 px: 19.5 nm per px; 128 lines of 0.5 s, back to back, so up
+# to 3 px over the series).  Frame k is scanned 64 k s on: simscan starts every
+# frame at t = 0, so the drift until then is its offset.
+vx=$(awk -v s="$seed" 'BEGIN { srand(s); printf "%.3f", 0.1 + 0.2*rand() }')
+vy=$(awk -v s="$seed" 'BEGIN { srand(s + 1); printf "%.3f", -0.2 + 0.4*rand() }')
+echo "drift: vx $vx nm/s, vy $vy nm/s"
+frames=
+for k in 0 1 2; do
+    offset=$(awk -v k=$k -v vx="$vx" -v vy="$vy" 'BEGIN { printf "%.4f,%.4f", 64*k*vx, 64*k*vy }')
+    "$simscan" -q --xres 128 --yres 128 --size 2.5 --stripes 4 --seed "$seed" \
+        --noise 0.1 --drift none --velocity "$vx,$vy" --offset "$offset" \
+        --line-time 0.5 -o "$tmp/f$k.gwy" 2>"$tmp/err" \
+        || fail "simscan frame $k: $(cat "$tmp/err")"
+    frames="$frames $tmp/f$k.gwy"
+done
+timing="--line-time 0.5 --frame-times 0,64,128 --direction down"
+
+# A good run: exit 0, nothing on stderr beyond warnings, three outputs.
+check
+"$tool" series $timing -o "$tmp/out.gwy" --trajectory "$tmp/t.csv" \
+    --json "$tmp/t.json" $frames >"$tmp/out" 2>"$tmp/err" \
+    || fail "good run exited $?: $(cat "$tmp/err")"
+check
+[ "$(head -c 4 "$tmp/out.gwy" 2>/dev/null)" = "GWYP" ] || fail "no .gwy written"
+check
+[ "$(grep -c -a '(drift corrected)' "$tmp/out.gwy")" -ge 1 ] \
+    || fail "no corrected channel titled '(drift corrected)'"
+check
+[ "$(grep -o -a 'drift corrected' "$tmp/out.gwy" | wc -l)" -eq 3 ] \
+    || fail "not 3 corrected channels"
+check
+grep -q -a 'Drift trajectory' "$tmp/out.gwy" || fail "no trajectory graph"
+check
+grep -v '^#' "$tmp/t.csv" | head -n 1 | grep -q '^frame,row,t_s,dx_px,dy_px$' \
+    || fail "CSV header: $(grep -v '^#' "$tmp/t.csv" | head -n 1)"
+check
+[ "$(grep -c '^[0-9]' "$tmp/t.csv")" -eq 384 ] \
+    || fail "CSV has $(grep -c '^[0-9]' "$tmp/t.csv") lines, not 3 x 128"
+# The drift at the last line of the last frame, against the drawn one:
+# p(t) - p(0) = v t, in px of 19.53 nm, within 0.15 px.
+check
+awk -F, -v vx="$vx" -v vy="$vy" '
+    $1 == 2 && $2 == 127 {
+        px = 2500/128; ex = vx*$3/px; ey = vy*$3/px
+        dx = $4 - ex; dy = $5 - ey
+        if (dx*dx + dy*dy > 0.15*0.15) {
+            printf "last line drift %s, %s px, drawn %.3f, %.3f px\n", $4, $5, ex, ey
+            exit 1
+        }
+        found = 1
+    }
+    END { exit found ? 0 : 1 }' "$tmp/t.csv" || fail "trajectory off the drawn drift"
+check
+for key in '"effect"' '"velocity_nm_per_s"' '"models"' '"frames"' '"warnings"' \
+           '"flagged" : false' '"t_start_s"' '"residual_px"'; do
+    grep -q -- "$key" "$tmp/t.json" || fail "JSON lacks $key"
+done
+check
+[ "$(grep -c '"flagged" : false' "$tmp/t.json")" -eq 3 ] || fail "not 3 unflagged frames"
+
+# --crop common: smaller corrected channels, no masks left.
+check
+"$tool" series $timing --crop common -o "$tmp/crop.gwy" $frames 2>"$tmp/err" \
+    || fail "--crop common exited $?: $(cat "$tmp/err")"
+check
+[ "$(wc -c <"$tmp/crop.gwy")" -lt "$(wc -c <"$tmp/out.gwy")" ] \
+    || fail "--crop common did not crop"
+
+# Bad command lines and inputs: exit status, one line, no output.
+bad_case() {
+    want=$1 expect=$2
+    shift 2
+    rm -f "$tmp/bad.gwy" "$tmp/bad.csv" "$tmp/bad.json"
+    "$tool" series "$@" >"$tmp/out" 2>"$tmp/err"
+    status=$?
+    check
+    [ $status -eq "$want" ] || fail "series $*: exit $status, not $want"
+    [ "$(wc -l <"$tmp/err")" -eq 1 ] || fail "series $*: stderr not one line: $(cat "$tmp/err")"
+    grep -q -- "$expect" "$tmp/err" || fail "series $*: message lacks '$expect': $(cat "$tmp/err")"
+    [ ! -e "$tmp/bad.gwy" ] && [ ! -e "$tmp/bad.csv" ] && [ ! -e "$tmp/bad.json" ] \
+        || fail "series $*: wrote output"
+    [ -z "$(ls -A "$tmp" | grep -v -e '^f[0-9].gwy$' -e '^out' -e '^t\.' -e '^crop.gwy$' -e '^err$' -e '^notes.txt$')" ] \
+        || fail "series $*: left $(ls -A "$tmp")"
+}
+bad_case 2 "-o OUT.gwy is required" $timing $frames
+bad_case 2 "no frames given" $timing -o "$tmp/bad.gwy"
+bad_case 2 "--crop must be common or none" $timing --crop some -o "$tmp/bad.gwy" $frames
+bad_case 2 "needs one file per frame" $timing --all-channels -o "$tmp/bad.gwy" "$tmp/f0.gwy"
+bad_case 2 "--line-time must be a number of seconds" --line-time 0 --frame-times 0,64,128 -o "$tmp/bad.gwy" $frames
+bad_case 2 "unknown direction" --line-time 1 --frame-times 0,64,128 --direction sideways -o "$tmp/bad.gwy" $frames
+bad_case 2 "f0.gwy" $timing -o "$tmp/f0.gwy" $frames
+bad_case 1 "3 frames" --line-time 0.5 --frame-times 0,64 -o "$tmp/bad.gwy" $frames
+bad_case 1 "at least two" --line-time 0.5 --frame-times 0 --channels 0 -o "$tmp/bad.gwy" "$tmp/f0.gwy"
+bad_case 1 "nosuch.gwy" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/nosuch.gwy"
+printf 'not a gwy file\n' >"$tmp/notes.txt"
+bad_case 1 "notes.txt" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/notes.txt"
+# simscan starts every frame at 0 s: the metadata's times cannot order them.
+bad_case 1 "time order" --line-time 0.5 -o "$tmp/bad.gwy" $frames
+bad_case 1 "time order" --line-time 0.5 --frame-times 0,128,64 -o "$tmp/bad.gwy" $frames
+
+# The measured series, as a user runs them.
+measured=${LOCALSCAN_MEASURED_DIR:-}
+if [ -n "$measured" ] && [ -d "$measured/fastscan-series" ] \
+   && [ -d "$measured/hsafm-minicircles" ]; then
+    check
+    "$tool" series -c ZSensor --all-channels -o "$tmp/fs.gwy" --json "$tmp/fs.json" \
+        "$measured"/fastscan-series/*.001 >"$tmp/out" 2>"$tmp/err" \
+        || fail "FastScan series exited $?: $(cat "$tmp/err")"
+    check
+    [ "$(grep -c '"index"' "$tmp/fs.json" 2>/dev/null)" -eq 3 ] || fail "FastScan: not 3 frames"
+    check
+    # Three files of three channels each, all corrected.
+    [ "$(grep -o -a 'drift corrected' "$tmp/fs.gwy" | wc -l)" -eq 9 ] \
+        || fail "FastScan --all-channels: not 9 corrected channels"
+    for f in "$measured"/hsafm-minicircles/*.gwy; do
+        check
+        "$tool" series -o "$tmp/hs.gwy" --json "$tmp/hs.json" "$f" >"$tmp/out" 2>"$tmp/err" \
+            || fail "$(basename "$f") exited $?: $(cat "$tmp/err")"
+        check
+        [ "$(grep -c '"index"' "$tmp/hs.json" 2>/dev/null)" -eq 7 ] || fail "$(basename "$f"): not 7 frames"
+    done
+else
+    echo "test-series-command: SKIPPED: measured data absent (${measured:-no LOCALSCAN_MEASURED_DIR})"
+    skipped=1
+fi
+
+echo "test-series-command: $checks checks, $failures failures, $skipped parts skipped"
+[ $failures -eq 0 ] || exit 1
+[ $skipped -eq 0 ] || exit 77
+exit 0

@@ -1,0 +1,284 @@
+/*
+ *  The series correction (modules/core/series-correction.h) on simulated
+ *  series with a random drift effect hidden in them (drawn as
+ *  hidden-effect-cases.c draws it, seeded): the trajectory on every scan
+ *  line, the corrected frames against the drift-free truth, the effect
+ *  named, a disturbed frame flagged and no other; and the outputs: the
+ *  trajectory CSV, the JSON and the common area.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+#include <check.h>
+#include <json-glib/json-glib.h>
+#include <libgwyddion/gwyddion.h>
+#include <libprocess/gwyprocess.h>
+#include "hidden-effect-cases.h"
+#include "series-cases.h"
+#include "test-common.h"
+
+/* What the soaks of docs/series.md allow (over every scan line of every
+ * frame but the disturbed one, lines within 3 of a jump left out). */
+#define TRAJECTORY_RMS_MAX 0.15
+#define STRIPE_MAX 0.3
+#define FRAME_MAX 0.3
+
+/* Cases: effect _i % 4, raw channels for _i / 4 odd, a disturbed frame
+ * for _i >= 8. */
+#define N_CASES 12
+
+static guint32 base_seed;
+
+static void
+check_case(gint i, const SeriesCaseOptions *options)
+{
+    DriftModel model;
+    GwyDataField **truth = NULL;
+    SeriesCaseResult r;
+    FrameSeries *series;
+    gint k;
+
+    hidden_case_draw(base_seed, i, &model);
+    series = series_case_scan(base_seed, i, &model, options, &truth);
+    ck_assert(series != NULL);
+    ck_assert_msg(series_case_judge(series, truth, &model, options, &r),
+                  "case %d (seed %u): the correction failed", i, base_seed);
+    printf("case %2d %-11s raw %d disturbed %2d: trajectory rms %.3f px "
+           "(worst line %.3f), stripes %.3f px, frames %.3f px, named %d, "
+           "flagged %d\n", i, drift_model_type_name(model.type),
+           options->raw, options->disturbed, r.trajectory_rms_px,
+           r.trajectory_worst_px, r.stripe_worst_px, r.frame_worst_px,
+           r.effect_named, r.flagged);
+    fflush(stdout);
+    ck_assert_msg(r.effect_named, "case %d (seed %u): %s not named", i,
+                  base_seed, drift_model_type_name(model.type));
+    ck_assert_msg(r.trajectory_rms_px <= TRAJECTORY_RMS_MAX,
+                  "case %d (seed %u): trajectory rms %g px", i, base_seed,
+                  r.trajectory_rms_px);
+    ck_assert_msg(r.stripe_worst_px <= STRIPE_MAX,
+                  "case %d (seed %u): a stripe keeps %g px", i, base_seed,
+                  r.stripe_worst_px);
+    ck_assert_msg(r.frame_worst_px <= FRAME_MAX,
+                  "case %d (seed %u): a frame lies %g px from the truth", i,
+                  base_seed, r.frame_worst_px);
+    ck_assert_msg(r.flagged == (options->disturbed >= 0),
+                  "case %d (seed %u): %d frames flagged", i, base_seed,
+                  r.flagged);
+    if (options->disturbed >= 0)
+        ck_assert_msg(r.disturbed_flagged,
+                      "case %d (seed %u): frame %d (slipped) not flagged", i,
+                      base_seed, options->disturbed);
+    for (k = 0; k < 2*SERIES_CASE_FRAMES; k++)
+        g_object_unref(truth[k]);
+    g_free(truth);
+    frame_series_free(series);
+    drift_model_clear(&model);
+}
+
+START_TEST(test_hidden_drift_corrected)
+{
+    SeriesCaseOptions options;
+
+    options.raw = (_i/SERIES_CASE_EFFECTS) % 2;
+    options.disturbed = -1;
+    /* An inner frame: the first or the last frame slipped is a jump at
+     * its border, which nothing can tell from a real one. */
+    if (_i >= 2*SERIES_CASE_EFFECTS) {
+        GRand *rng = g_rand_new_with_seed(base_seed + _i);
+
+        options.disturbed = g_rand_int_range(rng, 1, SERIES_CASE_FRAMES - 1);
+        g_rand_free(rng);
+    }
+    check_case(_i, &options);
+}
+END_TEST
+
+/* A steady drift of whole pixels per frame: the CSV holds every line of
+ * every frame with the fitted drift, the JSON the frames and the fit. */
+static FrameSeries*
+steady_series(gint n_frames, gdouble vx_px, GwyDataField **truth)
+{
+    FrameSeries *series = frame_series_new();
+    GRand *rng = g_rand_new_with_seed(base_seed);
+    gint xres = 96, yres = 64, canvas = 160, k, r, c, b;
+    GwyDataField *surface = gwy_data_field_new(canvas, canvas, canvas, canvas,
+                                               TRUE);
+    gdouble *s = gwy_data_field_get_data(surface);
+
+    /* Bumps on a canvas wider than any frame's travel. */
+    for (b = 0; b < 120; b++) {
+        gdouble x0 = g_rand_double_range(rng, 0, canvas);
+        gdouble y0 = g_rand_double_range(rng, 0, canvas);
+
+        for (r = 0; r < canvas; r++) {
+            for (c = 0; c < canvas; c++)
+                s[r*canvas + c] += exp(-((c - x0)*(c - x0) + (r - y0)*(r - y0))/8.0);
+        }
+    }
+    for (k = 0; k < n_frames; k++) {
+        GwyDataField *field = gwy_data_field_new(xres, yres, xres*1e-9,
+                                                 yres*1e-9, FALSE);
+        gdouble *d = gwy_data_field_get_data(field);
+        ScanTiming timing;
+
+        scan_timing_init(&timing, xres, yres, k*yres*1.0, 1.0,
+                         SCAN_DIRECTION_DOWN);
+        for (r = 0; r < yres; r++) {
+            gdouble shift = vx_px*scan_timing_rows_time(&timing, r, r+1)/yres;
+            gint whole = (gint)floor(shift);
+            gdouble f = shift - whole;
+
+            /* Content at x appears at x + shift. */
+            for (c = 0; c < xres; c++) {
+                gint x = c + 30 - whole;
+
+                d[r*xres + c] = (1.0 - f)*s[(r + 40)*canvas + x]
+                                + f*s[(r + 40)*canvas + x - 1];
+            }
+        }
+        gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+        frame_series_append(series, field, "steady", &timing);
+        g_object_unref(field);
+    }
+    g_rand_free(rng);
+    if (truth)
+        *truth = surface;
+    else
+        g_object_unref(surface);
+    return series;
+}
+
+START_TEST(test_outputs)
+{
+    FrameSeries *series = steady_series(3, 4.0, NULL);
+    SeriesCorrection correction;
+    GError *error = NULL;
+    gchar *csv, *json, **lines;
+    JsonParser *parser = json_parser_new();
+    JsonObject *root;
+    JsonArray *frames;
+    gint i, n_data = 0, first_data = -1;
+    gdouble t, dx, dy;
+
+    ck_assert_msg(series_correction_compute(series, NULL, NULL, &correction,
+                                            &error),
+                  "%s", error ? error->message : "?");
+    csv = series_correction_trajectory_csv(&correction, series);
+    lines = g_strsplit(csv, "\n", -1);
+    for (i = 0; lines[i] && lines[i][0]; i++) {
+        if (lines[i][0] == '#')
+            continue;
+        if (first_data < 0) {
+            ck_assert_str_eq(lines[i], "frame,row,t_s,dx_px,dy_px");
+            first_data = i;
+            continue;
+        }
+        n_data++;
+    }
+    ck_assert_int_eq(n_data, 3*64);
+    /* Frame 1, row 10: 4 px per frame of 64 s, fitted. */
+    ck_assert(sscanf(lines[first_data + 1 + 64 + 10], "1,10,%lf,%lf,%lf",
+                     &t, &dx, &dy) == 3);
+    ck_assert_msg(fabs(t - 74.25) < 1e-6, "t %g", t);
+    ck_assert_msg(fabs(dx - 4.0*t/64.0) < 0.05 && fabs(dy) < 0.05,
+                  "line drift %g, %g px, expected %g, 0", dx, dy, 4.0*t/64.0);
+    json = series_correction_to_json(&correction, series);
+    ck_assert(json_parser_load_from_data(parser, json, -1, NULL));
+    root = json_node_get_object(json_parser_get_root(parser));
+    ck_assert_str_eq(json_object_get_string_member(root, "effect"), "none");
+    ck_assert(json_object_has_member(root, "velocity_nm_per_s"));
+    ck_assert(json_object_has_member(root, "models"));
+    ck_assert(json_object_has_member(root, "warnings"));
+    frames = json_object_get_array_member(root, "frames");
+    ck_assert_int_eq(json_array_get_length(frames), 3);
+    for (i = 0; i < 3; i++) {
+        JsonObject *f = json_array_get_object_element(frames, i);
+
+        ck_assert_int_eq(json_object_get_int_member(f, "index"), i);
+        ck_assert(!json_object_get_boolean_member(f, "flagged"));
+        ck_assert(json_object_get_null_member(f, "reason"));
+        ck_assert_msg(fabs(json_object_get_double_member(f, "t_start_s") - 64.0*i) < 1e-9,
+                      "frame %d starts at %g s", i,
+                      json_object_get_double_member(f, "t_start_s"));
+        ck_assert(json_object_get_double_member(f, "residual_px") < 0.1);
+    }
+    g_strfreev(lines);
+    g_free(csv);
+    g_free(json);
+    g_object_unref(parser);
+    series_correction_clear(&correction);
+    frame_series_free(series);
+}
+END_TEST
+
+/* The corrected frames of a steady drift show the same content where they
+ * overlap, masked where they have none; the common area is where all
+ * have data. */
+START_TEST(test_frames_overlay)
+{
+    FrameSeries *series = steady_series(3, 6.0, NULL);
+    SeriesCorrection correction;
+    GwyDataField *fixed[3], *mask[3];
+    gint k, r, c, area[4], xres = 96, yres = 64, count = 0;
+    gdouble diff = 0.0;
+
+    ck_assert(series_correction_compute(series, NULL, NULL, &correction,
+                                        NULL));
+    for (k = 0; k < 3; k++) {
+        fixed[k] = gwy_data_field_new_alike(series->frames[k].field, FALSE);
+        mask[k] = gwy_data_field_new_alike(series->frames[k].field, FALSE);
+        ck_assert(series_correction_correct_frame(&correction, series, k,
+                                                  GWY_INTERPOLATION_BSPLINE,
+                                                  fixed[k], mask[k], NULL));
+    }
+    /* 6 px per frame to the right: the last frame, moved back, has no data
+     * for its last 18 columns (its last line was scanned 3 frames on). */
+    ck_assert(series_correction_common_area(mask, 3, area, area + 1,
+                                            area + 2, area + 3));
+    printf("common area: col %d row %d, %d x %d\n", area[0], area[1],
+           area[2], area[3]);
+    ck_assert_int_eq(area[0], 0);
+    ck_assert_int_eq(area[1], 0);
+    ck_assert_int_ge(area[2], xres - 20);
+    ck_assert_int_le(area[2], xres - 17);
+    ck_assert_int_eq(area[3], yres);
+    for (r = area[1] + 2; r < area[1] + area[3] - 2; r++) {
+        for (c = area[0] + 2; c < area[0] + area[2] - 2; c++) {
+            gdouble a = gwy_data_field_get_val(fixed[0], c, r);
+            gdouble b = gwy_data_field_get_val(fixed[2], c, r);
+
+            diff += (a - b)*(a - b);
+            count++;
+        }
+    }
+    diff = sqrt(diff/count)/gwy_data_field_get_rms(fixed[0]);
+    printf("first and last corrected frames differ by %.4f of the rms\n",
+           diff);
+    ck_assert_msg(diff < 0.05, "corrected frames differ by %g of the rms",
+                  diff);
+    for (k = 0; k < 3; k++) {
+        g_object_unref(fixed[k]);
+        g_object_unref(mask[k]);
+    }
+    series_correction_clear(&correction);
+    frame_series_free(series);
+}
+END_TEST
+
+int
+main(void)
+{
+    TCase *tc;
+    Suite *s = test_suite_new("series-correction", "series", &tc);
+
+    base_seed = test_seed_from_env("test-series-correction");
+    gwy_process_type_init();
+    tcase_add_loop_test(tc, test_hidden_drift_corrected, 0, N_CASES);
+    tcase_add_test(tc, test_outputs);
+    tcase_add_test(tc, test_frames_overlay);
+    tcase_set_timeout(tc, 120);
+    return test_run_suite(s);
+}
