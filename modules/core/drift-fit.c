@@ -119,7 +119,7 @@ model_basis_mean(FitKind kind, gdouble theta, gdouble t, gdouble h,
         return 2;
 
         case DRIFT_MODEL_OSCILLATION:
-        w = sinc(2.0*G_PI*h/theta);
+        w = (h > 0.0) ? sinc(2.0*G_PI*h/theta) : 1.0;
         f[1] = w*sin(2.0*G_PI*t/theta);
         f[2] = w*cos(2.0*G_PI*t/theta);
         return 3;
@@ -323,7 +323,7 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
 {
     gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], fa[MAX_BASIS],
             fb[MAX_BASIS], row[MAX_BASIS], a[MAX_BASIS*MAX_BASIS];
-    gdouble rss = 0.0;
+    gdouble rss = 0.0, sdd[2] = { 0.0, 0.0 };
     gint i, j, l, k = 1, ax;
 
     memset(ata, 0, sizeof(ata));
@@ -344,29 +344,26 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
             atb[0][j] += pm->w[i]*row[j]*pm->d[0][i];
             atb[1][j] += pm->w[i]*row[j]*pm->d[1][i];
         }
+        sdd[0] += pm->w[i]*pm->d[0][i]*pm->d[0][i];
+        sdd[1] += pm->w[i]*pm->d[1][i]*pm->d[1][i];
     }
     for (j = 0; j < k*k; j++) {
         if (!isfinite(ata[j]))
             return NAN;
     }
+    /* The residual sum of squares of a least-squares solution is
+     * d.d - coef.(A^T d): no second pass over the measurements (the grid
+     * searches call this thousands of times). */
     for (ax = 0; ax < 2; ax++) {
         memcpy(a, ata, sizeof(a));
-        solve_small(a, atb[ax], k, coef[ax]);
-    }
-    for (i = 0; i < pm->n; i++) {
-        if (pm->w[i] <= 0.0)
-            continue;
-        model_basis_mean(kind, theta, pm->ta[i], pm->half[i], fa);
-        model_basis_mean(kind, theta, pm->tb[i], pm->half[i], fb);
-        for (ax = 0; ax < 2; ax++) {
-            gdouble r = pm->d[ax][i];
-            for (j = 0; j < k; j++)
-                r -= coef[ax][j]*(fa[j] - fb[j]);
-            rss += pm->w[i]*r*r;
-        }
+        memcpy(row, atb[ax], sizeof(row));
+        solve_small(a, row, k, coef[ax]);
+        rss += sdd[ax];
+        for (j = 0; j < k; j++)
+            rss -= coef[ax][j]*atb[ax][j];
     }
     *n_basis = k;
-    return rss;
+    return MAX(rss, 0.0);
 }
 
 /* The periods an oscillation can be seen with in these measurements.  At
@@ -903,7 +900,7 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
     prepare(meas, n, mask, &pm);
     for (i = 0; i < n_types; i++) {
         fit_prepared(&pm, types[i], options, fits + i);
-        if (fits[i].ok)
+        if (fits[i].ok && options->n_folds >= 2)
             fits[i].cv_rms_nm = cross_validate_masked(meas, n, mask, types[i],
                                                       options);
         if (types[i] == DRIFT_MODEL_NONE)
@@ -922,8 +919,9 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
             continue;
         if (inone >= 0 && fits[inone].ok
             && (fits[inone].bic - fits[i].bic < options->bic_margin
-                || !(fits[i].cv_rms_nm
-                     < (1.0 - options->cv_gain)*fits[inone].cv_rms_nm)
+                || (options->n_folds >= 2
+                    && !(fits[i].cv_rms_nm
+                         < (1.0 - options->cv_gain)*fits[inone].cv_rms_nm))
                 || (explained_rms(fits + inone, fits + i)
                     < options->min_explained*fits[i].rms_nm)))
             continue;

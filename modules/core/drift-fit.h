@@ -50,7 +50,10 @@ typedef struct {
 } DriftFit;
 
 typedef struct {
-    gint n_folds;           /* cross-validation folds over groups (default 5) */
+    gint n_folds;           /* cross-validation folds over groups (default 5;
+                               below 2: no cross-validation, the choice by
+                               the criterion and the explained residual
+                               alone, several times faster) */
     gdouble bic_margin;     /* an effect must beat "none" by this (default 20) */
     gdouble cv_gain;        /* and predict held-out groups better by this
                                fraction (default 0.1): registration errors

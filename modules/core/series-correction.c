@@ -329,6 +329,9 @@ fit_leaving_out(const SeriesCorrection *correction, gint k,
             || correction->frames[b].flagged)
             work[i].weight = 0.0;
     }
+    /* Candidates are compared, not reported: the criterion without the
+     * cross-validation, a fit per frame affordable. */
+    options.n_folds = 0;
     chosen = drift_fit_select(work, report->n_meas, &options, fits);
     chosen = plausible_choice(correction, fits, report->n_fits, chosen, FALSE);
     if (chosen >= 0) {
