@@ -16,7 +16,7 @@
 #include <app/gwyapp.h>
 #include "hidden-effect-cases.h"
 
-#define N_TYPES 4
+#define N_TYPES HIDDEN_CASE_EFFECTS
 
 typedef struct {
     gint confusion[N_TYPES][N_TYPES + 1];   /* last column: fit failed */
@@ -29,8 +29,8 @@ type_index(const gchar *name)
 {
     DriftModelType type;
 
-    if (name && drift_model_type_from_name(name, &type) && type < N_TYPES)
-        return type;
+    if (name && drift_model_type_from_name(name, &type))
+        return hidden_case_effect_index(type);
     return N_TYPES;
 }
 
@@ -48,6 +48,10 @@ parameter_error(const DriftModel *m, JsonObject *result)
                     - 1.0);
         case DRIFT_MODEL_JUMP:
         return fabs(json_object_get_double_member(p, "t_s") - m->t_jump);
+        case DRIFT_MODEL_ACCELERATION:
+        return fabs(hypot(hidden_case_pair(p, "accel_nm_per_s2", 0),
+                          hidden_case_pair(p, "accel_nm_per_s2", 1))
+                    /(1e9*hypot(m->accel[0], m->accel[1])) - 1.0);
         default:
         return hypot(hidden_case_pair(result, "velocity_nm_per_s", 0)
                      - 1e9*m->v[0],
@@ -71,7 +75,7 @@ print_table(const Tally *t, gint n, guint32 seed, gboolean markdown)
 {
     static const gchar *what[N_TYPES] = {
         "velocity error (nm/s)", "tau relative error", "period relative error",
-        "t_s error (s)",
+        "t_s error (s)", "acceleration relative error",
     };
     gint i, j;
 
@@ -79,18 +83,20 @@ print_table(const Tally *t, gint n, guint32 seed, gboolean markdown)
            "drawn: |v| <= 0.1 nm/s; settling tau 20..60 s; oscillation "
            "period 20..60 s, 4 to 12 cycles over the series, inside the "
            "observable 12..167 s, amplitude 15..30 nm sweeping at most "
-           "2.5 px per 4 s block; jump t_s 30..230 s; details in "
+           "2.5 px per 4 s block; jump t_s 30..230 s; acceleration 20..50 nm "
+           "over the series; details in "
            "tests/hidden-effect-cases.c)\n\n", markdown ? "" : "# ",
            n, seed);
-    printf("| hidden \\ named | none | settling | oscillation | jump | failed |"
-           " named right | within tolerance | median %s |\n", "main parameter error");
-    printf("|---|---|---|---|---|---|---|---|---|\n");
+    printf("| hidden \\ named | none | settling | oscillation | jump | "
+           "acceleration | failed | named right | within tolerance | median %s |\n",
+           "main parameter error");
+    printf("|---|---|---|---|---|---|---|---|---|---|\n");
     for (i = 0; i < N_TYPES; i++) {
         gint total = 0;
 
         for (j = 0; j <= N_TYPES; j++)
             total += t->confusion[i][j];
-        printf("| %s |", drift_model_type_name(i));
+        printf("| %s |", drift_model_type_name(hidden_case_effect(i)));
         for (j = 0; j <= N_TYPES; j++)
             printf(" %d |", t->confusion[i][j]);
         printf(" %d/%d | %d/%d | %.3g (%s) |\n", t->confusion[i][i], total,
@@ -127,13 +133,13 @@ main(int argc, char **argv)
         named = result ? type_index(json_object_get_string_member(result,
                                                                   "effect"))
                        : N_TYPES;
-        tally.confusion[model.type][named]++;
-        if (named == (gint)model.type) {
+        tally.confusion[hidden_case_effect_index(model.type)][named]++;
+        if (named == hidden_case_effect_index(model.type)) {
             gdouble e = parameter_error(&model, result);
 
-            g_array_append_val(tally.errors[model.type], e);
+            g_array_append_val(tally.errors[named], e);
             if (!(why = hidden_case_check(i, &model, result)))
-                tally.within[model.type]++;
+                tally.within[named]++;
             g_free(why);
         }
         for (k = 0; files && k < HIDDEN_CASE_FRAMES; k++)

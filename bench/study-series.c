@@ -105,7 +105,7 @@ main(int argc, char **argv)
                 frame_series_free(series);
                 drift_model_clear(&model);
             }
-            tally_print(drift_model_type_name((DriftModelType)e), variants[v], &t);
+            tally_print(drift_model_type_name(hidden_case_effect(e)), variants[v], &t);
             g_array_free(t.frame_errors, TRUE);
         }
     }

@@ -42,6 +42,7 @@
 typedef struct {
     gchar *preset, *sample, *size, *direction, *drift;
     gchar *velocity, *offset, *settle_velocity, *amplitude, *jump_step;
+    gchar *acceleration;
     gdouble radius, radius_spread, density, spacing, roughness, correlation;
     gint count;
     gint xres, yres;
@@ -99,7 +100,8 @@ raw_clear(RawOptions *raw)
     gchar **strings[] = {
         &raw->preset, &raw->sample, &raw->size, &raw->direction, &raw->drift,
         &raw->velocity, &raw->offset, &raw->settle_velocity, &raw->amplitude,
-        &raw->jump_step, &raw->output, &raw->table, &raw->json,
+        &raw->jump_step, &raw->acceleration, &raw->output, &raw->table,
+        &raw->json,
         &raw->radius_text, &raw->ls_rmax_text, &raw->xres_text,
         &raw->yres_text,
     };
@@ -158,7 +160,8 @@ make_entries(RawOptions *raw)
           N_("spherical tip radius, nm (0: sharp)"), "NM" },
         { "drift", 0, 0, G_OPTION_ARG_STRING, &raw->drift,
           N_("none (constant velocity), settling, oscillation, jump, "
-             "random-walk, or figure6 (per-stripe shifts)"), "MODEL" },
+             "random-walk, acceleration, or figure6 (per-stripe shifts)"),
+          "MODEL" },
         { "velocity", 0, 0, G_OPTION_ARG_STRING, &raw->velocity,
           N_("constant drift velocity, nm/s (0.08,0.02; with --sample "
              "scaled by its pixel size against the paper's)"), "VX,VY" },
@@ -178,6 +181,8 @@ make_entries(RawOptions *raw)
           N_("jump: when, s (0)"), "S" },
         { "jump-step", 0, 0, G_OPTION_ARG_STRING, &raw->jump_step,
           N_("jump: step, nm (0,0)"), "DX,DY" },
+        { "acceleration", 0, 0, G_OPTION_ARG_STRING, &raw->acceleration,
+          N_("acceleration: constant acceleration, nm/s^2 (0,0)"), "AX,AY" },
         { "walk-sigma", 0, 0, G_OPTION_ARG_DOUBLE, &raw->walk_sigma,
           N_("random walk: velocity diffusion, nm/s per sqrt(s) (0)"), "NM" },
         { "walk-dt", 0, 0, G_OPTION_ARG_DOUBLE, &raw->walk_dt,
@@ -367,6 +372,7 @@ parse_drift(const RawOptions *raw, SimscanConfig *config, GError **error)
         { raw->settle_velocity, "settle-velocity", m->u },
         { raw->amplitude, "amplitude", m->a },
         { raw->jump_step, "jump-step", m->step },
+        { raw->acceleration, "acceleration", m->accel },
     };
     guint i;
 
@@ -376,7 +382,7 @@ parse_drift(const RawOptions *raw, SimscanConfig *config, GError **error)
             && !drift_model_type_from_name(raw->drift, &type))
             return bad_value(error, "drift",
                              _("unknown model (none, settling, oscillation, "
-                               "jump, random-walk, figure6)"));
+                               "jump, random-walk, acceleration, figure6)"));
         m->type = type;
     }
     for (i = 0; i < G_N_ELEMENTS(pairs); i++) {
@@ -542,7 +548,8 @@ drift_reach(const DriftModel *m, gdouble t)
     gdouble reach = hypot(m->p0[0], m->p0[1]) + hypot(m->v[0], m->v[1])*t;
 
     reach += hypot(m->u[0], m->u[1])*m->tau + hypot(m->a[0], m->a[1])
-             + hypot(m->step[0], m->step[1]);
+             + hypot(m->step[0], m->step[1])
+             + 0.5*hypot(m->accel[0], m->accel[1])*t*t;
     if (m->type == DRIFT_MODEL_RANDOM_WALK)
         reach += 5.0*m->walk_sigma*t*sqrt(t);
     return reach;
@@ -584,7 +591,8 @@ check_work_limits(const SimscanConfig *config, GError **error)
     if (!(reach <= MAX_DRIFT_SCANS*size)) {
         msg = g_strdup_printf(_("the drift would carry the sample %g um over the %g s simulated, "
                                 "more than %g times the scan size of %g um: lower --velocity, "
-                                "--offset, --settle-velocity, --amplitude, --jump-step or "
+                                "--offset, --settle-velocity, --amplitude, --jump-step, "
+                                "--acceleration or "
                                 "--walk-sigma, or the times"),
                               reach/UM, t, MAX_DRIFT_SCANS, size/UM);
         bad_value(error, "drift", msg);

@@ -26,6 +26,8 @@
 
 /*
  * Parameter ranges (large enough to be seen at 7.8 nm per pixel):
+ *   acceleration: |a| t^2/2 over the 256 s of the series 20..50 nm, any
+ *                direction
  *   velocity:    |v| <= 0.1 nm/s, any direction
  *   settling:    tau 20..60 s, |u| tau 30..60 nm
  *   oscillation: period 20..60 s, |a| 15..30 nm, any direction and phase;
@@ -39,7 +41,7 @@
  * between the first and the last block.
  * Tolerances: tau within 40 %; period within 10 % and |a| within 35 %;
  * t_s within 8 s (two blocks) and the step within 30 % + 4 nm; with no
- * effect, "none" and v within 0.02 nm/s.
+ * effect, "none" and v within 0.02 nm/s; the acceleration within 30 %.
  */
 /* Block registration measures where a block of lines sat on average: when
  * the drift sweeps more than a few pixels during one block (4 s), the block
@@ -71,11 +73,35 @@ random_vector(SimRandom *rng, gdouble length, gdouble *v)
     v[1] = length*sin(angle);
 }
 
+static const DriftModelType hidden_effects[HIDDEN_CASE_EFFECTS] = {
+    DRIFT_MODEL_NONE, DRIFT_MODEL_SETTLING, DRIFT_MODEL_OSCILLATION,
+    DRIFT_MODEL_JUMP, DRIFT_MODEL_ACCELERATION,
+};
+
+DriftModelType
+hidden_case_effect(gint i)
+{
+    return hidden_effects[i % HIDDEN_CASE_EFFECTS];
+}
+
+gint
+hidden_case_effect_index(DriftModelType type)
+{
+    gint e;
+
+    for (e = 0; e < HIDDEN_CASE_EFFECTS; e++) {
+        if (hidden_effects[e] == type)
+            return e;
+    }
+    return HIDDEN_CASE_EFFECTS;
+}
+
 void
 hidden_case_draw(guint32 base_seed, gint i, DriftModel *model)
 {
     SimRandom rng;
-    DriftModelType type = (DriftModelType)(i % 4);
+    DriftModelType type = hidden_case_effect(i);
+    gdouble span = HIDDEN_CASE_FRAMES*FRAME_TIME;
     gdouble cycles;
 
     sim_random_init(&rng, base_seed, 100 + i);
@@ -103,6 +129,11 @@ hidden_case_draw(guint32 base_seed, gint i, DriftModel *model)
         case DRIFT_MODEL_JUMP:
         model->t_jump = uniform(&rng, 30.0, 230.0);
         random_vector(&rng, uniform(&rng, 25e-9, 50e-9), model->step);
+        break;
+
+        case DRIFT_MODEL_ACCELERATION:
+        random_vector(&rng, 2.0*uniform(&rng, 20e-9, 50e-9)/(span*span),
+                      model->accel);
         break;
 
         default:
@@ -234,6 +265,15 @@ hidden_case_check(gint i, const DriftModel *m, JsonObject *result)
         if (!(err < 0.3*len + 4.0))
             return g_strdup_printf("case %d: step off by %g nm of %g",
                       i, err, len);
+        break;
+
+        case DRIFT_MODEL_ACCELERATION:
+        err = hypot(hidden_case_pair(p, "accel_nm_per_s2", 0) - 1e9*m->accel[0],
+                    hidden_case_pair(p, "accel_nm_per_s2", 1) - 1e9*m->accel[1]);
+        len = 1e9*hypot(m->accel[0], m->accel[1]);
+        if (!(err < 0.3*len))
+            return g_strdup_printf("case %d: acceleration off by %g nm/s^2 "
+                                   "of %g", i, err, len);
         break;
 
         default:

@@ -14,8 +14,16 @@
 G_BEGIN_DECLS
 
 #define HIDDEN_CASE_FRAMES 4
+#define HIDDEN_CASE_EFFECTS 5
 
-/* Case i of a run: effect i % 4 (none, settling, oscillation, jump). */
+/* The effect of case i: none, settling, oscillation, jump, acceleration
+ * in turn. */
+DriftModelType hidden_case_effect       (gint i);
+/* The index (0 .. HIDDEN_CASE_EFFECTS - 1) of an effect among them, or
+ * HIDDEN_CASE_EFFECTS for a type that is none of them. */
+gint           hidden_case_effect_index (DriftModelType type);
+
+/* Case i of a run: effect hidden_case_effect(i). */
 void         hidden_case_draw        (guint32 base_seed, gint i,
                                       DriftModel *model);
 /* Scans the frames into .gwy files in dir (no timing stored). */

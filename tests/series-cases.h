@@ -12,11 +12,12 @@
 #include "drift-model.h"
 #include "frame-series.h"
 #include "series-correction.h"
+#include "hidden-effect-cases.h"
 
 G_BEGIN_DECLS
 
 #define SERIES_CASE_FRAMES 5
-#define SERIES_CASE_EFFECTS 4   /* none, settling, oscillation, jump */
+#define SERIES_CASE_EFFECTS HIDDEN_CASE_EFFECTS
 
 typedef struct {
     gboolean raw;           /* raw-channel artefacts on every frame */

@@ -28,9 +28,9 @@
 #define STRIPE_MAX 0.3
 #define FRAME_MAX 0.3
 
-/* Cases: effect _i % 4, raw channels for _i / 4 odd, a disturbed frame
- * for _i >= 8. */
-#define N_CASES 12
+/* Cases: effect hidden_case_effect(_i), raw channels for every other
+ * round of the effects, a disturbed frame in the third round. */
+#define N_CASES (3*SERIES_CASE_EFFECTS)
 
 static guint32 base_seed;
 

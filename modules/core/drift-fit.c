@@ -48,7 +48,7 @@ fit_kind(const DriftFit *fit)
 
 static const DriftModelType candidate_types[] = {
     DRIFT_MODEL_NONE, DRIFT_MODEL_SETTLING, DRIFT_MODEL_OSCILLATION,
-    DRIFT_MODEL_JUMP,
+    DRIFT_MODEL_JUMP, DRIFT_MODEL_ACCELERATION,
 };
 
 const DriftModelType*
@@ -131,6 +131,7 @@ model_basis_mean(FitKind kind, gdouble theta, gdouble t, gdouble h,
             f[1] = (t >= theta) ? 1.0 : 0.0;
         return 2;
 
+        case DRIFT_MODEL_ACCELERATION:
         case KIND_ACCELERATION:
         f[1] = t*t + h*h/3.0;
         return 2;
@@ -876,11 +877,13 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
     DriftFitOptions defaults;
     gint n_types, i, best, chosen, inone = -1;
     const DriftModelType *types = drift_fit_candidates(&n_types);
+    gdouble span;
     gboolean *mask = g_new(gboolean, n);
     Prepared pm;
 
     options = options_or_defaults(options, &defaults);
     prepare(meas, n, NULL, &pm);
+    span = pm.t_max - pm.t_min;
     for (i = 0; i < n_types; i++)
         fit_prepared(&pm, types[i], options, fits + i);
     prepared_free(&pm);
@@ -916,6 +919,10 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
         /* An oscillation that wants the longest observable period wants a
          * longer one still: it bends the trajectory, it does not repeat. */
         if (types[i] == DRIFT_MODEL_OSCILLATION && fits[i].at_limit > 0)
+            continue;
+        /* A settling slower than the series is curvature, which a constant
+         * acceleration says with fewer parameters. */
+        if (types[i] == DRIFT_MODEL_SETTLING && fits[i].nonlinear > span)
             continue;
         if (inone >= 0 && fits[inone].ok
             && (fits[inone].bic - fits[i].bic < options->bic_margin
@@ -986,6 +993,7 @@ drift_fit_parameters(const DriftFit *fit, DriftFitParameters *params)
         second_coefficients(fit, 1.0, params->step_nm);
         break;
 
+        case DRIFT_MODEL_ACCELERATION:
         case KIND_ACCELERATION:
         second_coefficients(fit, 2.0, params->accel_nm_per_s2);
         break;
@@ -1028,6 +1036,10 @@ drift_fit_to_model(const DriftFit *fit, DriftModel *model)
         case DRIFT_MODEL_JUMP:
         model->t_jump = params.t_s;
         pair_to_metres(params.step_nm, model->step);
+        break;
+
+        case DRIFT_MODEL_ACCELERATION:
+        pair_to_metres(params.accel_nm_per_s2, model->accel);
         break;
 
         default:

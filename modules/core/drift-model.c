@@ -13,7 +13,7 @@
 #define RANDOM_WALK_MAX_NODES 4194304
 
 static const gchar *const drift_model_names[DRIFT_MODEL_NTYPES] = {
-    "none", "settling", "oscillation", "jump", "random-walk",
+    "none", "settling", "oscillation", "jump", "random-walk", "acceleration",
 };
 
 void
@@ -150,6 +150,11 @@ drift_model_eval(const DriftModel *model, gdouble t,
         y += wy;
         break;
 
+        case DRIFT_MODEL_ACCELERATION:
+        x += 0.5*model->accel[0]*t*t;
+        y += 0.5*model->accel[1]*t*t;
+        break;
+
         default:
         break;
     }
@@ -184,6 +189,11 @@ drift_model_velocity(const DriftModel *model, gdouble t,
             x += wx;
             y += wy;
         }
+        break;
+
+        case DRIFT_MODEL_ACCELERATION:
+        x += model->accel[0]*t;
+        y += model->accel[1]*t;
         break;
 
         default:

@@ -18,6 +18,7 @@ typedef enum {
     DRIFT_MODEL_OSCILLATION,   /* p = p0 + v t + a sin(2 pi t/period + phase) */
     DRIFT_MODEL_JUMP,          /* p = p0 + v t + step [t >= t_jump] */
     DRIFT_MODEL_RANDOM_WALK,   /* p' = v + w(t), w a seeded random walk */
+    DRIFT_MODEL_ACCELERATION,  /* p = p0 + v t + accel t^2/2 */
     DRIFT_MODEL_NTYPES
 } DriftModelType;
 
@@ -32,6 +33,7 @@ typedef struct {
     gdouble phase;         /* rad */
     gdouble step[2];       /* jump, m */
     gdouble t_jump;        /* s */
+    gdouble accel[2];      /* constant acceleration, m/s^2 */
     gdouble walk_sigma;    /* random walk: velocity diffusion, m/s per sqrt(s) */
     gdouble walk_dt;       /* random walk: time step of the path, s */
     guint32 walk_seed;

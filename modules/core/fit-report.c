@@ -72,6 +72,10 @@ add_parameters(JsonBuilder *b, const DriftFit *fit)
         json_values_set_pair(b, "step_nm", p.step_nm);
         break;
 
+        case DRIFT_MODEL_ACCELERATION:
+        json_values_set_pair(b, "accel_nm_per_s2", p.accel_nm_per_s2);
+        break;
+
         default:
         break;
     }
