@@ -6,9 +6,11 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include <sys/stat.h>
 #include <stdio.h>
 #include <string.h>
 #include <math.h>
+#include <glib/gstdio.h>
 #include <libgwyddion/gwyddion.h>
 #include <libprocess/gwyprocess.h>
 #include <libgwydgets/gwydgets.h>
@@ -124,6 +126,45 @@ refuse_usage(GError **error, const gchar *message)
 }
 
 static gboolean
+parse_interpolation(const gchar *name, GwyInterpolationType *interpolation,
+                    GError **error)
+{
+    gchar *lower = g_ascii_strdown(name, -1), *names, *quoted;
+    gint value = run_description_interpolation_from_name(lower);
+
+    g_free(lower);
+    if (value >= 0) {
+        *interpolation = value;
+        return TRUE;
+    }
+    names = run_description_interpolation_names();
+    quoted = quoted_input_excerpt(name, -1);
+    g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                _("--interpolation: unknown kernel '%s' (known: %s)"),
+                quoted, names);
+    g_free(quoted);
+    g_free(names);
+    return FALSE;
+}
+
+/* An output that exists must be a regular file: a device or a fifo would
+ * be renamed over. */
+static gboolean
+check_output_kind(const gchar *filename, GError **error)
+{
+    GStatBuf st;
+    gchar *message;
+
+    if (!filename || g_stat(filename, &st) != 0 || S_ISREG(st.st_mode))
+        return TRUE;
+    message = g_strdup_printf(_("cannot write %s: it is not a regular file"),
+                              filename);
+    refuse_usage(error, message);
+    g_free(message);
+    return FALSE;
+}
+
+static gboolean
 check_args(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
 {
     gint n_files = args->files ? g_strv_length(args->files) : 0, i;
@@ -132,6 +173,9 @@ check_args(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
 
     if (!args->output)
         return refuse_usage(error, _("-o OUT.gwy is required"));
+    if (!*args->output || (args->trajectory && !*args->trajectory)
+        || (args->json && !*args->json))
+        return refuse_usage(error, _("an output file name is empty"));
     if (!n_files)
         return refuse_usage(error, _("no frames given (several files, or "
                                      "one file with a channel per frame)"));
@@ -140,11 +184,17 @@ check_args(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
         run->crop = TRUE;
     else if (args->crop && g_ascii_strcasecmp(args->crop, "none") != 0)
         return refuse_usage(error, _("--crop must be common or none"));
+    if (!check_output_kind(args->output, error)
+        || !check_output_kind(args->trajectory, error)
+        || !check_output_kind(args->json, error))
+        return FALSE;
+    if (args->series.channels && n_files > 1)
+        return refuse_usage(error, _("--channels names the channels of one "
+                                     "file; with several files use -c"));
     run->interpolation = SERIES_DEFAULT_INTERPOLATION;
-    if (args->interpolation_name
-        && (gint)(run->interpolation
-                  = run_description_interpolation_from_name(args->interpolation_name)) < 0)
-        return refuse_usage(error, _("--interpolation: unknown kernel"));
+    if (args->interpolation_name && !parse_interpolation(args->interpolation_name,
+                                                         &run->interpolation, error))
+        return FALSE;
     if (args->all_channels && n_files == 1)
         return refuse_usage(error, _("--all-channels needs one file per "
                                      "frame"));
@@ -272,7 +322,7 @@ store_corrected(GwyContainer *out, const SeriesRun *run, gint k,
 /* The channels of file `file` that share the frame's pixels: the frame's
  * own first, then the others with --all-channels. */
 static GArray*
-channels_to_correct(const SeriesRun *run, gint k, gboolean all_channels)
+channels_to_correct(SeriesRun *run, gint k, gboolean all_channels)
 {
     const SeriesFrame *frame = run->series->frames + k;
     GwyContainer *data = run->datas[frame->file_index];
@@ -286,11 +336,19 @@ channels_to_correct(const SeriesRun *run, gint k, gboolean all_channels)
     for (i = 0; all[i] >= 0; i++) {
         GwyDataField *field = localscan_channel_item(data, all[i], "data");
 
-        if (all[i] != frame->channel_id
-            && gwy_data_field_check_compatibility(field, frame->field,
-                                                  GWY_DATA_COMPATIBILITY_RES
-                                                  | GWY_DATA_COMPATIBILITY_REAL) == 0)
+        if (all[i] == frame->channel_id)
+            continue;
+        if (gwy_data_field_check_compatibility(field, frame->field,
+                                               GWY_DATA_COMPATIBILITY_RES
+                                               | GWY_DATA_COMPATIBILITY_REAL) == 0)
             g_array_append_val(ids, all[i]);
+        else
+            g_ptr_array_add(run->correction.warnings,
+                            g_strdup_printf(_("%s: channel %d (%s) not "
+                                              "corrected: it is not scanned "
+                                              "like the frame"),
+                                            frame->label, all[i],
+                                            localscan_channel_title(data, all[i])));
     }
     g_free(all);
     return ids;

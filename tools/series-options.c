@@ -58,6 +58,10 @@ series_options_parse_seconds(const gchar *option, const gchar *text,
     gchar *end, *quoted;
     gdouble v = g_ascii_strtod(text, &end);
 
+    /* strtod also reads hexadecimal ("0x10" is 16): not a time anyone
+     * types. */
+    if (strpbrk(text, "xX"))
+        end = (gchar*)text;
     if (end == text || *end || !isfinite(v) || v < min || v > max) {
         quoted = quoted_input_excerpt(text, -1);
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
@@ -148,6 +152,12 @@ parse_channels(const gchar *text, FrameSeriesOptions *options,
     }
     parts = g_strsplit(text, ",", -1);
     n = g_strv_length(parts);
+    if (!n) {
+        g_strfreev(parts);
+        return refuse("channels", text,
+                      _("is not a list of channel ids (0,2,4) or a range "
+                        "(0-6)"), error);
+    }
     ids = g_new(gint, MAX(n, 1));
     for (i = 0; i < n; i++) {
         if (!parse_channel_id(parts[i], ids + i)) {

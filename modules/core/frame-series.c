@@ -146,8 +146,32 @@ fields_alike(GwyDataField *a, GwyDataField *b)
     if (fabs(gwy_data_field_get_dx(a)/gwy_data_field_get_dx(b) - 1.0) > 1e-6
         || fabs(gwy_data_field_get_dy(a)/gwy_data_field_get_dy(b) - 1.0) > 1e-6)
         return FALSE;
-    return gwy_si_unit_equal(gwy_data_field_get_si_unit_z(a),
-                             gwy_data_field_get_si_unit_z(b));
+    return (gwy_si_unit_equal(gwy_data_field_get_si_unit_z(a),
+                              gwy_data_field_get_si_unit_z(b))
+            && gwy_si_unit_equal(gwy_data_field_get_si_unit_xy(a),
+                                 gwy_data_field_get_si_unit_xy(b)));
+}
+
+/* Pixels of a usable size: finite, positive, and not so unlike along the
+ * two axes that a blur of one physical size is meaningless.  A file may
+ * say anything (a NaN width crashed the blur). */
+#define PIXEL_ASPECT_MAX 1000.0
+
+static gboolean
+check_pixels(const FrameSeries *series, GError **error)
+{
+    GwyDataField *field = series->frames[0].field;
+    gdouble dx = gwy_data_field_get_dx(field), dy = gwy_data_field_get_dy(field);
+
+    if (isfinite(dx) && isfinite(dy) && dx > 0.0 && dy > 0.0
+        && isfinite(gwy_data_field_get_xreal(field))
+        && isfinite(gwy_data_field_get_yreal(field))
+        && dy/dx <= PIXEL_ASPECT_MAX && dx/dy <= PIXEL_ASPECT_MAX)
+        return TRUE;
+    g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
+                _("%s: the frame's pixel size (%g by %g) is not usable"),
+                series->frames[0].label, dx, dy);
+    return FALSE;
 }
 
 static gboolean
@@ -245,7 +269,9 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
 {
     gint *ids = localscan_channel_ids(data);
     GwyDataField *first = NULL;
-    gint i, n;
+    gint i, n, matched = 0;
+    gboolean chosen = (options->channel || options->first_id >= 0
+                       || options->last_id >= 0);
 
     for (n = 0; ids[n] >= 0; n++)
         ;
@@ -261,11 +287,21 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
             && !title_matches(localscan_channel_title(data, ids[i]),
                               options->channel))
             continue;
+        matched++;
         if (!first)
             first = field;
         else if (!fields_alike(first, field)) {
-            if (!options->channel)
+            /* Channels not chosen by name or id that are no frames of the
+             * series (another scan in the file) are passed over, said. */
+            if (!chosen) {
+                g_ptr_array_add(series->notes,
+                                g_strdup_printf(_("%s: channel %d (%s) is "
+                                                  "not a frame of the series: "
+                                                  "other size, pixel size or "
+                                                  "unit"), filename, ids[i],
+                                                localscan_channel_title(data, ids[i])));
                 continue;
+            }
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
                         _("%s: channel %d (%s) differs in size or pixel size "
                           "from the first frame"),
@@ -277,6 +313,11 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
         append_channel(series, data, ids[i], filename, 0, TRUE, *mts);
     }
     g_free(ids);
+    if (options->channel && !matched) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("%s: no channel %s"), filename, options->channel);
+        return FALSE;
+    }
     return TRUE;
 }
 
@@ -390,6 +431,40 @@ assign_line_times(FrameSeries *series, const MetaTiming *mts,
     return TRUE;
 }
 
+/* Time stamps from different clocks (one file's relative frame time,
+ * another's date) put frames decades apart; a series whose frames lie more
+ * than CLOCK_GAP_FRAMES frame times apart is refused, not fitted. */
+#define CLOCK_GAP_FRAMES 1000.0
+
+static gboolean
+check_one_clock(const FrameSeries *series, GError **error)
+{
+    gdouble first = G_MAXDOUBLE, last = -G_MAXDOUBLE, longest = 0.0;
+    gint i, a = 0, b = 0;
+
+    for (i = 0; i < series->n_frames; i++) {
+        const ScanTiming *timing = &series->frames[i].timing;
+
+        longest = MAX(longest, timing->yres*timing->line_time);
+        if (timing->frame_start < first) {
+            first = timing->frame_start;
+            a = i;
+        }
+        if (timing->frame_start > last) {
+            last = timing->frame_start;
+            b = i;
+        }
+    }
+    if (last - first <= CLOCK_GAP_FRAMES*series->n_frames*longest)
+        return TRUE;
+    g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                _("%s and %s start %.3g s apart in the metadata: their time "
+                  "stamps cannot come from one clock; give --frame-times"),
+                series->frames[a].label, series->frames[b].label,
+                last - first);
+    return FALSE;
+}
+
 static gboolean
 assign_start_times(FrameSeries *series, const MetaTiming *mts,
                    const FrameSeriesOptions *options, GError **error)
@@ -431,6 +506,8 @@ assign_start_times(FrameSeries *series, const MetaTiming *mts,
         for (i = 0; i < n; i++)
             series->frames[i].timing.frame_start
                 = series->frames[i].absolute_start - t0;
+        if (!check_one_clock(series, error))
+            return FALSE;
         if (mts[0].start_is_end)
             g_ptr_array_add(series->notes,
                             g_strdup(_("time stamps taken as the end of each "
@@ -498,7 +575,8 @@ frame_series_from_files(GwyContainer **datas, gchar **filenames,
                       "found %d"), filenames[0], series->n_frames);
         goto fail;
     }
-    if (!assign_line_times(series, mts, options, error)
+    if (!check_pixels(series, error)
+        || !assign_line_times(series, mts, options, error)
         || !assign_start_times(series, mts, options, error))
         goto fail;
     g_free(mts);

@@ -253,7 +253,8 @@ output_files_reserve(OutputFiles *files, const gchar *filename,
     gboolean ok;
 
     g_return_val_if_fail(!files->committed, NULL);
-    if (!check_new_target(files, filename, error)
+    /* A device or a fifo would be renamed over (as root, /dev/null). */
+    if (!check_target(files, filename, error)
         || !(p = add_pending(files, filename, &fd, error)))
         return NULL;
     /* Nothing written: only the usual permissions given. */

@@ -48,9 +48,8 @@ gboolean      output_files_add          (OutputFiles *files,
 /* For a writer that wants a file name (Gwyddion's file savers): an empty
  * temporary file beside filename, with the usual permissions, for the
  * caller to fill before output_files_commit(); owned by the set.  The
- * target is not checked up front like output_files_add() does: the commit
- * refuses one that is not a regular file (the rename's own error).  NULL
- * with error set on failure. */
+ * target is checked as output_files_add() checks it.  NULL with error set
+ * on failure. */
 const gchar*  output_files_reserve      (OutputFiles *files,
                                          const gchar *filename,
                                          GError **error);
