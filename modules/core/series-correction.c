@@ -359,7 +359,10 @@ fit_leaving_out(const SeriesCorrection *correction, gint k,
  * whose others need the simplest model: a slip in frame 1 of a steady
  * series can be read as frame 0 cut off by a jump, or as frame 1 out of
  * line.  Agreement is the others' spread, which sees a frame that fits
- * only in part (a jump inside a slipped frame read as a jump at its end). */
+ * only in part (a jump inside a slipped frame read as a jump at its end).
+ * Of those, the one that stands out least: a jump inside frame 0 with
+ * frame 1 slipped reads as well as frame 0 out of line and a jump undoing
+ * the slip, but asks a larger disagreement of frame 0. */
 static gint
 pick_left_out(const LeftOut *cand, gint n)
 {
@@ -373,7 +376,7 @@ pick_left_out(const LeftOut *cand, gint n)
             continue;
         if (best < 0 || cand[i].n_params < cand[best].n_params
             || (cand[i].n_params == cand[best].n_params
-                && cand[i].spread < cand[best].spread))
+                && cand[i].residual < cand[best].residual))
             best = i;
     }
     return best;
