@@ -22,6 +22,7 @@
 #include "reference-choice.h"
 #include "run-description.h"
 #include "preview-field.h"
+#include "series-process.h"
 
 /* Our strings live in our own domain, not in Gwyddion's. */
 #undef _
@@ -182,6 +183,7 @@ module_register(void)
                               RUN_MODES,
                               GWY_MENU_FLAG_DATA,
                               N_("Compensate drift by the local-scan method"));
+    localscan_series_register();
     return TRUE;
 }
 

@@ -26,6 +26,7 @@
 #include "quoted-input.h"
 #include "library-log.h"
 #include "series-command.h"
+#include "series-graph.h"
 #include "localscan-intl.h"
 
 #define COMMAND_NAME "gwy-localscan series"
@@ -438,91 +439,6 @@ finish_channels(const SeriesRun *run, GwyContainer *out, GArray *stored)
     }
 }
 
-static GwyGraphCurveModel*
-new_curve(const gchar *title, GwyGraphCurveType type, gint colour,
-          const gdouble *t, const gdouble *v, gint n)
-{
-    GwyGraphCurveModel *curve = gwy_graph_curve_model_new();
-
-    g_object_set(curve, "description", title, "mode", type,
-                 "color", gwy_graph_get_preset_color(colour), NULL);
-    gwy_graph_curve_model_set_data(curve, t, v, n);
-    return curve;
-}
-
-/* dx(t) and dy(t): the fit on every scan line, the measurements as points
- * (measured displacement added to the fit at the earlier moment). */
-static GwyGraphModel*
-trajectory_graph(const SeriesRun *run)
-{
-    const SeriesCorrection *c = &run->correction;
-    const DriftFit *fit = c->fit.fits + c->fit.chosen;
-    GwyGraphModel *graph = gwy_graph_model_new();
-    GArray *t = g_array_new(FALSE, FALSE, sizeof(gdouble));
-    GArray *x = g_array_new(FALSE, FALSE, sizeof(gdouble));
-    GArray *y = g_array_new(FALSE, FALSE, sizeof(gdouble));
-    GwyGraphCurveModel *curve;
-    GwySIUnit *unit;
-    gdouble when, px, py, bx, by;
-    gint k, r, i, m;
-
-    for (m = 0; m < 2; m++) {
-        g_array_set_size(t, 0);
-        g_array_set_size(x, 0);
-        g_array_set_size(y, 0);
-        if (m == 0) {
-            for (k = 0; k < run->series->n_frames; k++) {
-                const ScanTiming *timing = &run->series->frames[k].timing;
-
-                for (r = 0; r < timing->yres; r++) {
-                    when = scan_timing_rows_time(timing, r, r+1);
-                    drift_fit_eval(fit, when, &px, &py);
-                    g_array_append_val(t, when);
-                    g_array_append_val(x, px);
-                    g_array_append_val(y, py);
-                }
-            }
-        }
-        else {
-            for (i = 0; i < c->fit.n_meas; i++) {
-                const DriftMeasurement *mm = c->fit.meas + i;
-
-                if (mm->weight <= 0.0)
-                    continue;
-                drift_fit_eval(fit, mm->t_b, &bx, &by);
-                px = bx + mm->dx;
-                py = by + mm->dy;
-                g_array_append_val(t, mm->t_a);
-                g_array_append_val(x, px);
-                g_array_append_val(y, py);
-            }
-        }
-        curve = new_curve(m ? _("dx measured") : _("dx fitted"),
-                          m ? GWY_GRAPH_CURVE_POINTS : GWY_GRAPH_CURVE_LINE,
-                          0, (gdouble*)t->data, (gdouble*)x->data, t->len);
-        gwy_graph_model_add_curve(graph, curve);
-        g_object_unref(curve);
-        curve = new_curve(m ? _("dy measured") : _("dy fitted"),
-                          m ? GWY_GRAPH_CURVE_POINTS : GWY_GRAPH_CURVE_LINE,
-                          1, (gdouble*)t->data, (gdouble*)y->data, t->len);
-        gwy_graph_model_add_curve(graph, curve);
-        g_object_unref(curve);
-    }
-    g_object_set(graph, "title", _("Drift trajectory"),
-                 "axis-label-bottom", "t", "axis-label-left", _("drift"),
-                 NULL);
-    unit = gwy_si_unit_new("s");
-    g_object_set(graph, "si-unit-x", unit, NULL);
-    g_object_unref(unit);
-    unit = gwy_si_unit_new("m");
-    g_object_set(graph, "si-unit-y", unit, NULL);
-    g_object_unref(unit);
-    g_array_free(t, TRUE);
-    g_array_free(x, TRUE);
-    g_array_free(y, TRUE);
-    return graph;
-}
-
 static GwyContainer*
 build_output(SeriesRun *run, gboolean all_channels, GError **error)
 {
@@ -545,7 +461,7 @@ build_output(SeriesRun *run, gboolean all_channels, GError **error)
     }
     if (ok) {
         finish_channels(run, out, stored);
-        graph = trajectory_graph(run);
+        graph = series_graph_new(&run->correction, run->series);
         gwy_container_set_object_by_name(out, "/0/graph/graph/1", graph);
         g_object_unref(graph);
     }

@@ -1,0 +1,490 @@
+/*
+ *  Local Scan Series Drift: the channels of the open file that are scanned
+ *  like the current one are the frames of a series, corrected from one
+ *  fitted drift trajectory (docs/series.md), the process function beside
+ *  Local Scan Drift.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include <math.h>
+#include <gtk/gtk.h>
+#include <libgwyddion/gwyddion.h>
+#include <libgwymodule/gwymodule-process.h>
+#include <libprocess/gwyprocess.h>
+#include <libgwydgets/gwydgets.h>
+#include <app/gwyapp.h>
+#include "series-correction.h"
+#include "series-graph.h"
+#include "localscan-channel.h"
+#include "series-process.h"
+
+#undef _
+#define _(s) dgettext(GETTEXT_PACKAGE, s)
+
+#define SERIES_RUN_MODES (GWY_RUN_INTERACTIVE | GWY_RUN_IMMEDIATE)
+#define GRAPH_WIDTH 480
+#define GRAPH_HEIGHT 240
+
+enum {
+    PARAM_LINE_TIME,
+    PARAM_FRAME_INTERVAL,
+    PARAM_DIRECTION,
+    PARAM_INTERPOLATION,
+    PARAM_CROP,
+    PARAM_ADD_GRAPH,
+};
+
+typedef struct {
+    GwyParams *params;
+    GwyContainer *data;
+    gint id;
+    FrameSeries *series;
+    SeriesCorrection correction;
+    gboolean computed;
+    gboolean timing_assumed;   /* the metadata lacked it: the params' */
+} SeriesArgs;
+
+typedef struct {
+    SeriesArgs *args;
+    GtkWidget *dialog;
+    GwyParamTable *table;
+    GwyGraphModel *gmodel;
+    GtkWidget *summary;
+} SeriesGUI;
+
+static void
+series_args_reset(SeriesArgs *args)
+{
+    if (args->computed)
+        series_correction_clear(&args->correction);
+    frame_series_free(args->series);
+    args->series = NULL;
+    args->computed = FALSE;
+}
+
+static GwyParamDef*
+define_series_params(void)
+{
+    static const GwyEnum directions[] = {
+        { N_("Down"), SCAN_DIRECTION_DOWN, },
+        { N_("Up"),   SCAN_DIRECTION_UP,   },
+    };
+    static GwyParamDef *paramdef = NULL;
+
+    if (paramdef)
+        return paramdef;
+    paramdef = gwy_param_def_new();
+    gwy_param_def_set_function_name(paramdef, LOCALSCAN_SERIES_FUNCTION_NAME);
+    /* Used only where the file's metadata does not give the timing. */
+    gwy_param_def_add_double(paramdef, PARAM_LINE_TIME, "line_time",
+                             _("_Line time"), 1e-6, 1e4, 1.0);
+    gwy_param_def_add_double(paramdef, PARAM_FRAME_INTERVAL, "frame_interval",
+                             _("_Frame interval"), 0.0, 1e9, 0.0);
+    gwy_param_def_add_gwyenum(paramdef, PARAM_DIRECTION, "direction",
+                              _("Slow scan _direction"), directions,
+                              G_N_ELEMENTS(directions), SCAN_DIRECTION_DOWN);
+    gwy_param_def_add_enum(paramdef, PARAM_INTERPOLATION, "interpolation",
+                           NULL, GWY_TYPE_INTERPOLATION_TYPE,
+                           GWY_INTERPOLATION_BSPLINE);
+    gwy_param_def_add_boolean(paramdef, PARAM_CROP, "crop",
+                              _("_Crop to the area every frame covers"),
+                              FALSE);
+    gwy_param_def_add_boolean(paramdef, PARAM_ADD_GRAPH, "add_graph",
+                              _("Add the trajectory _graph"), TRUE);
+    return paramdef;
+}
+
+/* The frames: the current channel and every other scanned like it, in id
+ * order. */
+static GArray*
+frame_ids(GwyContainer *data, gint current)
+{
+    GwyDataField *field = localscan_channel_item(data, current, "data");
+    GArray *ids = g_array_new(FALSE, FALSE, sizeof(gint));
+    gint *all = localscan_channel_ids(data), i;
+
+    for (i = 0; all[i] >= 0; i++) {
+        GwyDataField *other = localscan_channel_item(data, all[i], "data");
+
+        if (!gwy_data_field_check_compatibility(field, other,
+                                                GWY_DATA_COMPATIBILITY_RES
+                                                | GWY_DATA_COMPATIBILITY_REAL
+                                                | GWY_DATA_COMPATIBILITY_LATERAL
+                                                | GWY_DATA_COMPATIBILITY_VALUE))
+            g_array_append_val(ids, all[i]);
+    }
+    g_free(all);
+    return ids;
+}
+
+/* The series from the metadata's timing, else from the params': frames
+ * back to back or a frame interval apart. */
+static FrameSeries*
+load_series(SeriesArgs *args, GError **error)
+{
+    GArray *ids = frame_ids(args->data, args->id);
+    const gchar *filename = NULL;
+    gchar *name;
+    FrameSeriesOptions options;
+    FrameSeries *series;
+    GError *err = NULL;
+    gdouble line_time, interval;
+    gint yres, k;
+
+    gwy_container_gis_string_by_name(args->data, "/filename",
+                                     (const guchar**)&filename);
+    name = g_strdup(filename ? filename : _("Untitled"));
+    frame_series_options_init(&options);
+    options.channel_ids = (gint*)ids->data;
+    options.n_channel_ids = ids->len;
+    args->timing_assumed = FALSE;
+    series = frame_series_from_files(&args->data, &name, 1, &options, &err);
+    if (!series && err->domain == FRAME_SERIES_ERROR
+        && err->code == FRAME_SERIES_ERROR_TIMING) {
+        g_clear_error(&err);
+        line_time = gwy_params_get_double(args->params, PARAM_LINE_TIME);
+        interval = gwy_params_get_double(args->params, PARAM_FRAME_INTERVAL);
+        yres = gwy_data_field_get_yres(localscan_channel_item(args->data, args->id, "data"));
+        if (interval <= 0.0)
+            interval = yres*line_time;
+        options.line_time = line_time;
+        options.direction = gwy_params_get_enum(args->params, PARAM_DIRECTION);
+        options.n_frame_times = ids->len;
+        options.frame_times = g_new(gdouble, ids->len);
+        for (k = 0; k < (gint)ids->len; k++)
+            options.frame_times[k] = k*interval;
+        args->timing_assumed = TRUE;
+        series = frame_series_from_files(&args->data, &name, 1, &options,
+                                         &err);
+        g_free(options.frame_times);
+    }
+    if (err)
+        g_propagate_error(error, err);
+    g_array_free(ids, TRUE);
+    g_free(name);
+    return series;
+}
+
+static gboolean
+execute(SeriesArgs *args, GError **error)
+{
+    if (args->computed)
+        return TRUE;
+    series_args_reset(args);
+    if (!(args->series = load_series(args, error)))
+        return FALSE;
+    if (!series_correction_compute(args->series, NULL, NULL,
+                                   &args->correction, error)) {
+        series_correction_clear(&args->correction);
+        return FALSE;
+    }
+    args->computed = TRUE;
+    return TRUE;
+}
+
+/* A corrected frame as a new channel: titled after its source, with its
+ * palette and metadata, a mask where no data exists. */
+static gint
+add_corrected_channel(SeriesArgs *args, gint k, GwyDataField *result,
+                      GwyDataField *mask)
+{
+    GwyContainer *data = args->data;
+    gint source = args->series->frames[k].channel_id, newid;
+    gchar *title, *text;
+
+    newid = gwy_app_data_browser_add_data_field(result, data, TRUE);
+    title = gwy_app_get_data_field_title(data, source);
+    text = g_strdup_printf(_("%s (drift corrected)"), title);
+    gwy_container_set_string(data, gwy_app_get_data_title_key_for_id(newid),
+                             (const guchar*)text);
+    g_free(title);
+    gwy_app_sync_data_items(data, data, source, newid, FALSE,
+                            GWY_DATA_ITEM_GRADIENT, GWY_DATA_ITEM_MASK_COLOR,
+                            GWY_DATA_ITEM_META, GWY_DATA_ITEM_REAL_SQUARE, 0);
+    if (mask && gwy_data_field_get_max(mask) > 0.0)
+        gwy_container_set_object(data, gwy_app_get_mask_key_for_id(newid),
+                                 mask);
+    gwy_app_channel_log_add(data, source, newid, NULL, NULL);
+    return newid;
+}
+
+static GwyDataField*
+crop_to(GwyDataField *field, const gint *area)
+{
+    GwyDataField *part = gwy_data_field_area_extract(field, area[0], area[1],
+                                                     area[2], area[3]);
+
+    gwy_data_field_set_xoffset(part, gwy_data_field_get_xoffset(field)
+                               + gwy_data_field_jtor(field, area[0]));
+    gwy_data_field_set_yoffset(part, gwy_data_field_get_yoffset(field)
+                               + gwy_data_field_itor(field, area[1]));
+    return part;
+}
+
+/* Every frame corrected (with Gwyddion's wait dialog, which can cancel),
+ * then added, cropped to the common area when asked. */
+static gboolean
+create_outputs(SeriesArgs *args, gboolean show_progress, GError **error)
+{
+    gint n = args->series->n_frames, k, area[4];
+    GwyDataField **results = g_new0(GwyDataField*, n);
+    GwyDataField **masks = g_new0(GwyDataField*, n);
+    gboolean ok = TRUE, crop = gwy_params_get_boolean(args->params, PARAM_CROP);
+    GwyInterpolationType interpolation = gwy_params_get_enum(args->params,
+                                                             PARAM_INTERPOLATION);
+
+    for (k = 0; k < n && ok; k++) {
+        GwyDataField *field = args->series->frames[k].field;
+
+        results[k] = gwy_data_field_new_alike(field, FALSE);
+        masks[k] = gwy_data_field_new_alike(field, FALSE);
+        ok = series_correction_correct_frame(&args->correction, args->series,
+                                             k, interpolation, results[k],
+                                             masks[k], error);
+        if (ok && show_progress && !gwy_app_wait_set_fraction((k + 1.0)/n))
+            ok = FALSE;
+    }
+    if (ok && crop && !series_correction_common_area(masks, n, area, area + 1,
+                                                     area + 2, area + 3)) {
+        g_set_error(error, SERIES_CORRECTION_ERROR,
+                    SERIES_CORRECTION_ERROR_COMPENSATE,
+                    _("No part of the area is covered by every frame."));
+        ok = FALSE;
+    }
+    for (k = 0; k < n && ok; k++) {
+        if (crop) {
+            GwyDataField *part = crop_to(results[k], area);
+
+            add_corrected_channel(args, k, part, NULL);
+            g_object_unref(part);
+        }
+        else
+            add_corrected_channel(args, k, results[k], masks[k]);
+    }
+    for (k = 0; k < n; k++) {
+        if (results[k])
+            g_object_unref(results[k]);
+        if (masks[k])
+            g_object_unref(masks[k]);
+    }
+    g_free(results);
+    g_free(masks);
+    return ok;
+}
+
+static void
+add_graph(SeriesArgs *args)
+{
+    GwyGraphModel *gmodel = series_graph_new(&args->correction, args->series);
+
+    gwy_app_data_browser_add_graph_model(gmodel, args->data, TRUE);
+    g_object_unref(gmodel);
+}
+
+/* The fit, the flagged frames and the warnings, in one text. */
+static gchar*
+describe_result(const SeriesArgs *args)
+{
+    const SeriesCorrection *c = &args->correction;
+    const DriftFit *fit = c->fit.fits + c->fit.chosen;
+    DriftFitParameters p;
+    GString *text = g_string_new(NULL);
+    gint k, flagged = 0;
+    guint i;
+
+    drift_fit_parameters(fit, &p);
+    g_string_append_printf(text, _("Drift: %s, velocity (%.3g, %.3g) nm/s; "
+                                   "%d frames, typical residual %.2f px."),
+                           drift_model_type_name(fit->type),
+                           p.velocity_nm_per_s[0], p.velocity_nm_per_s[1],
+                           args->series->n_frames, c->typical_px);
+    for (k = 0; k < args->series->n_frames; k++) {
+        if (!c->frames[k].flagged)
+            continue;
+        g_string_append_printf(text, _("\nFrame %d (%s) flagged: %s."), k,
+                               args->series->frames[k].label,
+                               c->frames[k].reason);
+        flagged++;
+    }
+    if (!flagged)
+        g_string_append(text, _("\nNo frame flagged."));
+    if (args->timing_assumed)
+        g_string_append(text, _("\nTiming from the settings below (the file "
+                                "does not give it)."));
+    for (i = 0; i < c->warnings->len; i++)
+        g_string_append_printf(text, "\n%s",
+                               (const gchar*)g_ptr_array_index(c->warnings, i));
+    return g_string_free(text, FALSE);
+}
+
+static void
+report_error(SeriesArgs *args, const GError *error)
+{
+    GtkWidget *main_window = gwy_app_main_window_get(), *dialog;
+
+    if (!main_window) {
+        localscan_run_error_set(args->data, error);
+        g_printerr("%s: %s\n", LOCALSCAN_SERIES_FUNCTION_NAME, error->message);
+        return;
+    }
+    dialog = gtk_message_dialog_new(GTK_WINDOW(main_window),
+                                    GTK_DIALOG_DESTROY_WITH_PARENT,
+                                    GTK_MESSAGE_ERROR, GTK_BUTTONS_OK, "%s",
+                                    _("Series drift correction failed."));
+    gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(dialog), "%s",
+                                             error->message);
+    gtk_dialog_run(GTK_DIALOG(dialog));
+    gtk_widget_destroy(dialog);
+}
+
+/* The dialog's preview: the series measured and fitted, the trajectory
+ * drawn and the verdicts written (on request: it takes seconds). */
+static void
+preview(gpointer user_data)
+{
+    SeriesGUI *gui = (SeriesGUI*)user_data;
+    GwyGraphModel *gmodel;
+    GError *error = NULL;
+    gchar *text;
+
+    gwy_app_wait_cursor_start(GTK_WINDOW(gui->dialog));
+    if (execute(gui->args, &error)) {
+        gmodel = series_graph_new(&gui->args->correction, gui->args->series);
+        gwy_graph_model_remove_all_curves(gui->gmodel);
+        gwy_graph_model_append_curves(gui->gmodel, gmodel, 0);
+        g_object_unref(gmodel);
+        text = describe_result(gui->args);
+        gwy_dialog_have_result(GWY_DIALOG(gui->dialog));
+    }
+    else {
+        text = g_strdup(error->message);
+        g_clear_error(&error);
+    }
+    gtk_label_set_text(GTK_LABEL(gui->summary), text);
+    g_free(text);
+    gwy_app_wait_cursor_finish(GTK_WINDOW(gui->dialog));
+}
+
+static void
+param_changed(SeriesGUI *gui, gint id)
+{
+    /* Only the fallback timing changes what is measured. */
+    if (id < 0 || id == PARAM_LINE_TIME || id == PARAM_FRAME_INTERVAL
+        || id == PARAM_DIRECTION) {
+        if (gui->args->timing_assumed || id < 0)
+            series_args_reset(gui->args);
+        gwy_dialog_invalidate(GWY_DIALOG(gui->dialog));
+    }
+}
+
+static GwyDialogOutcome
+run_gui(SeriesArgs *args)
+{
+    SeriesGUI gui;
+    GwyDialog *dialog;
+    GwyParamTable *table;
+    GtkWidget *hbox, *vbox, *graph;
+    GwyDialogOutcome outcome;
+
+    gwy_clear(&gui, 1);
+    gui.args = args;
+    gui.dialog = gwy_dialog_new(_("Local Scan Series Drift"));
+    dialog = GWY_DIALOG(gui.dialog);
+    gwy_dialog_add_buttons(dialog, GWY_RESPONSE_UPDATE, GWY_RESPONSE_RESET,
+                           GTK_RESPONSE_CANCEL, GTK_RESPONSE_OK, 0);
+
+    hbox = gwy_hbox_new(8);
+    gtk_container_set_border_width(GTK_CONTAINER(hbox), 4);
+    gwy_dialog_add_content(dialog, hbox, TRUE, TRUE, 0);
+    vbox = gwy_vbox_new(4);
+    gtk_box_pack_start(GTK_BOX(hbox), vbox, TRUE, TRUE, 0);
+    gui.gmodel = gwy_graph_model_new();
+    g_object_set(gui.gmodel, "title", _("Drift trajectory"),
+                 "axis-label-bottom", "t", "axis-label-left", _("drift"), NULL);
+    graph = gwy_graph_new(gui.gmodel);
+    gwy_graph_enable_user_input(GWY_GRAPH(graph), FALSE);
+    gtk_widget_set_size_request(graph, GRAPH_WIDTH, GRAPH_HEIGHT);
+    gtk_box_pack_start(GTK_BOX(vbox), graph, TRUE, TRUE, 0);
+    gui.summary = gtk_label_new(_("Press Update to measure the series."));
+    gtk_misc_set_alignment(GTK_MISC(gui.summary), 0.0, 0.0);
+    gtk_label_set_line_wrap(GTK_LABEL(gui.summary), TRUE);
+    gtk_label_set_selectable(GTK_LABEL(gui.summary), TRUE);
+    gtk_widget_set_size_request(gui.summary, GRAPH_WIDTH, -1);
+    gtk_box_pack_start(GTK_BOX(vbox), gui.summary, FALSE, FALSE, 0);
+
+    table = gui.table = gwy_param_table_new(args->params);
+    gwy_param_table_append_header(table, -1, _("Timing the file does not give"));
+    gwy_param_table_append_entry(table, PARAM_LINE_TIME);
+    gwy_param_table_set_unitstr(table, PARAM_LINE_TIME, "s");
+    gwy_param_table_append_entry(table, PARAM_FRAME_INTERVAL);
+    gwy_param_table_set_unitstr(table, PARAM_FRAME_INTERVAL, "s");
+    gwy_param_table_append_combo(table, PARAM_DIRECTION);
+    gwy_param_table_append_header(table, -1, _("Output"));
+    gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
+    gwy_param_table_append_checkbox(table, PARAM_CROP);
+    gwy_param_table_append_checkbox(table, PARAM_ADD_GRAPH);
+    gtk_box_pack_start(GTK_BOX(hbox), gwy_param_table_widget(table), FALSE,
+                       FALSE, 0);
+    gwy_dialog_add_param_table(dialog, table);
+
+    g_signal_connect_swapped(table, "param-changed", G_CALLBACK(param_changed),
+                             &gui);
+    gwy_dialog_set_preview_func(dialog, GWY_PREVIEW_UPON_REQUEST, preview,
+                                &gui, NULL);
+    outcome = gwy_dialog_run(dialog);
+    g_object_unref(gui.gmodel);
+    return outcome;
+}
+
+static void
+localscan_series(GwyContainer *data, GwyRunType runtype,
+                 G_GNUC_UNUSED const gchar *name)
+{
+    GwyDialogOutcome outcome = GWY_DIALOG_PROCEED;
+    GError *error = NULL;
+    SeriesArgs args;
+    gboolean ok, show_progress;
+
+    g_return_if_fail(runtype & SERIES_RUN_MODES);
+    gwy_clear(&args, 1);
+    gwy_app_data_browser_get_current(GWY_APP_DATA_FIELD_ID, &args.id, 0);
+    g_return_if_fail(args.id >= 0);
+    args.data = data;
+    args.params = gwy_params_new_from_settings(define_series_params());
+    if (runtype == GWY_RUN_INTERACTIVE) {
+        outcome = run_gui(&args);
+        gwy_params_save_to_settings(args.params);
+        if (outcome == GWY_DIALOG_CANCEL)
+            goto end;
+    }
+    show_progress = (runtype == GWY_RUN_INTERACTIVE || gwy_app_main_window_get());
+    if (show_progress)
+        gwy_app_wait_start(gwy_app_find_window_for_channel(data, args.id),
+                           _("Correcting the series..."));
+    ok = execute(&args, &error) && create_outputs(&args, show_progress, &error);
+    if (show_progress)
+        gwy_app_wait_finish();
+    if (ok && gwy_params_get_boolean(args.params, PARAM_ADD_GRAPH))
+        add_graph(&args);
+    if (!ok && error)
+        report_error(&args, error);
+
+end:
+    g_clear_error(&error);
+    series_args_reset(&args);
+    g_object_unref(args.params);
+}
+
+void
+localscan_series_register(void)
+{
+    gwy_process_func_register(LOCALSCAN_SERIES_FUNCTION_NAME,
+                              &localscan_series,
+                              N_("/_Distortion/Local Scan _Series Drift..."),
+                              NULL, SERIES_RUN_MODES, GWY_MENU_FLAG_DATA,
+                              N_("Correct a series of frames (the channels "
+                                 "scanned like this one) from one fitted "
+                                 "drift trajectory"));
+}
