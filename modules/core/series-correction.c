@@ -360,11 +360,19 @@ fit_leaving_out(const SeriesCorrection *correction, gint k,
  * series can be read as frame 0 cut off by a jump, or as frame 1 out of
  * line.  Agreement is the others' spread, which sees a frame that fits
  * only in part (a jump inside a slipped frame read as a jump at its end).
- * Of those, the one that stands out least: a jump inside frame 0 with
- * frame 1 slipped reads as well as frame 0 out of line and a jump undoing
- * the slip, but asks a larger disagreement of frame 0. */
+ * Of those, an inner frame before the first or the last: either end frame
+ * out of line reads as a jump at its border, so any inner frame slipped can
+ * be read as the end frame cut off by a jump that undoes the slip (a
+ * settling in frame 0 with frame 1 slipped, a jump inside frame 0 with
+ * frame 1 slipped). */
+static gboolean
+is_end_frame(gint k, gint n_frames)
+{
+    return k == 0 || k == n_frames - 1;
+}
+
 static gint
-pick_left_out(const LeftOut *cand, gint n)
+pick_left_out(const LeftOut *cand, gint n, gint n_frames)
 {
     gdouble lowest = G_MAXDOUBLE;
     gint i, best = -1;
@@ -374,9 +382,14 @@ pick_left_out(const LeftOut *cand, gint n)
     for (i = 0; i < n; i++) {
         if (cand[i].spread > LEAVE_OUT_TIE*lowest)
             continue;
+        gboolean end = is_end_frame(cand[i].frame, n_frames);
+        gboolean best_end = best >= 0 && is_end_frame(cand[best].frame, n_frames);
+
         if (best < 0 || cand[i].n_params < cand[best].n_params
             || (cand[i].n_params == cand[best].n_params
-                && cand[i].residual < cand[best].residual))
+                && (best_end > end
+                    || (best_end == end
+                        && cand[i].spread < cand[best].spread))))
             best = i;
     }
     return best;
@@ -420,7 +433,7 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
                     || beyond_limit(in_all[k], agreement)))
                 cand[n++] = c;
         }
-        if ((best = pick_left_out(cand, n)) < 0)
+        if ((best = pick_left_out(cand, n, nf)) < 0)
             break;
         c = cand[best];
         flag_frame(correction->frames + c.frame, c.residual, c.typical);
