@@ -616,6 +616,71 @@ make_fit_case(HostileCase *hc, GRand *rng)
     hc->must_say = "frame0.gwy";
 }
 
+/* gwy-localscan series given frames that cannot form a series, timing
+ * that cannot be, a frame with missing or no data, thousands of frames. */
+static void
+make_series_case(HostileCase *hc, GRand *rng)
+{
+    gint kind = g_rand_int_range(rng, 0, 7), k, n;
+    gint xres = g_rand_int_range(rng, 48, 97), yres = g_rand_int_range(rng, 48, 97);
+    gchar *frame;
+
+    hc->prefix = "gwy-localscan series: ";
+    add_args(hc, "series", NULL);
+    add_output(hc, "-o", "series.gwy");
+    add_output(hc, "--json", "series.json");
+    add_output(hc, "--trajectory", "series.csv");
+    if (kind == 0) {
+        /* Thousands of frames, none there: refused at the first. */
+        n = g_rand_int_range(rng, 1000, 5000);
+        add_args(hc, "--line-time", "0.1", NULL);
+        for (k = 0; k < n; k++)
+            g_ptr_array_add(hc->argv, case_file(hc, "absent.gwy"));
+        hc->must_say = "absent.gwy";
+        return;
+    }
+    for (k = 0; k < 3; k++) {
+        gint w = (kind == 1 && k == 2) ? xres + 1 : xres;
+        gdouble missing = (kind == 5 && k == 1) ? 1.0 : (kind == 6 ? 0.1 : 0.0);
+
+        frame = g_strdup_printf("frame%d.gwy", k);
+        g_ptr_array_add(hc->argv, write_image_with(hc, rng, frame, w, yres,
+                                                   missing, 12));
+        g_free(frame);
+        if (kind == 2)
+            break;
+    }
+    switch (kind) {
+        case 1:
+        add_args(hc, "--line-time", "0.1", "--frame-times", "0,20,40", NULL);
+        hc->must_say = "differs";
+        break;
+
+        case 2:
+        add_args(hc, "--line-time", "0.1", "--frame-times", "0", NULL);
+        hc->must_say = "at least two";
+        break;
+
+        case 3:
+        add_args(hc, "--line-time", "0.1", "--frame-times", "0,40,20", NULL);
+        hc->must_say = "time order";
+        break;
+
+        case 4:
+        /* No timing in the files, none given: the first frame named. */
+        hc->must_say = "frame0.gwy";
+        break;
+
+        default:
+        /* A frame with no data, or every frame with missing pixels: either
+         * refused in one line or corrected with finite outputs. */
+        add_args(hc, "--line-time", "0.1", "--frame-times",
+                 g_rand_boolean(rng) ? "0,20,40" : "0,12,24", NULL);
+        hc->expect = EXPECT_EITHER;
+        break;
+    }
+}
+
 typedef void (*CaseMaker)(HostileCase *hc, GRand *rng);
 
 static const struct {
@@ -631,6 +696,7 @@ static const struct {
     { "option out of range",       TOOL_PATH,    make_bad_option,     },
     { "simscan",                   SIMSCAN_PATH, make_simscan_case,   },
     { "simscan fit",               SIMSCAN_PATH, make_fit_case,       },
+    { "gwy-localscan series",      TOOL_PATH,    make_series_case,    },
 };
 
 /* Running and judging. */

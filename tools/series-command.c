@@ -461,6 +461,9 @@ build_output(SeriesRun *run, gboolean all_channels, GError **error)
     }
     if (ok) {
         finish_channels(run, out, stored);
+        /* Input channels with missing pixels are copied filled and masked:
+         * a file the tools write holds no NaN (docs/missing-data.md). */
+        localscan_channels_fill_missing(out);
         graph = series_graph_new(&run->correction, run->series);
         gwy_container_set_object_by_name(out, "/0/graph/graph/1", graph);
         g_object_unref(graph);

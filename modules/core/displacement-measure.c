@@ -70,13 +70,19 @@ level_lines(const gdouble *data, gint xres, gint yres,
 {
     gdouble *out = g_new(gdouble, xres*yres), *row = g_new(gdouble, xres);
     gdouble sum2 = 0.0, med;
-    gint i, j;
+    gint i, j, n;
 
+    /* Missing pixels (docs/missing-data.md) become the line's level: the
+     * blur would spread them over its whole reach. */
     for (i = 0; i < yres; i++) {
-        memcpy(row, data + i*xres, xres*sizeof(gdouble));
-        med = gwy_math_median(xres, row);
+        for (j = n = 0; j < xres; j++) {
+            if (isfinite(data[i*xres + j]))
+                row[n++] = data[i*xres + j];
+        }
+        med = n ? gwy_math_median(n, row) : 0.0;
         for (j = 0; j < xres; j++) {
-            out[i*xres + j] = data[i*xres + j] - med;
+            out[i*xres + j] = (isfinite(data[i*xres + j])
+                               ? data[i*xres + j] - med : 0.0);
             sum2 += out[i*xres + j]*out[i*xres + j];
         }
     }

@@ -12,6 +12,8 @@
 #include "continuous-compensate.h"
 #include "drift-trajectory.h"
 #include "frame-conditioning.h"
+#include "localscan-channel.h"
+#include "missing-data.h"
 #include "series-correction.h"
 #include "localscan-intl.h"
 
@@ -234,6 +236,27 @@ static gboolean
 beyond_limit(gdouble residual, gdouble typical)
 {
     return residual > MAX(FLAG_RATIO*typical, FLAG_FLOOR_PX);
+}
+
+/* Frames more than half missing (docs/missing-data.md) say too little to
+ * be measured: flagged before any fit, still corrected. */
+static void
+flag_mostly_missing(SeriesCorrection *correction, const FrameSeries *series)
+{
+    gint k;
+
+    for (k = 0; k < series->n_frames; k++) {
+        GwyDataField *field = series->frames[k].field;
+        gsize n = (gsize)gwy_data_field_get_xres(field)*gwy_data_field_get_yres(field);
+        gsize missing = missing_data_count(gwy_data_field_get_data_const(field), n);
+
+        if (missing > MISSING_DATA_MAX_FRACTION*n) {
+            correction->frames[k].flagged = TRUE;
+            correction->frames[k].reason
+                = g_strdup_printf(_("%.0f %% of its pixels are missing"),
+                                  100.0*missing/n);
+        }
+    }
 }
 
 /* Frames registered against no other frame. */
@@ -766,8 +789,13 @@ series_correction_compute(const FrameSeries *series,
     drift_fit_candidates(&fit->n_fits);
     registered = g_new(gdouble, 2*MAX(fit->n_meas, 1));
     weights = registered + MAX(fit->n_meas, 1);
-    for (i = 0; i < (guint)fit->n_meas; i++)
+    flag_mostly_missing(correction, series);
+    for (i = 0; i < (guint)fit->n_meas; i++) {
         registered[i] = fit->meas[i].weight;
+        if (correction->frames[fit->meas[i].frame_a].flagged
+            || correction->frames[fit->meas[i].frame_b].flagged)
+            registered[i] = 0.0;
+    }
     /* Frames that disagree with the rest are found first, then the
      * trajectory is fitted without them. */
     if ((ok = fit_models(correction, registered))) {
@@ -940,7 +968,7 @@ series_correction_correct_field(const SeriesCorrection *correction,
     gint xres = gwy_data_field_get_xres(field);
     gint yres = gwy_data_field_get_yres(field);
     const gdouble *data = gwy_data_field_get_data_const(field);
-    gdouble fill = gwy_data_field_get_avg(field);
+    gdouble fill = localscan_fill_value(field, LOCALSCAN_FILL_MEAN);
     gboolean ok;
 
     g_return_val_if_fail(timing->xres == xres && timing->yres == yres, FALSE);
