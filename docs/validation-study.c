@@ -16,6 +16,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "fit-report.h"
+#include "series-correction.h"
 #include "frame-series-load.h"
 #include "drift-table.h"
 #include "stripe-geometry.h"
@@ -154,32 +155,6 @@ leveled_copy(GwyDataField *field)
     return out;
 }
 
-/* The fit's drift over the frame as the product's trajectory D(t) = p(t) -
- * p(0), px: the fit sampled at every row's centre time (and the frame's
- * ends) and interpolated, as a trajectory built from a drift model. */
-static DriftTrajectory*
-fit_trajectory(const ScanTiming *tm, const DriftFit *fit, gdouble xstep,
-               gdouble ystep)
-{
-    gint n = tm->yres + 2, i;
-    DriftMeasurement *meas = g_new0(DriftMeasurement, n);
-    DriftTrajectory *trajectory;
-    gdouble px, py;
-
-    for (i = 0; i < n; i++) {
-        meas[i].t_a = (i == 0 ? tm->frame_start
-                       : i == n-1 ? scan_timing_frame_end(tm)
-                       : scan_timing_pixel_time(tm, i-1, 0.5*tm->xres));
-        meas[i].t_b = 0.0;
-        drift_fit_eval(fit, meas[i].t_a, &px, &py);
-        meas[i].dx = px/xstep;
-        meas[i].dy = py/ystep;
-    }
-    trajectory = drift_trajectory_new_interpolating(meas, n, NULL);
-    g_free(meas);
-    return trajectory;
-}
-
 /* Drift-free image of a frame by the product's compensation: with stripes
  * > 0 paper mode (paper_compensate) with each stripe's drift the fit's at
  * the stripe's centre time, rounded to whole pixels by drift_px_round;
@@ -219,7 +194,7 @@ compensate(const SeriesFrame *frame, const gdouble *data, const DriftFit *fit,
         g_free(dy);
         return out;
     }
-    trajectory = fit_trajectory(tm, fit, xstep, ystep);
+    trajectory = series_fit_trajectory(fit, xstep, ystep, tm, NULL);
     if (!trajectory
         || !continuous_compensate_trajectory(data, xres, yres, trajectory, tm,
                                              GWY_INTERPOLATION_BSPLINE,

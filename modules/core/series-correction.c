@@ -523,20 +523,31 @@ typedef enum {
     JUMP_ALWAYS,
 } JumpSide;
 
+/* p(t) - p(0) of a fit in pixels, a jump's step taken as side says. */
+static void
+fit_eval_side(const DriftFit *fit, gdouble xstep, gdouble ystep, gdouble t,
+              JumpSide side, gdouble *dx, gdouble *dy)
+{
+    gdouble x, y, x0, y0, sign = 0.0;
+
+    drift_fit_eval(fit, t, &x, &y);
+    drift_fit_eval(fit, 0.0, &x0, &y0);
+    if (fit->type == DRIFT_MODEL_JUMP && fit->creep == DRIFT_FIT_CREEP_NONE) {
+        if (side == JUMP_NEVER && t >= fit->nonlinear)
+            sign = -1.0;
+        else if (side == JUMP_ALWAYS && t < fit->nonlinear)
+            sign = 1.0;
+    }
+    *dx = (x - x0 + sign*1e-9*fit->coef[0][1])/xstep;
+    *dy = (y - y0 + sign*1e-9*fit->coef[1][1])/ystep;
+}
+
 static void
 eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
           gdouble *dx, gdouble *dy)
 {
-    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
-    gdouble sign = 0.0;
-
-    series_correction_eval(correction, t, dx, dy);
-    if (side == JUMP_NEVER && t >= fit->nonlinear)
-        sign = -1.0;
-    else if (side == JUMP_ALWAYS && t < fit->nonlinear)
-        sign = 1.0;
-    *dx += sign*1e-9*fit->coef[0][1]/correction->xstep;
-    *dy += sign*1e-9*fit->coef[1][1]/correction->ystep;
+    fit_eval_side(correction->fit.fits + correction->fit.chosen,
+                  correction->xstep, correction->ystep, t, side, dx, dy);
 }
 
 /* How many block spans on either side of the fitted jump time the jump is
@@ -850,21 +861,15 @@ void
 series_correction_eval(const SeriesCorrection *correction, gdouble t,
                        gdouble *dx_px, gdouble *dy_px)
 {
-    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
-    gdouble x, y, x0, y0;
-
-    drift_fit_eval(fit, t, &x, &y);
-    drift_fit_eval(fit, 0.0, &x0, &y0);
-    *dx_px = (x - x0)/correction->xstep;
-    *dy_px = (y - y0)/correction->ystep;
+    eval_side(correction, t, JUMP_AS_FITTED, dx_px, dy_px);
 }
 
-/* The trajectory over a frame sampled at every line, as a spline the
+/* The fit's drift over a frame sampled at every line, as a spline the
  * continuous compensation can follow: t_b = 0 makes t = 0 the moment the
  * corrected frame shows. */
 static DriftTrajectory*
-frame_trajectory(const SeriesCorrection *correction, const ScanTiming *timing,
-                 JumpSide side, GError **error)
+sampled_trajectory(const DriftFit *fit, gdouble xstep, gdouble ystep,
+                   const ScanTiming *timing, JumpSide side, GError **error)
 {
     gint yres = timing->yres, n = yres + 2, r;
     DriftMeasurement *meas = g_new0(DriftMeasurement, n);
@@ -879,13 +884,30 @@ frame_trajectory(const SeriesCorrection *correction, const ScanTiming *timing,
             m->t_a = scan_timing_frame_end(timing);
         else
             m->t_a = scan_timing_rows_time(timing, r-1, r);
-        eval_side(correction, m->t_a, side, &m->dx, &m->dy);
+        fit_eval_side(fit, xstep, ystep, m->t_a, side, &m->dx, &m->dy);
         m->weight = 1.0;
     }
     /* Scanning up, the rows' times fall; the spline sorts by time. */
     trajectory = drift_trajectory_new_interpolating(meas, n, error);
     g_free(meas);
     return trajectory;
+}
+
+DriftTrajectory*
+series_fit_trajectory(const DriftFit *fit, gdouble xstep, gdouble ystep,
+                      const ScanTiming *timing, GError **error)
+{
+    return sampled_trajectory(fit, xstep, ystep, timing, JUMP_AS_FITTED,
+                              error);
+}
+
+static DriftTrajectory*
+frame_trajectory(const SeriesCorrection *correction, const ScanTiming *timing,
+                 JumpSide side, GError **error)
+{
+    return sampled_trajectory(correction->fit.fits + correction->fit.chosen,
+                              correction->xstep, correction->ystep, timing,
+                              side, error);
 }
 
 /* A fitted jump while this frame was scanned, or so close to it that the

@@ -16,6 +16,7 @@
 #include <libprocess/gwyprocessenums.h>
 #include "frame-series.h"
 #include "fit-report.h"
+#include "drift-trajectory.h"
 
 G_BEGIN_DECLS
 
@@ -75,6 +76,16 @@ void      series_correction_eval      (const SeriesCorrection *correction,
                                        gdouble t,
                                        gdouble *dx_px,
                                        gdouble *dy_px);
+
+/* A fitted drift over one frame as the trajectory the continuous
+ * compensation follows: D(t) = p(t) - p(0) in pixels of xstep by ystep
+ * (m), sampled at every line (docs/series.md).  For studies that correct
+ * frames with a fit of their own choosing. */
+DriftTrajectory* series_fit_trajectory(const DriftFit *fit,
+                                       gdouble xstep,
+                                       gdouble ystep,
+                                       const ScanTiming *timing,
+                                       GError **error);
 
 /* A field scanned with timing (a frame, or another channel of the same
  * scan) corrected line by line (continuous-compensate.h) into the
