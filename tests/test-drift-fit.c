@@ -6,6 +6,7 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include <string.h>
 #include <stdlib.h>
 #include <math.h>
 #include <check.h>
@@ -219,6 +220,8 @@ START_TEST(test_aliased_periods_not_fitted)
     const DriftModelType *types = drift_fit_candidates(&n_types);
     SimRandom rng;
 
+    /* Every field set: those not named below (the span) are 0. */
+    memset(meas, 0, sizeof(meas));
     sim_random_init(&rng, 17, 1);
     for (k = 1; k < 3; k++) {
         for (j = 0; j < k; j++) {
