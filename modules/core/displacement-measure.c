@@ -176,6 +176,31 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
     g_free(b);
 }
 
+/* The row a block's registration speaks for: its rows weighted by their
+ * detail (squared differences along the line, which line offsets do not
+ * touch).  A block registers where its features are; when the drift moves
+ * fast, its centre row's moment can be seconds off theirs.  The centre
+ * row when the block has no detail (or no finite pixel). */
+static gdouble
+detail_row(const gdouble *data, gint xres, gint r0, gint r1)
+{
+    gdouble wsum = 0.0, rsum = 0.0, w, d;
+    gint r, c;
+
+    for (r = r0; r < r1; r++) {
+        const gdouble *row = data + (gsize)r*xres;
+
+        for (c = 1, w = 0.0; c < xres; c++) {
+            d = row[c] - row[c-1];
+            if (isfinite(d))
+                w += d*d;
+        }
+        wsum += w;
+        rsum += w*r;
+    }
+    return (wsum > 0.0 && isfinite(rsum)) ? rsum/wsum : 0.5*(r0 + r1 - 1);
+}
+
 /* Registers frame ka against frame kb and appends the block measurements;
  * global gets the frame's overall shift. */
 static void
@@ -196,12 +221,14 @@ measure_pair(const FrameSeries *series, gint ka, gint kb,
                                  dx, dy, score, global);
     for (s = 0; s < n; s++) {
         gint r0 = s*yres/n, r1 = (s + 1)*yres/n;
-        gdouble crow = 0.5*(r0 + r1 - 1), ccol = 0.5*(xres - 1);
+        gdouble ccol = 0.5*(xres - 1), crow;
         DriftMeasurement m;
 
         /* The block's content was scanned in the reference dy rows
          * earlier (higher up), dx columns to the left. */
-        m.t_a = scan_timing_rows_time(&fa->timing, r0, r1);
+        crow = detail_row(gwy_data_field_get_data_const(fa->field), xres,
+                          r0, r1);
+        m.t_a = scan_timing_pixel_time(&fa->timing, crow, ccol);
         m.t_b = scan_timing_pixel_time(&fb->timing, crow - dy[s],
                                        ccol - dx[s]);
         m.dx = dx[s]*xstep;

@@ -459,12 +459,17 @@ parameter_grid(const Prepared *pm, FitKind kind,
         }
     }
     else {
-        /* A step between each pair of consecutive distinct times. */
+        /* A step between each pair of consecutive distinct times; at most
+         * MAX_GRID of them, evenly spread (the series correction places a
+         * jump to the line afterwards). */
+        gint stride;
+
         nt = distinct_times(pm, &times);
-        m = MAX(nt - 1, 1);
+        stride = MAX((nt - 1 + MAX_GRID - 1)/MAX_GRID, 1);
+        m = MAX((nt - 1 + stride - 1)/stride, 1);
         g = g_new(gdouble, m);
-        for (i = 0; i+1 < nt; i++)
-            g[i] = 0.5*(times[i] + times[i+1]);
+        for (i = 0; i < m && stride*i + 1 < nt; i++)
+            g[i] = 0.5*(times[stride*i] + times[stride*i + 1]);
         if (nt < 2)
             g[0] = tmax;
         g_free(times);

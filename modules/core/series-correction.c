@@ -36,6 +36,9 @@
  * blocks empty. */
 #define MIN_BLOCK_LINES 8
 
+/* At most this many measurements enter the fit (fit_models). */
+#define FIT_MAX_MEASUREMENTS 4000
+
 /* Leaving a disturbed frame out makes the others agree this many times
  * better. */
 #define LEAVE_OUT_GAIN 2.0
@@ -114,16 +117,27 @@ plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
 }
 
 /* The fit of every model to the measurements whose weight in `weights` is
- * positive; measurements the fit cuts as gross outliers get weight 0. */
+ * positive; measurements the fit cuts as gross outliers get weight 0.  A
+ * long series fits every stride-th of them only (FIT_MAX_MEASUREMENTS in
+ * all, spread over every pair and block): the searches of a jump's time and
+ * an oscillation's period grow with the measurements times their count,
+ * and a few thousand measurements determine a handful of parameters as
+ * well as fifty thousand. */
 static gboolean
 fit_models(SeriesCorrection *correction, const gdouble *weights)
 {
     FitReport *fit = &correction->fit;
     gboolean *kept = g_new(gboolean, MAX(fit->n_meas, 1));
-    gint i;
+    gint i, used = 0, stride;
 
     for (i = 0; i < fit->n_meas; i++)
+        used += (weights[i] > 0.0);
+    stride = MAX((used + FIT_MAX_MEASUREMENTS - 1)/FIT_MAX_MEASUREMENTS, 1);
+    for (i = used = 0; i < fit->n_meas; i++) {
         fit->meas[i].weight = weights[i];
+        if (weights[i] > 0.0 && used++ % stride)
+            fit->meas[i].weight = 0.0;
+    }
     fit->chosen = drift_fit_select_kept(fit->meas, fit->n_meas,
                                         &fit->fit_options, fit->fits, kept);
     fit->chosen = plausible_choice(correction, fit->fits, fit->n_fits,
@@ -686,6 +700,38 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     }
 }
 
+/* Where the lines are looked at: window on either side of the fitted time,
+ * and when that time falls into a flagged frame or a gap between frames,
+ * as far as window into the frames not flagged on either side (the jump
+ * may lie in their last or first lines: nothing in between shows it). */
+static void
+jump_search_window(const SeriesCorrection *correction,
+                   const FrameSeries *series, gdouble t, gdouble window,
+                   gdouble *t_lo, gdouble *t_hi)
+{
+    gdouble start, end, prev_end = -G_MAXDOUBLE, next_start = G_MAXDOUBLE;
+    gint k;
+
+    *t_lo = t - window;
+    *t_hi = t + window;
+    for (k = 0; k < series->n_frames; k++) {
+        if (correction->frames[k].flagged)
+            continue;
+        start = series->frames[k].timing.frame_start;
+        end = scan_timing_frame_end(&series->frames[k].timing);
+        if (start <= t && t <= end)
+            return;
+        if (end < t)
+            prev_end = MAX(prev_end, end);
+        if (start > t)
+            next_start = MIN(next_start, start);
+    }
+    if (prev_end > -G_MAXDOUBLE)
+        *t_lo = MIN(*t_lo, prev_end - window);
+    if (next_start < G_MAXDOUBLE)
+        *t_hi = MAX(*t_hi, next_start + window);
+}
+
 /* The fit places a jump within a block or so (blocks straddling it register
  * to either side).  Line by line, against a neighbouring frame, the lines
  * before the jump match the drift without the step and those after it the
@@ -698,13 +744,15 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
 {
     DriftFit *fit = correction->fit.fits + correction->fit.chosen;
     gint nf = series->n_frames, k, r, i, n = 0, first = 0, last = 0, most = 0;
-    gdouble *line, *after, *before, *when, total, lowest, window, t;
+    gdouble *line, *after, *before, *when, total, lowest, window, t, t_lo, t_hi;
     ConditionedFrame **cache;
 
     if (fit->type != DRIFT_MODEL_JUMP || nf < 2)
         return;
     cache = g_new0(ConditionedFrame*, nf);
     window = JUMP_SEARCH_BLOCKS*block_span;
+    jump_search_window(correction, series, fit->nonlinear, window, &t_lo,
+                       &t_hi);
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
     line = g_new(gdouble, series->frames[0].timing.xres);
@@ -719,7 +767,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
         for (i = 0; i < fk->timing.yres && !correction->frames[k].flagged; i++) {
             r = (fk->timing.direction == SCAN_DIRECTION_UP) ? fk->timing.yres-1 - i : i;
             t = scan_timing_rows_time(&fk->timing, r, r+1);
-            if (fabs(t - fit->nonlinear) > window)
+            if (t < t_lo || t > t_hi)
                 continue;
             line_costs(correction, series, cache, k, r, line, before + n,
                        after + n);
