@@ -81,7 +81,8 @@ define_series_params(void)
     gwy_param_def_add_double(paramdef, PARAM_LINE_TIME, "line_time",
                              _("_Line time"), 1e-6, 1e4, 1.0);
     gwy_param_def_add_double(paramdef, PARAM_FRAME_INTERVAL, "frame_interval",
-                             _("_Frame interval"), 0.0, 1e9, 0.0);
+                             _("_Frame interval (0: back to back)"), 0.0, 1e9,
+                             0.0);
     gwy_param_def_add_gwyenum(paramdef, PARAM_DIRECTION, "direction",
                               _("Slow scan _direction"), directions,
                               G_N_ELEMENTS(directions), SCAN_DIRECTION_DOWN);
@@ -89,7 +90,7 @@ define_series_params(void)
                            NULL, GWY_TYPE_INTERPOLATION_TYPE,
                            GWY_INTERPOLATION_BSPLINE);
     gwy_param_def_add_boolean(paramdef, PARAM_CROP, "crop",
-                              _("_Crop to the area every frame covers"),
+                              _("C_rop to the area every frame covers"),
                               FALSE);
     gwy_param_def_add_boolean(paramdef, PARAM_ADD_GRAPH, "add_graph",
                               _("Add the trajectory _graph"), TRUE);
@@ -283,22 +284,64 @@ add_graph(SeriesArgs *args)
     g_object_unref(gmodel);
 }
 
+/* The fitted effect in words, with its parameters: the velocity alone is
+ * the constant part, which beside a settling or an acceleration is not the
+ * slope the graph shows. */
+static void
+describe_effect(GString *text, const DriftFit *fit)
+{
+    DriftFitParameters p;
+
+    drift_fit_parameters(fit, &p);
+    switch (fit->type) {
+        case DRIFT_MODEL_SETTLING:
+        g_string_append_printf(text, _("settling drift: time constant %.3g s, "
+                                       "initial excess velocity (%.3g, %.3g) nm/s, "
+                                       "final velocity (%.3g, %.3g) nm/s"),
+                               p.tau_s, p.u_nm_per_s[0], p.u_nm_per_s[1],
+                               p.velocity_nm_per_s[0], p.velocity_nm_per_s[1]);
+        break;
+
+        case DRIFT_MODEL_OSCILLATION:
+        g_string_append_printf(text, _("oscillating drift: period %.3g s, "
+                                       "amplitude (%.3g, %.3g) nm, mean velocity "
+                                       "(%.3g, %.3g) nm/s"),
+                               p.period_s, p.amplitude_nm[0], p.amplitude_nm[1],
+                               p.velocity_nm_per_s[0], p.velocity_nm_per_s[1]);
+        break;
+
+        case DRIFT_MODEL_JUMP:
+        g_string_append_printf(text, _("a jump of (%.3g, %.3g) nm at %.4g s on "
+                                       "a velocity of (%.3g, %.3g) nm/s"),
+                               p.step_nm[0], p.step_nm[1], p.t_s,
+                               p.velocity_nm_per_s[0], p.velocity_nm_per_s[1]);
+        break;
+
+        case DRIFT_MODEL_ACCELERATION:
+        g_string_append_printf(text, _("accelerating drift: (%.3g, %.3g) nm/s², "
+                                       "starting at (%.3g, %.3g) nm/s"),
+                               p.accel_nm_per_s2[0], p.accel_nm_per_s2[1],
+                               p.velocity_nm_per_s[0], p.velocity_nm_per_s[1]);
+        break;
+
+        default:
+        g_string_append_printf(text, _("constant drift of (%.3g, %.3g) nm/s"),
+                               p.velocity_nm_per_s[0], p.velocity_nm_per_s[1]);
+        break;
+    }
+}
+
 /* The fit, the flagged frames and the warnings, in one text. */
 static gchar*
 describe_result(const SeriesArgs *args)
 {
     const SeriesCorrection *c = &args->correction;
-    const DriftFit *fit = c->fit.fits + c->fit.chosen;
-    DriftFitParameters p;
     GString *text = g_string_new(NULL);
     gint k, flagged = 0;
     guint i;
 
-    drift_fit_parameters(fit, &p);
-    g_string_append_printf(text, _("Drift: %s, velocity (%.3g, %.3g) nm/s; "
-                                   "%d frames, typical residual %.2f px."),
-                           drift_model_type_name(fit->type),
-                           p.velocity_nm_per_s[0], p.velocity_nm_per_s[1],
+    describe_effect(text, c->fit.fits + c->fit.chosen);
+    g_string_append_printf(text, _("; %d frames, typical residual %.2f px."),
                            args->series->n_frames, c->typical_px);
     for (k = 0; k < args->series->n_frames; k++) {
         if (!c->frames[k].flagged)
@@ -313,6 +356,9 @@ describe_result(const SeriesArgs *args)
     if (args->timing_assumed)
         g_string_append(text, _("\nTiming from the settings below (the file "
                                 "does not give it)."));
+    else
+        g_string_append(text, _("\nTiming from the file's metadata (the "
+                                "settings below are not used)."));
     for (i = 0; i < c->warnings->len; i++)
         g_string_append_printf(text, "\n%s",
                                (const gchar*)g_ptr_array_index(c->warnings, i));
@@ -379,6 +425,19 @@ param_changed(SeriesGUI *gui, gint id)
     }
 }
 
+/* Curves appended from another model do not bring its units. */
+static void
+set_graph_units(GwyGraphModel *gmodel)
+{
+    GwySIUnit *unit = gwy_si_unit_new("s");
+
+    g_object_set(gmodel, "si-unit-x", unit, NULL);
+    g_object_unref(unit);
+    unit = gwy_si_unit_new("m");
+    g_object_set(gmodel, "si-unit-y", unit, NULL);
+    g_object_unref(unit);
+}
+
 static GwyDialogOutcome
 run_gui(SeriesArgs *args)
 {
@@ -403,6 +462,7 @@ run_gui(SeriesArgs *args)
     gui.gmodel = gwy_graph_model_new();
     g_object_set(gui.gmodel, "title", _("Drift trajectory"),
                  "axis-label-bottom", "t", "axis-label-left", _("drift"), NULL);
+    set_graph_units(gui.gmodel);
     graph = gwy_graph_new(gui.gmodel);
     gwy_graph_enable_user_input(GWY_GRAPH(graph), FALSE);
     gtk_widget_set_size_request(graph, GRAPH_WIDTH, GRAPH_HEIGHT);
@@ -421,6 +481,9 @@ run_gui(SeriesArgs *args)
     gwy_param_table_append_entry(table, PARAM_FRAME_INTERVAL);
     gwy_param_table_set_unitstr(table, PARAM_FRAME_INTERVAL, "s");
     gwy_param_table_append_combo(table, PARAM_DIRECTION);
+    /* The fields look as if they mattered: say when they do. */
+    gwy_param_table_append_message(table, -1,
+                                   _("Used only if the file lacks them."));
     gwy_param_table_append_header(table, -1, _("Output"));
     gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
     gwy_param_table_append_checkbox(table, PARAM_CROP);
