@@ -25,7 +25,6 @@ new_curve(const gchar *title, GwyGraphCurveType type, gint colour,
 GwyGraphModel*
 series_graph_new(const SeriesCorrection *c, const FrameSeries *series)
 {
-    const DriftFit *fit = c->fit.fits + c->fit.chosen;
     GwyGraphModel *graph = gwy_graph_model_new();
     GArray *t = g_array_new(FALSE, FALSE, sizeof(gdouble));
     GArray *x = g_array_new(FALSE, FALSE, sizeof(gdouble));
@@ -45,7 +44,9 @@ series_graph_new(const SeriesCorrection *c, const FrameSeries *series)
 
                 for (r = 0; r < timing->yres; r++) {
                     when = scan_timing_rows_time(timing, r, r+1);
-                    drift_fit_eval(fit, when, &px, &py);
+                    series_correction_eval(c, when, &px, &py);
+                    px *= c->xstep;
+                    py *= c->ystep;
                     g_array_append_val(t, when);
                     g_array_append_val(x, px);
                     g_array_append_val(y, py);
@@ -58,7 +59,9 @@ series_graph_new(const SeriesCorrection *c, const FrameSeries *series)
 
                 if (mm->weight <= 0.0)
                     continue;
-                drift_fit_eval(fit, mm->t_b, &bx, &by);
+                series_correction_eval(c, mm->t_b, &bx, &by);
+                bx *= c->xstep;
+                by *= c->ystep;
                 px = bx + mm->dx;
                 py = by + mm->dy;
                 g_array_append_val(t, mm->t_a);

@@ -112,12 +112,32 @@ near_jump(const DriftModel *model, gdouble t)
             && fabs(t - model->t_jump) < JUMP_LINES*LINE_TIME);
 }
 
+void
+series_case_draw_walk(guint32 base_seed, gint i, gdouble sigma,
+                      DriftModel *model)
+{
+    SimRandom rng;
+    gdouble speed, angle;
+
+    sim_random_init(&rng, base_seed, 500 + i);
+    drift_model_init(model, DRIFT_MODEL_RANDOM_WALK);
+    speed = 0.1e-9*sim_random_uniform(&rng);
+    angle = 2.0*G_PI*sim_random_uniform(&rng);
+    model->v[0] = speed*cos(angle);
+    model->v[1] = speed*sin(angle);
+    model->walk_sigma = sigma*1e-9;
+    model->walk_dt = 2.0;
+    model->walk_seed = base_seed + 17*i;
+    drift_model_prepare(model, 2.0*SERIES_CASE_FRAMES*FRAME_TIME);
+}
+
 static void
 judge_trajectory(const SeriesCorrection *correction,
                  const FrameSeries *series, const DriftModel *model,
                  const SeriesCaseOptions *options, SeriesCaseResult *result)
 {
-    gdouble sum = 0.0, worst = 0.0, x0, y0, x, y, fx, fy, t, e;
+    gdouble sum = 0.0, worst = 0.0, x0, y0, x, y, fx, fy, t, e, ex, ey;
+    gdouble mean[2] = { 0.0, 0.0 };
     gint k, r, count = 0;
 
     drift_model_eval(model, 0.0, &x0, &y0);
@@ -132,8 +152,11 @@ judge_trajectory(const SeriesCorrection *correction,
                 continue;
             drift_model_eval(model, t, &x, &y);
             series_correction_eval(correction, t, &fx, &fy);
-            e = hypot(fx - (x - x0)/correction->xstep,
-                      fy - (y - y0)/correction->ystep);
+            ex = fx - (x - x0)/correction->xstep;
+            ey = fy - (y - y0)/correction->ystep;
+            e = hypot(ex, ey);
+            mean[0] += ex;
+            mean[1] += ey;
             sum += e*e;
             worst = MAX(worst, e);
             count++;
@@ -141,6 +164,11 @@ judge_trajectory(const SeriesCorrection *correction,
     }
     result->trajectory_rms_px = sqrt(sum/MAX(count, 1));
     result->trajectory_worst_px = worst;
+    mean[0] /= MAX(count, 1);
+    mean[1] /= MAX(count, 1);
+    result->trajectory_relative_px
+        = sqrt(MAX(sum/MAX(count, 1) - mean[0]*mean[0] - mean[1]*mean[1], 0.0));
+    result->smooth_used = correction->use_smooth;
 }
 
 /* What a stripe of the corrected frame keeps of the drift: the trajectory's

@@ -29,6 +29,10 @@ typedef struct {
     gdouble trajectory_rms_px;   /* over every scan line of every frame,
                                     lines within 3 of a jump left out */
     gdouble trajectory_worst_px;
+    gdouble trajectory_relative_px; /* the same RMS without the mean error:
+                                       how well the frames overlay, whatever
+                                       the absolute reference */
+    gboolean smooth_used;        /* the flexible trajectory corrected them */
     gdouble stripe_worst_px;     /* the drift a stripe of 16 lines of a
                                     corrected frame keeps, worst of all */
     gdouble frame_worst_px;      /* corrected frames registered as a whole
@@ -46,6 +50,10 @@ FrameSeries*  series_case_scan    (guint32 base_seed, gint i,
                                    const DriftModel *model,
                                    const SeriesCaseOptions *options,
                                    GwyDataField ***truth);
+/* A random-walk drift (no model explains it) for case i: velocity up to
+ * 0.1 nm/s, diffusion sigma nm/s per sqrt(s) in steps of 2 s. */
+void          series_case_draw_walk(guint32 base_seed, gint i, gdouble sigma,
+                                    DriftModel *model);
 /* Corrects the series with the core and judges it; FALSE when the
  * correction failed. */
 gboolean      series_case_judge   (const FrameSeries *series,

@@ -28,6 +28,9 @@
 #define TRAJECTORY_RMS_MAX 0.35
 #define STRIPE_MAX 0.4
 #define FRAME_MAX 0.4
+/* A random walk of 0.02 nm/s per sqrt(s): the trajectory without its mean
+ * error (docs/series.md). */
+#define WALK_RELATIVE_MAX 0.5
 
 /* Cases: effect hidden_case_effect(_i), raw channels for every other
  * round of the effects, a disturbed frame in the third round. */
@@ -96,6 +99,41 @@ START_TEST(test_hidden_drift_corrected)
         g_rand_free(rng);
     }
     check_case(_i, &options);
+}
+END_TEST
+
+/* A random walk: no model explains it, the flexible trajectory corrects
+ * the frames (which then overlay, whatever the absolute reference: the
+ * walk's first seconds, which fix where the sample was at t = 0, are
+ * measured by the first blocks alone). */
+START_TEST(test_random_walk_smooth)
+{
+    SeriesCaseOptions options = { _i % 2, -1 };
+    DriftModel model;
+    GwyDataField **truth = NULL;
+    SeriesCaseResult r;
+    FrameSeries *series;
+    gint k;
+
+    series_case_draw_walk(base_seed, _i, 0.02, &model);
+    series = series_case_scan(base_seed, 200 + _i, &model, &options, &truth);
+    ck_assert(series != NULL);
+    ck_assert_msg(series_case_judge(series, truth, &model, &options, &r),
+                  "walk %d (seed %u): the correction failed", _i, base_seed);
+    printf("walk %d raw %d: smooth %d, trajectory rms %.3f px, without its "
+           "mean %.3f px\n", _i, options.raw, r.smooth_used,
+           r.trajectory_rms_px, r.trajectory_relative_px);
+    fflush(stdout);
+    ck_assert_msg(r.smooth_used, "walk %d (seed %u): a model corrected it",
+                  _i, base_seed);
+    ck_assert_msg(r.trajectory_relative_px <= WALK_RELATIVE_MAX,
+                  "walk %d (seed %u): the frames overlay within %g px", _i,
+                  base_seed, r.trajectory_relative_px);
+    for (k = 0; k < 2*SERIES_CASE_FRAMES; k++)
+        g_object_unref(truth[k]);
+    g_free(truth);
+    frame_series_free(series);
+    drift_model_clear(&model);
 }
 END_TEST
 
@@ -280,6 +318,7 @@ main(void)
     base_seed = test_seed_from_env("test-series-correction");
     gwy_process_type_init();
     tcase_add_loop_test(tc, test_hidden_drift_corrected, 0, N_CASES);
+    tcase_add_loop_test(tc, test_random_walk_smooth, 0, 2);
     tcase_add_test(tc, test_outputs);
     tcase_add_test(tc, test_frames_overlay);
     tcase_set_timeout(tc, 120);

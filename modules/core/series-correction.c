@@ -36,6 +36,10 @@
  * blocks empty. */
 #define MIN_BLOCK_LINES 8
 
+/* Knots of the flexible trajectory in all (a dense solve of this size is
+ * milliseconds; the trajectory between blocks is smooth anyway). */
+#define SMOOTH_KNOTS 400
+
 /* At most this many measurements enter the fit (fit_models). */
 #define FIT_MAX_MEASUREMENTS 4000
 
@@ -167,14 +171,19 @@ median_of(gdouble *values, gint n)
     return (n % 2) ? values[n/2] : 0.5*(values[n/2 - 1] + values[n/2]);
 }
 
-/* |measured - fitted| of a measurement in pixels. */
+/* |measured - fitted| of a measurement in pixels; fit NULL: the
+ * trajectory the series is corrected with. */
 static gdouble
 residual_px(const SeriesCorrection *correction, const DriftFit *fit,
             const DriftMeasurement *m)
 {
     gdouble dx, dy;
 
-    drift_fit_predict(fit, m, &dx, &dy);
+    if (!fit && correction->use_smooth)
+        smooth_trajectory_predict(correction->smooth, m, &dx, &dy);
+    else
+        drift_fit_predict(fit ? fit : correction->fit.fits + correction->fit.chosen,
+                          m, &dx, &dy);
     return hypot((m->dx - dx)/correction->xstep,
                  (m->dy - dy)/correction->ystep);
 }
@@ -223,7 +232,6 @@ static void
 judge_frames(SeriesCorrection *correction, const gdouble *registered)
 {
     const FitReport *report = &correction->fit;
-    const DriftFit *fit = report->fits + report->chosen;
     gint nf = correction->n_frames, k, count = 0;
     gdouble *values = g_new(gdouble, report->n_meas + nf + 1);
     gdouble *typical = values + report->n_meas;
@@ -231,7 +239,7 @@ judge_frames(SeriesCorrection *correction, const gdouble *registered)
     for (k = 0; k < nf; k++) {
         SeriesFrameVerdict *v = correction->frames + k;
 
-        v->residual_px = frame_residual(correction, fit, k, registered,
+        v->residual_px = frame_residual(correction, NULL, k, registered,
                                         &v->n_pairs, values);
         if (!v->flagged && isfinite(v->residual_px))
             typical[count++] = v->residual_px;
@@ -507,6 +515,51 @@ drop_flagged(SeriesCorrection *correction, const gdouble *registered,
     return any;
 }
 
+/* Knots of the flexible trajectory: evenly within each frame, as many as
+ * its blocks up to SMOOTH_KNOTS in all (between frames nothing is
+ * measured: the penalty bridges the gap). */
+static gdouble*
+smooth_knots(const FrameSeries *series, gint n_blocks, gint *n)
+{
+    gint per = CLAMP(SMOOTH_KNOTS/MAX(series->n_frames, 1), 2, MAX(n_blocks, 2));
+    gdouble *knots = g_new(gdouble, per*series->n_frames + 1), t, start, span;
+    gint k, j;
+
+    *n = 0;
+    for (k = 0; k < series->n_frames; k++) {
+        start = series->frames[k].timing.frame_start;
+        span = scan_timing_frame_end(&series->frames[k].timing) - start;
+        for (j = 0; j < per; j++) {
+            t = start + (j + 0.5)*span/per;
+            if (!*n || t > knots[*n - 1])
+                knots[(*n)++] = t;
+        }
+    }
+    return knots;
+}
+
+/* The flexible trajectory beside the chosen model; it is used when it
+ * predicts held-out blocks better by the fit's cv_gain: no model explains
+ * the drift (a random walk, creep of no simple form). */
+static void
+fit_smooth(SeriesCorrection *correction, const FrameSeries *series,
+           gint n_blocks)
+{
+    const FitReport *fit = &correction->fit;
+    const DriftFit *chosen = fit->fits + fit->chosen;
+    gdouble *knots;
+    gint n;
+
+    knots = smooth_knots(series, n_blocks, &n);
+    correction->smooth = smooth_trajectory_fit(fit->meas, fit->n_meas, knots,
+                                               n, fit->fit_options.n_folds);
+    g_free(knots);
+    correction->use_smooth
+        = (correction->smooth && isfinite(chosen->cv_rms_nm)
+           && correction->smooth->cv_rms_nm
+              < (1.0 - fit->fit_options.cv_gain)*chosen->cv_rms_nm);
+}
+
 static void
 warn_about_fit(SeriesCorrection *correction, const gdouble *registered)
 {
@@ -523,7 +576,9 @@ warn_about_fit(SeriesCorrection *correction, const gdouble *registered)
                                       "registered: the trajectory rests on "
                                       "few measurements"),
                                     n_reg, fit->n_meas));
-    rms_px = 1e-9*chosen->rms_nm/MIN(correction->xstep, correction->ystep);
+    rms_px = 1e-9*(correction->use_smooth ? correction->smooth->rms_nm
+                                          : chosen->rms_nm)
+             /MIN(correction->xstep, correction->ystep);
     if (rms_px > MODEL_WARN_PX)
         add_warning(correction,
                     g_strdup_printf(_("the fitted model leaves %.2f px RMS "
@@ -563,6 +618,12 @@ static void
 eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
           gdouble *dx, gdouble *dy)
 {
+    if (correction->use_smooth) {
+        smooth_trajectory_eval(correction->smooth, t, dx, dy);
+        *dx /= correction->xstep;
+        *dy /= correction->ystep;
+        return;
+    }
     fit_eval_side(correction->fit.fits + correction->fit.chosen,
                   correction->xstep, correction->ystep, t, side, dx, dy);
 }
@@ -880,6 +941,7 @@ series_correction_compute(const FrameSeries *series,
     if (ok) {
         localise_jump(correction, series,
                       series->frames[0].timing.yres*series->frames[0].timing.line_time/d.n_blocks);
+        fit_smooth(correction, series, d.n_blocks);
         judge_frames(correction, registered);
         if (series->n_frames > SERIES_CORRECTION_LEAVE_OUT_UP_TO) {
             flag_outlying(correction);
@@ -902,6 +964,8 @@ series_correction_clear(SeriesCorrection *correction)
     gint k;
 
     fit_report_clear(&correction->fit);
+    smooth_trajectory_free(correction->smooth);
+    correction->smooth = NULL;
     for (k = 0; k < correction->n_frames && correction->frames; k++)
         g_free(correction->frames[k].reason);
     g_free(correction->frames);
@@ -918,31 +982,37 @@ series_correction_eval(const SeriesCorrection *correction, gdouble t,
     eval_side(correction, t, JUMP_AS_FITTED, dx_px, dy_px);
 }
 
-/* The fit's drift over a frame sampled at every line, as a spline the
- * continuous compensation can follow: t_b = 0 makes t = 0 the moment the
- * corrected frame shows. */
-static DriftTrajectory*
-sampled_trajectory(const DriftFit *fit, gdouble xstep, gdouble ystep,
-                   const ScanTiming *timing, JumpSide side, GError **error)
+/* The moments a frame's drift is sampled at: every line, and the frame's
+ * start and end (the compensation looks a line beyond). */
+static DriftMeasurement*
+line_samples(const ScanTiming *timing, gint *n)
 {
-    gint yres = timing->yres, n = yres + 2, r;
-    DriftMeasurement *meas = g_new0(DriftMeasurement, n);
-    DriftTrajectory *trajectory;
+    gint r;
+    DriftMeasurement *meas;
 
-    for (r = 0; r < n; r++) {
-        DriftMeasurement *m = meas + r;
-
+    *n = timing->yres + 2;
+    meas = g_new0(DriftMeasurement, *n);
+    for (r = 0; r < *n; r++) {
         if (r == 0)
-            m->t_a = timing->frame_start;
-        else if (r == n-1)
-            m->t_a = scan_timing_frame_end(timing);
+            meas[r].t_a = timing->frame_start;
+        else if (r == *n - 1)
+            meas[r].t_a = scan_timing_frame_end(timing);
         else
-            m->t_a = scan_timing_rows_time(timing, r-1, r);
-        fit_eval_side(fit, xstep, ystep, m->t_a, side, &m->dx, &m->dy);
-        m->weight = 1.0;
+            meas[r].t_a = scan_timing_rows_time(timing, r-1, r);
+        meas[r].weight = 1.0;
     }
-    /* Scanning up, the rows' times fall; the spline sorts by time. */
-    trajectory = drift_trajectory_new_interpolating(meas, n, error);
+    return meas;
+}
+
+/* The samples as a spline the continuous compensation can follow: t_b = 0
+ * makes t = 0 the moment the corrected frame shows.  Scanning up, the
+ * rows' times fall; the spline sorts by time. */
+static DriftTrajectory*
+spline_through(DriftMeasurement *meas, gint n, GError **error)
+{
+    DriftTrajectory *trajectory = drift_trajectory_new_interpolating(meas, n,
+                                                                     error);
+
     g_free(meas);
     return trajectory;
 }
@@ -951,17 +1021,25 @@ DriftTrajectory*
 series_fit_trajectory(const DriftFit *fit, gdouble xstep, gdouble ystep,
                       const ScanTiming *timing, GError **error)
 {
-    return sampled_trajectory(fit, xstep, ystep, timing, JUMP_AS_FITTED,
-                              error);
+    gint n, r;
+    DriftMeasurement *meas = line_samples(timing, &n);
+
+    for (r = 0; r < n; r++)
+        fit_eval_side(fit, xstep, ystep, meas[r].t_a, JUMP_AS_FITTED,
+                      &meas[r].dx, &meas[r].dy);
+    return spline_through(meas, n, error);
 }
 
 static DriftTrajectory*
 frame_trajectory(const SeriesCorrection *correction, const ScanTiming *timing,
                  JumpSide side, GError **error)
 {
-    return sampled_trajectory(correction->fit.fits + correction->fit.chosen,
-                              correction->xstep, correction->ystep, timing,
-                              side, error);
+    gint n, r;
+    DriftMeasurement *meas = line_samples(timing, &n);
+
+    for (r = 0; r < n; r++)
+        eval_side(correction, meas[r].t_a, side, &meas[r].dx, &meas[r].dy);
+    return spline_through(meas, n, error);
 }
 
 /* A fitted jump while this frame was scanned, or so close to it that the
@@ -973,7 +1051,8 @@ jump_in_frame(const SeriesCorrection *correction, const ScanTiming *timing)
     gdouble t0 = timing->frame_start - 2.0*timing->line_time;
     gdouble t1 = scan_timing_frame_end(timing) + 2.0*timing->line_time;
 
-    return (fit->type == DRIFT_MODEL_JUMP && fit->creep == DRIFT_FIT_CREEP_NONE
+    return (!correction->use_smooth
+            && fit->type == DRIFT_MODEL_JUMP && fit->creep == DRIFT_FIT_CREEP_NONE
             && fit->nonlinear > t0 && fit->nonlinear < t1);
 }
 
@@ -1130,6 +1209,29 @@ add_text(JsonBuilder *b, const gchar *text)
     g_free(valid);
 }
 
+/* Which trajectory corrected the frames: the chosen model, or the flexible
+ * one where no model explains the drift. */
+static void
+add_trajectory_choice(JsonBuilder *b, const SeriesCorrection *correction)
+{
+    const DriftFit *chosen = correction->fit.fits + correction->fit.chosen;
+
+    json_builder_set_member_name(b, "trajectory");
+    json_builder_begin_object(b);
+    json_builder_set_member_name(b, "model");
+    json_builder_add_string_value(b, correction->use_smooth ? "smooth"
+                                  : drift_model_type_name(chosen->type));
+    json_values_set_number(b, "model_cv_rms_nm", chosen->cv_rms_nm);
+    json_values_set_number(b, "smooth_cv_rms_nm",
+                           correction->smooth ? correction->smooth->cv_rms_nm
+                           : NAN);
+    json_values_set_number(b, "smooth_rms_nm",
+                           correction->smooth ? correction->smooth->rms_nm : NAN);
+    json_builder_set_member_name(b, "smooth_knots");
+    json_builder_add_int_value(b, correction->smooth ? correction->smooth->n_knots : 0);
+    json_builder_end_object(b);
+}
+
 static void
 add_frame_verdicts(JsonBuilder *b, const SeriesCorrection *correction,
                    const FrameSeries *series)
@@ -1171,6 +1273,7 @@ series_correction_to_json(const SeriesCorrection *correction,
     json_builder_begin_object(b);
     fit_report_add_members(b, &correction->fit);
     json_values_set_number(b, "typical_residual_px", correction->typical_px);
+    add_trajectory_choice(b, correction);
     add_frame_verdicts(b, correction, series);
     json_builder_set_member_name(b, "warnings");
     json_builder_begin_array(b);

@@ -17,6 +17,7 @@
 #include "frame-series.h"
 #include "fit-report.h"
 #include "drift-trajectory.h"
+#include "smooth-trajectory.h"
 
 G_BEGIN_DECLS
 
@@ -47,6 +48,11 @@ typedef struct {
     GPtrArray *warnings;    /* strings */
     gdouble xstep, ystep;   /* pixel size of the frames, m */
     gdouble frame_nm;       /* the frames' smaller physical side, nm */
+    SmoothTrajectory *smooth; /* the flexible trajectory fitted beside the
+                                 models (NULL when it could not be) */
+    gboolean use_smooth;    /* it predicts held-out blocks better than the
+                               chosen model by the fit's cv_gain: the
+                               trajectory is it */
 } SeriesCorrection;
 
 /* Pairs of frames registered in a long series: each frame against this
