@@ -1205,10 +1205,15 @@ write_series(GString *md, const SeriesSpec *spec, const SeriesResult *res)
                            res->cv_ext);
     g_string_append_printf(md, "Alignment of consecutive frames (normalised "
                            "correlation over the overlap, mean over pairs): raw "
-                           "%.4f, paper-compensated %.4f, %s-compensated "
-                           "%.4f.\n", res->ncc_raw, res->ncc_paper,
-                           drift_model_type_name(rep->fits[res->extended].type),
-                           res->ncc_ext);
+                           "%.4f, paper-compensated %.4f, %s-compensated ",
+                           res->ncc_raw, res->ncc_paper,
+                           drift_model_type_name(rep->fits[res->extended].type));
+    /* The compensation refuses a drift that folds the frames over. */
+    if (isfinite(res->ncc_ext))
+        g_string_append_printf(md, "%.4f.\n", res->ncc_ext);
+    else
+        g_string_append(md, "none (the fitted drift is too fast to "
+                        "compensate: it would fold the frames over).\n");
     g_string_append(md, "\nThe drift as the data show it: apparent velocity "
                     "of each consecutive pair (mean of its blocks' "
                     "displacement over their time difference):\n");

@@ -229,7 +229,9 @@ START_TEST(test_outputs)
     json = series_correction_to_json(&correction, series);
     ck_assert(json_parser_load_from_data(parser, json, -1, NULL));
     root = json_node_get_object(json_parser_get_root(parser));
-    ck_assert_str_eq(json_object_get_string_member(root, "effect"), "none");
+    ck_assert_msg(g_str_equal(json_object_get_string_member(root, "effect"), "none"),
+                  "a steady drift named %s (seed %u): %s",
+                  json_object_get_string_member(root, "effect"), base_seed, json);
     ck_assert(json_object_has_member(root, "velocity_nm_per_s"));
     ck_assert(json_object_has_member(root, "models"));
     ck_assert(json_object_has_member(root, "warnings"));

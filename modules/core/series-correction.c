@@ -27,6 +27,8 @@
 /* An effect larger than this fraction of the frame's smaller side is not
  * believed: the frames would not overlap across it. */
 #define PLAUSIBLE_EFFECT 0.5
+/* An effect smaller than this (px) is not named. */
+#define EFFECT_MIN_PX 0.1
 
 /* A frame is judged by the fit of the others only when at least this many
  * others remain: two frames are one pair, which any model fits. */
@@ -73,9 +75,10 @@ add_warning(SeriesCorrection *correction, gchar *text)
 }
 
 /* The size of the effect a fit names (nm): a jump's step, an
- * oscillation's amplitude, settling's excess travel u tau; 0 for none. */
+ * oscillation's amplitude, settling's excess travel u tau, how far an
+ * acceleration bends the drift over the series (span s); 0 for none. */
 static gdouble
-effect_size_nm(const DriftFit *fit)
+effect_size_nm(const DriftFit *fit, gdouble span)
 {
     DriftFitParameters p;
 
@@ -90,24 +93,34 @@ effect_size_nm(const DriftFit *fit)
         case DRIFT_MODEL_SETTLING:
         return hypot(p.u_nm_per_s[0], p.u_nm_per_s[1])*p.tau_s;
 
+        case DRIFT_MODEL_ACCELERATION:
+        return 0.25*hypot(p.accel_nm_per_s2[0], p.accel_nm_per_s2[1])*span*span;
+
         default:
         return 0.0;
     }
 }
 
 /* The chosen fit, or constant drift when the chosen effect is larger than
- * the frames could show (a fit bending to a few failed registrations). */
+ * the frames could show (a fit bending to a few failed registrations), or
+ * smaller than EFFECT_MIN_PX: measurements of steady drift so exact that a
+ * jump of a thousandth of a pixel passes every relative test change no
+ * corrected frame, and name no effect. */
 static gint
 plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
                  gint n_fits, gint chosen, gboolean warn)
 {
-    gdouble size;
+    gdouble size, pixel = 1e9*MIN(correction->xstep, correction->ystep);
+    gboolean too_large;
     gint i;
 
-    if (chosen < 0
-        || (size = effect_size_nm(fits + chosen)) <= PLAUSIBLE_EFFECT*correction->frame_nm)
+    if (chosen < 0 || fits[chosen].type == DRIFT_MODEL_NONE)
         return chosen;
-    if (warn)
+    size = effect_size_nm(fits + chosen, correction->span_s);
+    too_large = !(size <= PLAUSIBLE_EFFECT*correction->frame_nm);
+    if (!too_large && size >= EFFECT_MIN_PX*pixel)
+        return chosen;
+    if (warn && too_large)
         add_warning((SeriesCorrection*)correction,
                     g_strdup_printf(_("a %s of %.3g nm was fitted and "
                                       "refused: more than half the frame"),
@@ -907,6 +920,7 @@ series_correction_compute(const FrameSeries *series,
     correction->ystep = frame_series_dy(series);
     correction->frame_nm = 1e9*MIN(correction->xstep*series->frames[0].timing.xres,
                                    correction->ystep*series->frames[0].timing.yres);
+    correction->span_s = scan_timing_frame_end(&series->frames[series->n_frames-1].timing);
     for (i = 0; i < series->notes->len; i++)
         add_warning(correction,
                     g_strdup(g_ptr_array_index(series->notes, i)));

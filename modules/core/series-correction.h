@@ -48,6 +48,7 @@ typedef struct {
     GPtrArray *warnings;    /* strings */
     gdouble xstep, ystep;   /* pixel size of the frames, m */
     gdouble frame_nm;       /* the frames' smaller physical side, nm */
+    gdouble span_s;         /* from t = 0 to the end of the last frame */
     SmoothTrajectory *smooth; /* the flexible trajectory fitted beside the
                                  models (NULL when it could not be) */
     gboolean use_smooth;    /* it predicts held-out blocks better than the
