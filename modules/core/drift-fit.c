@@ -12,6 +12,11 @@
 #define MAX_BASIS 4
 #define GOLDEN_STEPS 40
 #define MAX_GRID 6000
+/* Distinct measured times a jump leaves on either side at least. */
+#define JUMP_MIN_SIDE 3
+/* A settling slower than half the series and an acceleration predicting
+ * within this factor of it are the same curvature. */
+#define CURVATURE_TIE 1.05
 /* Oscillation periods whose cycles mostly cancel between the frames are not
  * searched (see oscillation_visibility). */
 #define MIN_VISIBILITY 0.25
@@ -459,17 +464,28 @@ parameter_grid(const Prepared *pm, FitKind kind,
         }
     }
     else {
-        /* A step between each pair of consecutive distinct times; at most
-         * MAX_GRID of them, evenly spread (the series correction places a
-         * jump to the line afterwards). */
-        gint stride;
+        /* A step between each pair of consecutive distinct times, with at
+         * least JUMP_MIN_SIDE times on either side: a jump that sets apart
+         * the last block or two explains a single failed registration
+         * there, which the outlier cut then keeps (an acceleration read as
+         * a jump in the last block, then as none).  At most MAX_GRID of
+         * them, evenly spread (the series correction places a jump to the
+         * line afterwards). */
+        gint stride, first, last, span_i;
 
         nt = distinct_times(pm, &times);
-        stride = MAX((nt - 1 + MAX_GRID - 1)/MAX_GRID, 1);
-        m = MAX((nt - 1 + stride - 1)/stride, 1);
+        first = JUMP_MIN_SIDE - 1;
+        last = nt - 1 - JUMP_MIN_SIDE;
+        if (last < first) {
+            first = 0;
+            last = nt - 2;
+        }
+        span_i = MAX(last - first + 1, 1);
+        stride = MAX((span_i + MAX_GRID - 1)/MAX_GRID, 1);
+        m = MAX((span_i + stride - 1)/stride, 1);
         g = g_new(gdouble, m);
-        for (i = 0; i < m && stride*i + 1 < nt; i++)
-            g[i] = 0.5*(times[stride*i] + times[stride*i + 1]);
+        for (i = 0; i < m && first + stride*i + 1 < nt; i++)
+            g[i] = 0.5*(times[first + stride*i] + times[first + stride*i + 1]);
         if (nt < 2)
             g[0] = tmax;
         g_free(times);
@@ -874,6 +890,24 @@ drift_fit_select(const DriftMeasurement *meas, gint n,
     return drift_fit_select_kept(meas, n, options, fits, NULL);
 }
 
+/* Whether the acceleration fit predicts held-out groups within
+ * CURVATURE_TIE of fit (or, without cross-validation, fits as well). */
+static gboolean
+acceleration_as_good(const DriftFit *fits, const DriftModelType *types,
+                     gint n_types, const DriftFit *fit)
+{
+    gint i;
+
+    for (i = 0; i < n_types; i++) {
+        if (types[i] != DRIFT_MODEL_ACCELERATION || !fits[i].ok)
+            continue;
+        if (isfinite(fits[i].cv_rms_nm) && isfinite(fit->cv_rms_nm))
+            return fits[i].cv_rms_nm <= CURVATURE_TIE*fit->cv_rms_nm;
+        return fits[i].rms_nm <= CURVATURE_TIE*fit->rms_nm;
+    }
+    return FALSE;
+}
+
 gint
 drift_fit_select_kept(const DriftMeasurement *meas, gint n,
                       const DriftFitOptions *options, DriftFit *fits,
@@ -926,8 +960,12 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
         if (types[i] == DRIFT_MODEL_OSCILLATION && fits[i].at_limit > 0)
             continue;
         /* A settling slower than the series is curvature, which a constant
-         * acceleration says with fewer parameters. */
-        if (types[i] == DRIFT_MODEL_SETTLING && fits[i].nonlinear > span)
+         * acceleration says with fewer parameters; so is one slower than
+         * half the series that an acceleration predicts as well. */
+        if (types[i] == DRIFT_MODEL_SETTLING
+            && (fits[i].nonlinear > span
+                || (fits[i].nonlinear > 0.5*span
+                    && acceleration_as_good(fits, types, n_types, fits + i))))
             continue;
         if (inone >= 0 && fits[inone].ok
             && (fits[inone].bic - fits[i].bic < options->bic_margin
