@@ -136,8 +136,10 @@ judge_trajectory(const SeriesCorrection *correction,
                  const FrameSeries *series, const DriftModel *model,
                  const SeriesCaseOptions *options, SeriesCaseResult *result)
 {
+    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
     gdouble sum = 0.0, worst = 0.0, x0, y0, x, y, fx, fy, t, e, ex, ey;
-    gdouble mean[2] = { 0.0, 0.0 };
+    gdouble mean[2] = { 0.0, 0.0 }, msum = 0.0, mmean[2] = { 0.0, 0.0 };
+    gdouble mx, my, mx0, my0;
     gint k, r, count = 0;
 
     drift_model_eval(model, 0.0, &x0, &y0);
@@ -158,6 +160,13 @@ judge_trajectory(const SeriesCorrection *correction,
             mean[0] += ex;
             mean[1] += ey;
             sum += e*e;
+            drift_fit_eval(fit, t, &mx, &my);
+            drift_fit_eval(fit, 0.0, &mx0, &my0);
+            mx = (mx - mx0 - (x - x0))/correction->xstep;
+            my = (my - my0 - (y - y0))/correction->ystep;
+            mmean[0] += mx;
+            mmean[1] += my;
+            msum += mx*mx + my*my;
             worst = MAX(worst, e);
             count++;
         }
@@ -169,6 +178,10 @@ judge_trajectory(const SeriesCorrection *correction,
     result->trajectory_relative_px
         = sqrt(MAX(sum/MAX(count, 1) - mean[0]*mean[0] - mean[1]*mean[1], 0.0));
     result->smooth_used = correction->use_smooth;
+    mmean[0] /= MAX(count, 1);
+    mmean[1] /= MAX(count, 1);
+    result->model_relative_px
+        = sqrt(MAX(msum/MAX(count, 1) - mmean[0]*mmean[0] - mmean[1]*mmean[1], 0.0));
 }
 
 /* What a stripe of the corrected frame keeps of the drift: the trajectory's

@@ -33,6 +33,8 @@ typedef struct {
                                        how well the frames overlay, whatever
                                        the absolute reference */
     gboolean smooth_used;        /* the flexible trajectory corrected them */
+    gdouble model_relative_px;   /* the chosen model's trajectory_relative_px,
+                                    whether it corrected them or not */
     gdouble stripe_worst_px;     /* the drift a stripe of 16 lines of a
                                     corrected frame keeps, worst of all */
     gdouble frame_worst_px;      /* corrected frames registered as a whole

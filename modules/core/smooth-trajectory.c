@@ -15,6 +15,10 @@
 #define LAMBDA_STEPS 21
 #define LAMBDA_STEP 0.5
 
+/* The penalty chosen is the largest whose held-out mean square error is
+ * within this factor of the least's (about 5 % in RMS). */
+#define SMOOTHEST_TIE 1.1
+
 /* A measurement touches at most this many knot values: three points of
  * its span on each side, two knots each. */
 #define ROW_MAX 12
@@ -294,6 +298,15 @@ choose_lambda(const Knots *k, const DriftMeasurement *meas, gint n,
         if (wsum[l] > 0.0
             && (best < 0 || sum[l]/wsum[l] < sum[best]/wsum[best]))
             best = l;
+    }
+    /* The smoothest weight that predicts nearly as well: differences
+     * between frames leave a shape repeated in every frame unseen, and a
+     * rougher trajectory than the data ask for fills it with noise. */
+    for (l = LAMBDA_STEPS - 1; best >= 0 && l > best; l--) {
+        if (wsum[l] > 0.0 && sum[l]/wsum[l] <= SMOOTHEST_TIE*sum[best]/wsum[best]) {
+            best = l;
+            break;
+        }
     }
     *best_cv = best >= 0 ? sqrt(sum[best]/wsum[best]) : NAN;
     g_free(fold_normal);
