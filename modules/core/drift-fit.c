@@ -12,6 +12,8 @@
 #define MAX_BASIS 4
 #define GOLDEN_STEPS 40
 #define MAX_GRID 6000
+/* Local minima of an oscillation's grid refined besides the best. */
+#define REFINED_MINIMA 12
 /* Distinct measured times a jump leaves on either side at least. */
 #define JUMP_MIN_SIDE 3
 /* A settling slower than half the series and an acceleration predicting
@@ -573,17 +575,30 @@ search_grid(const Prepared *pm, FitKind kind, const gdouble *grid, gint m,
     }
     best = refine_grid_value(pm, kind, grid, rss, m, ibest, theta);
     if (kind == DRIFT_MODEL_OSCILLATION) {
+        gint *minima = g_new(gint, m + 1), n_minima = 0, j;
+
+        /* The lowest local minima besides the best, REFINED_MINIMA of them:
+         * a long series has hundreds, each refined by some thirty fits,
+         * and the grid is eight times finer than the series resolves, so
+         * a true minimum lies beside one of the lowest. */
         for (i = 0; i < m; i++) {
             if (i == ibest || (i > 0 && rss[i-1] < rss[i])
                 || (i+1 < m && rss[i+1] < rss[i]))
                 continue;
-            value = refine_grid_value(pm, kind, grid, rss, m, i, &t);
+            for (j = n_minima; j > 0 && rss[minima[j-1]] > rss[i]; j--)
+                minima[j] = minima[j-1];
+            minima[j] = i;
+            n_minima = MIN(n_minima + 1, REFINED_MINIMA);
+        }
+        for (j = 0; j < n_minima; j++) {
+            value = refine_grid_value(pm, kind, grid, rss, m, minima[j], &t);
             if (value < best) {
                 best = value;
                 *theta = t;
-                ibest = i;
+                ibest = minima[j];
             }
         }
+        g_free(minima);
     }
     g_free(rss);
     return ibest;
