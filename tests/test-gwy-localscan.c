@@ -1341,12 +1341,12 @@ START_TEST(test_error_output_not_writable)
 END_TEST
 
 /* A --write-drift that cannot be written (its folder missing: no temporary
- * file; a folder at its name: the rename fails after OUT's) leaves an older
- * OUT as it was, and nothing else behind. */
+ * file; a folder at its name: refused before anything is written) leaves
+ * an older OUT as it was, and nothing else behind. */
 START_TEST(test_write_drift_failure_keeps_old_output)
 {
     static const gchar *const targets[2] = { "nowhere/used.csv", "adir" };
-    static const gchar *const reasons[2] = { "No such file or directory", "Is a directory" };
+    static const gchar *const reasons[2] = { "No such file or directory", "it is a folder" };
     gchar *input = simple_input(GOOD_TABLE), *output = out_path("out.gwy"), *adir = out_path("adir");
     gchar *used, *contents, *message, *listing;
     ToolRun run;
