@@ -44,6 +44,9 @@
 /* The flexible trajectory must predict held-out blocks better than the
  * chosen model by this much (px) besides the fit's relative gain. */
 #define SMOOTH_MIN_GAIN_PX 0.1
+/* ... and stray from it by at most this many times the model's RMS
+ * residual, plus half a pixel. */
+#define SMOOTH_MAX_DEPARTURE 6.0
 
 /* At most this many measurements enter the fit (fit_models). */
 #define FIT_MAX_MEASUREMENTS 4000
@@ -554,16 +557,46 @@ smooth_knots(const FrameSeries *series, gint n_blocks, gint *n)
     return knots;
 }
 
+/* The largest distance (px) between the flexible trajectory and the
+ * chosen model over every line of the frames not flagged. */
+static gdouble
+smooth_departure(const SeriesCorrection *correction, const FrameSeries *series)
+{
+    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
+    gdouble worst = 0.0, t, sx, sy, mx, my, mx0, my0;
+    gint k, r;
+
+    drift_fit_eval(fit, 0.0, &mx0, &my0);
+    for (k = 0; k < series->n_frames; k++) {
+        const ScanTiming *timing = &series->frames[k].timing;
+
+        for (r = 0; r < timing->yres && !correction->frames[k].flagged; r++) {
+            t = scan_timing_rows_time(timing, r, r+1);
+            smooth_trajectory_eval(correction->smooth, t, &sx, &sy);
+            drift_fit_eval(fit, t, &mx, &my);
+            worst = MAX(worst, hypot((sx - mx + mx0)/correction->xstep,
+                                     (sy - my + my0)/correction->ystep));
+        }
+    }
+    return worst;
+}
+
 /* The flexible trajectory beside the chosen model; it is used when it
  * predicts held-out blocks better by the fit's cv_gain: no model explains
- * the drift (a random walk, creep of no simple form). */
+ * the drift (a random walk, creep of no simple form).  Not when it strays
+ * from the model much farther than the model's own residual: differences
+ * between frames do not see a shape repeated in every frame, and a
+ * flexible trajectory can swing by many pixels within each frame while it
+ * fits every block (seed 1411410649 of test-series-correction: 13 px
+ * against a jump model 0.1 px from its blocks, whose held-out error
+ * suffered from re-searching the jump in each fold). */
 static void
 fit_smooth(SeriesCorrection *correction, const FrameSeries *series,
            gint n_blocks)
 {
     const FitReport *fit = &correction->fit;
     const DriftFit *chosen = fit->fits + fit->chosen;
-    gdouble *knots;
+    gdouble *knots, pixel_nm;
     gint n;
 
     knots = smooth_knots(series, n_blocks, &n);
@@ -575,12 +608,15 @@ fit_smooth(SeriesCorrection *correction, const FrameSeries *series,
      * relative gains are noise, and its freedom (a shape repeated in every
      * frame is unseen) costs more than they bring (a jump read by the
      * model to the line, then drawn pixels off by the flexible one). */
+    pixel_nm = 1e9*MIN(correction->xstep, correction->ystep);
     correction->use_smooth
         = (correction->smooth && isfinite(chosen->cv_rms_nm)
            && correction->smooth->cv_rms_nm
               < (1.0 - fit->fit_options.cv_gain)*chosen->cv_rms_nm
            && chosen->cv_rms_nm - correction->smooth->cv_rms_nm
-              >= SMOOTH_MIN_GAIN_PX*1e9*MIN(correction->xstep, correction->ystep));
+              >= SMOOTH_MIN_GAIN_PX*pixel_nm
+           && smooth_departure(correction, series)
+              <= SMOOTH_MAX_DEPARTURE*chosen->rms_nm/pixel_nm + SMOOTH_MIN_GAIN_PX*5.0);
 }
 
 static void
