@@ -398,7 +398,7 @@ static gboolean
 assign_line_times(FrameSeries *series, const MetaTiming *mts,
                   const FrameSeriesOptions *options, GError **error)
 {
-    gint i;
+    gint i, assumed = 0;
 
     for (i = 0; i < series->n_frames; i++) {
         SeriesFrame *frame = series->frames + i;
@@ -425,9 +425,19 @@ assign_line_times(FrameSeries *series, const MetaTiming *mts,
             frame->timing.direction = mts[i].direction;
             frame->direction_source = FRAME_TIME_METADATA;
         }
-        else
+        else {
             frame->timing.direction = SCAN_DIRECTION_DOWN;
+            assumed++;
+        }
     }
+    /* Scanned up, a frame's lines run backwards in time: an assumption
+     * that deserves a word. */
+    if (assumed)
+        g_ptr_array_add(series->notes,
+                        g_strdup_printf(_("the slow-scan direction of %d of "
+                                          "%d frames is not in the metadata: "
+                                          "taken as down (give --direction)"),
+                                        assumed, series->n_frames));
     return TRUE;
 }
 

@@ -1310,6 +1310,11 @@ add_frame_verdicts(JsonBuilder *b, const SeriesCorrection *correction,
         add_text(b, series->frames[k].label);
         json_values_set_number(b, "t_start_s",
                                series->frames[k].timing.frame_start);
+        json_values_set_number(b, "line_time_s",
+                               series->frames[k].timing.line_time);
+        json_builder_set_member_name(b, "direction");
+        json_builder_add_string_value(b, series->frames[k].timing.direction
+                                         == SCAN_DIRECTION_UP ? "up" : "down");
         json_builder_set_member_name(b, "flagged");
         json_builder_add_boolean_value(b, v->flagged);
         json_builder_set_member_name(b, "reason");
