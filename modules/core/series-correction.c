@@ -860,6 +860,24 @@ jump_search_window(const SeriesCorrection *correction,
         *t_hi = MAX(*t_hi, next_start + window);
 }
 
+/* Equally good splits first .. last leave the jump anywhere from the end
+ * of line first-1 to the start of line last: lines without evidence, or a
+ * flagged frame or a pause between frames, whose lines nobody judges.  The
+ * blocks' fit is then the best guess, kept within that span; in the middle
+ * of a gap, a guess at its edge would put lines of a trusted frame on the
+ * wrong side. */
+static gdouble
+jump_within_ties(gdouble fitted, const gdouble *when, const gdouble *ends,
+                 gint n, gint first, gint last, gdouble t_lo, gdouble t_hi)
+{
+    gdouble lo = (first > 0) ? ends[first-1] : t_lo;
+    gdouble hi = (last < n) ? when[last] : t_hi;
+
+    if (first == last)
+        return when[first];
+    return CLAMP(fitted, lo, hi);
+}
+
 /* The fit places a jump within a block or so (blocks straddling it register
  * to either side).  Line by line, against a neighbouring frame, the lines
  * before the jump match the drift without the step and those after it the
@@ -872,7 +890,8 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
 {
     DriftFit *fit = correction->fit.fits + correction->fit.chosen;
     gint nf = series->n_frames, k, r, i, n = 0, first = 0, last = 0, most = 0;
-    gdouble *line, *after, *before, *when, total, lowest, window, t, t_lo, t_hi;
+    gdouble *line, *after, *before, *when, *ends, total, lowest, window, t;
+    gdouble t_lo, t_hi;
     ConditionedFrame **cache;
 
     if (fit->type != DRIFT_MODEL_JUMP || nf < 2)
@@ -884,9 +903,10 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
     line = g_new(gdouble, series->frames[0].timing.xres);
-    after = g_new(gdouble, 3*most);
+    after = g_new(gdouble, 4*most);
     before = after + most;
     when = before + most;
+    ends = when + most;
     /* The lines around the jump in the order they were scanned. */
     for (k = 0; k < nf; k++) {
         const SeriesFrame *fk = series->frames + k;
@@ -900,11 +920,11 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
             line_costs(correction, series, cache, k, r, line, before + n,
                        after + n);
             when[n] = scan_timing_row_start(&fk->timing, r);
+            ends[n] = when[n] + fk->timing.line_time;
             n++;
         }
     }
-    /* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it; of
-     * equally good splits (lines without evidence) the middle one. */
+    /* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it. */
     total = 0.0;
     for (i = 0; i < n; i++)
         total += after[i];
@@ -918,9 +938,9 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
         else if (total <= lowest + 1e-12 && last == i)
             last = i + 1;
     }
-    i = (first + last)/2;
-    if (n >= 2 && i > 0 && i < n)
-        fit->nonlinear = when[i];
+    if (n >= 2 && last > 0 && first < n)
+        fit->nonlinear = jump_within_ties(fit->nonlinear, when, ends, n,
+                                          first, last, t_lo, t_hi);
     for (k = 0; k < nf; k++) {
         if (cache[k])
             conditioned_frame_free(cache[k]);
