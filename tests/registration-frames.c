@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include "raw-artefacts.h"
 #include "registration-frames.h"
 
 enum {
@@ -52,14 +53,6 @@ frame_pair_spec_init(FramePairSpec *spec)
     spec->velocity_x = spec->velocity_y = 0.0;
     spec->jump_row = -1;
     spec->jump_x = spec->jump_y = 0.0;
-}
-
-static gdouble
-gaussian(GRand *rng)
-{
-    gdouble u = g_rand_double(rng), v = g_rand_double(rng);
-
-    return sqrt(-2.0*log(1.0 - u))*cos(2.0*G_PI*v);
 }
 
 static void
@@ -169,7 +162,7 @@ add_noise(gdouble *data, gsize count, gdouble rms, GRand *rng)
     gsize k;
 
     for (k = 0; k < count; k++)
-        data[k] += rms*gaussian(rng);
+        data[k] += rms*sim_raw_gaussian(rng);
 }
 
 FramePair*
@@ -224,68 +217,6 @@ frame_pair_free(FramePair *pair)
     g_free(pair);
 }
 
-/* 1/f noise along a series of len samples: octaves of random phase, each
- * octave's amplitude falling by sqrt(2) as its frequency doubles. */
-static void
-add_wander(gdouble *out, gint len, gdouble rms, GRand *rng)
-{
-    gint octave, i;
-
-    for (octave = 0; (1 << octave) < len/2; octave++) {
-        gdouble f = (1 << octave)/(gdouble)len, a = rms*pow(0.5, 0.5*octave);
-        gdouble phase = g_rand_double_range(rng, 0.0, 2.0*G_PI);
-
-        for (i = 0; i < len; i++)
-            out[i] += a*sin(2.0*G_PI*f*i + phase);
-    }
-}
-
-/* An instrument's 1/f noise is a time series sampled in raster order: a
- * line takes milliseconds, so within it the noise hardly moves, and it
- * shows between lines (offsets wandering from line to line).  The scanner
- * adds a plane and a bow along x. */
-static void
-add_frame_artefacts(gdouble *data, gint xres, gint yres, gdouble size, GRand *rng)
-{
-    gdouble tilt_x = g_rand_double_range(rng, -1.0, 1.0)*size*4.0/xres;
-    gdouble tilt_y = g_rand_double_range(rng, -1.0, 1.0)*size*4.0/yres;
-    gdouble bow = g_rand_double_range(rng, -1.0, 1.0)*size*2.0;
-    gdouble *line_wander = g_new0(gdouble, yres);
-    gint r, c;
-
-    add_wander(line_wander, yres, 0.5*size, rng);
-    for (r = 0; r < yres; r++) {
-        gdouble *row = data + (gsize)r*xres;
-        gdouble offset = line_wander[r] + 0.3*size*gaussian(rng);
-
-        for (c = 0; c < xres; c++) {
-            gdouble x = 2.0*c/(xres - 1) - 1.0;
-
-            row[c] += tilt_x*c + tilt_y*r + bow*x*x + offset;
-        }
-    }
-    g_free(line_wander);
-}
-
-/* A pattern fixed to the frame, separable 1/f along x and y over every
- * octave: what differs between the frames beyond noise and looks like
- * texture at every scale. */
-static void
-add_frame_undulation(gdouble *data, gint xres, gint yres, gdouble size, GRand *rng)
-{
-    gdouble *along_x = g_new0(gdouble, xres), *along_y = g_new0(gdouble, yres);
-    gint r, c;
-
-    add_wander(along_x, xres, 0.3*size, rng);
-    add_wander(along_y, yres, 0.3*size, rng);
-    for (r = 0; r < yres; r++) {
-        for (c = 0; c < xres; c++)
-            data[(gsize)r*xres + c] += along_x[c]*along_y[r]/(0.3*size);
-    }
-    g_free(along_y);
-    g_free(along_x);
-}
-
 typedef void (*FrameArtefact)(gdouble *data, gint xres, gint yres, gdouble size, GRand *rng);
 
 /* Each frame gets its own draw of the artefact. */
@@ -302,7 +233,7 @@ add_to_both_frames(FramePair *pair, FrameArtefact add, gdouble size, guint32 see
 void
 frame_pair_add_raw_artefacts(FramePair *pair, gdouble size, guint32 seed)
 {
-    add_to_both_frames(pair, add_frame_artefacts, size, seed ^ 0x5eedu);
+    add_to_both_frames(pair, sim_raw_artefacts_add, size, seed ^ 0x5eedu);
 }
 
 void
@@ -311,14 +242,14 @@ frame_add_raw_artefacts(gdouble *data, gint xres, gint yres, gdouble size,
 {
     GRand *rng = g_rand_new_with_seed(seed ^ 0x5eedu);
 
-    add_frame_artefacts(data, xres, yres, size, rng);
+    sim_raw_artefacts_add(data, xres, yres, size, rng);
     g_rand_free(rng);
 }
 
 void
 frame_pair_add_undulation(FramePair *pair, gdouble size, guint32 seed)
 {
-    add_to_both_frames(pair, add_frame_undulation, size, seed ^ 0x0dd1u);
+    add_to_both_frames(pair, sim_raw_undulation_add, size, seed ^ 0x0dd1u);
 }
 
 void
