@@ -343,6 +343,49 @@ START_TEST(test_type_names)
 }
 END_TEST
 
+/* Frame-start creep on top of a constant velocity: the lag decays from
+ * each fly-back, restarts at the next, and the velocity is its derivative
+ * (a central difference away from the fly-backs). */
+START_TEST(test_frame_creep_formula)
+{
+    GRand *rng = g_rand_new_with_seed(test_seed + 5);
+    DriftModel m;
+    gdouble t, f, vx, vy, x1, y1, x2, y2, h = 1e-4;
+    gint k;
+
+    drift_model_init(&m, DRIFT_MODEL_NONE);
+    random_linear_part(&m, rng);
+    m.creep[0] = uniform(rng, -20e-9, 20e-9);
+    m.creep[1] = uniform(rng, -20e-9, 20e-9);
+    m.creep_tau = uniform(rng, 2.0, 30.0);
+    m.creep_period = uniform(rng, 40.0, 200.0);
+    for (k = 0; k < N_TIMES; k++) {
+        t = uniform(rng, 0.0, T_MAX);
+        f = exp(-(t - m.creep_period*floor(t/m.creep_period))/m.creep_tau);
+        assert_eval_equals(&m, t, m.p0[0] + m.v[0]*t + m.creep[0]*f,
+                           m.p0[1] + m.v[1]*t + m.creep[1]*f);
+        if (fmod(t, m.creep_period) < 2.0*h
+            || fmod(t, m.creep_period) > m.creep_period - 2.0*h)
+            continue;
+        drift_model_velocity(&m, t, &vx, &vy);
+        drift_model_eval(&m, t - h, &x1, &y1);
+        drift_model_eval(&m, t + h, &x2, &y2);
+        ck_assert_msg(fabs(vx - (x2 - x1)/(2.0*h)) < 1e-6*(fabs(vx) + 1e-9)
+                      && fabs(vy - (y2 - y1)/(2.0*h)) < 1e-6*(fabs(vy) + 1e-9),
+                      "creep velocity at t=%g: (%g, %g)", t, vx, vy);
+    }
+    /* Right after a fly-back the whole lag is back. */
+    t = 3.0*m.creep_period + 1e-6;
+    drift_model_eval(&m, t, &x1, &y1);
+    ck_assert_msg(fabs(x1 - m.p0[0] - t*m.v[0] - m.creep[0])
+                  < 1e-6*fabs(m.creep[0]) + 1e-12*magnitude(&m, T_MAX),
+                  "after the fly-back: %g, lag %g", x1 - m.p0[0] - t*m.v[0],
+                  m.creep[0]);
+    drift_model_clear(&m);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* A freshly initialised model of any type has no drift at all. */
 START_TEST(test_init_is_no_drift)
 {
@@ -376,6 +419,7 @@ drift_model_suite(void)
     tcase_add_test(tc, test_oscillation_velocity);
     tcase_add_test(tc, test_random_walk_reproducible);
     tcase_add_test(tc, test_random_walk_integral);
+    tcase_add_test(tc, test_frame_creep_formula);
     tcase_add_test(tc, test_type_names);
     tcase_add_test(tc, test_init_is_no_drift);
     return s;

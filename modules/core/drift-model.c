@@ -24,6 +24,7 @@ drift_model_init(DriftModel *model, DriftModelType type)
     model->tau = 1.0;
     model->period = 1.0;
     model->walk_dt = 1.0;
+    model->creep_tau = 1.0;
 }
 
 void
@@ -117,6 +118,16 @@ random_walk_eval(const DriftModel *model, gdouble t, gdouble *px, gdouble *py)
     *py = model->walk_p[2*k + 1] + wy*s;
 }
 
+/* The creep's decay factor at t and the time since its fly-back; 0 before
+ * t = 0 and without creep. */
+static gdouble
+frame_creep_decay(const DriftModel *model, gdouble t)
+{
+    if (!(model->creep_period > 0.0) || t < 0.0)
+        return 0.0;
+    return exp(-fmod(t, model->creep_period)/model->creep_tau);
+}
+
 void
 drift_model_eval(const DriftModel *model, gdouble t,
                  gdouble *px, gdouble *py)
@@ -158,8 +169,9 @@ drift_model_eval(const DriftModel *model, gdouble t,
         default:
         break;
     }
-    *px = x;
-    *py = y;
+    f = frame_creep_decay(model, t);
+    *px = x + model->creep[0]*f;
+    *py = y + model->creep[1]*f;
 }
 
 void
@@ -200,8 +212,9 @@ drift_model_velocity(const DriftModel *model, gdouble t,
         /* The jump's step is a position discontinuity, not a velocity. */
         break;
     }
-    *vx = x;
-    *vy = y;
+    f = -frame_creep_decay(model, t)/model->creep_tau;
+    *vx = x + model->creep[0]*f;
+    *vy = y + model->creep[1]*f;
 }
 
 const gchar*

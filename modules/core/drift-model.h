@@ -37,6 +37,12 @@ typedef struct {
     gdouble walk_sigma;    /* random walk: velocity diffusion, m/s per sqrt(s) */
     gdouble walk_dt;       /* random walk: time step of the path, s */
     guint32 walk_seed;
+    /* Frame-start creep, added to any type: after each fly-back of the slow
+     * axis (every creep_period s from t = 0) the scanner lags by creep and
+     * the lag decays with creep_tau.  creep_period 0: none. */
+    gdouble creep[2];      /* m, the lag right after a fly-back */
+    gdouble creep_tau;     /* s */
+    gdouble creep_period;  /* s, the frame period; 0 = no creep */
     /* private: the random walk's precomputed path */
     gdouble walk_t_end;
     gint walk_n;
@@ -48,7 +54,8 @@ typedef struct {
 #define DRIFT_MODEL_PAPER_VY 0.02e-9
 
 /* Sets every field to the model with no drift at all (p0, v, u, a, step,
- * walk_sigma zero; tau, period, walk_dt 1 s so the formulas stay finite). */
+ * walk_sigma, creep and creep_period zero; tau, period, walk_dt, creep_tau
+ * 1 s so the formulas stay finite). */
 void          drift_model_init       (DriftModel *model, DriftModelType type);
 /* Deep copy (the random walk's path included); dest need not be initialised,
  * and must be cleared afterwards. */
