@@ -690,6 +690,30 @@ drift_fit_model(const DriftMeasurement *meas, gint n, DriftModelType type,
     return fit_masked(meas, n, NULL, type, options, fit);
 }
 
+gboolean
+drift_fit_refit_at(const DriftMeasurement *meas, gint n, gdouble theta,
+                   DriftFit *fit)
+{
+    FitKind kind = fit_kind(fit);
+    gdouble coef[2][MAX_BASIS], rss;
+    Prepared pm;
+    gint k;
+
+    if (!fit->ok || !model_has_nonlinear(kind) || !isfinite(theta))
+        return FALSE;
+    prepare(meas, n, NULL, &pm);
+    rss = solve_fixed(&pm, kind, theta, coef, &k);
+    prepared_free(&pm);
+    if (!isfinite(rss) || k != fit->n_basis)
+        return FALSE;
+    memcpy(fit->coef, coef, sizeof(coef));
+    fit->nonlinear = theta;
+    fit->rms_nm = sqrt(rss/fit->n_used);
+    fit->bic = fit->n_used*log(MAX(rss/fit->n_used, 1e-30))
+               + fit->n_params*log(fit->n_used);
+    return TRUE;
+}
+
 /* p at t averaged over [t - h, t + h], nm. */
 static void
 eval_mean(const DriftFit *fit, gdouble t, gdouble h, gdouble *p)

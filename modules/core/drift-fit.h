@@ -96,6 +96,16 @@ gboolean       drift_fit_model        (const DriftMeasurement *meas,
                                        const DriftFitOptions *options,
                                        DriftFit *fit);
 
+/* Refits fit (of a model with a nonlinear parameter) with that parameter
+ * fixed at theta, to the measurements with weight > 0: when something
+ * finer than the grid search places it (a jump located line by line).
+ * FALSE, fit unchanged, when the model has no such parameter or the
+ * solution is not finite. */
+gboolean       drift_fit_refit_at     (const DriftMeasurement *meas,
+                                       gint n,
+                                       gdouble theta,
+                                       DriftFit *fit);
+
 /* The periods an oscillation can be observed with (s): at least
  * min_cycles cycles over the time span of the measurements, and no shorter
  * than twice the longest gap between measured times (shorter periods alias

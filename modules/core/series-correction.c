@@ -11,7 +11,6 @@
 #include "json-values.h"
 #include "continuous-compensate.h"
 #include "drift-trajectory.h"
-#include "frame-conditioning.h"
 #include "localscan-channel.h"
 #include "missing-data.h"
 #include "series-correction.h"
@@ -740,51 +739,38 @@ predict_line(const SeriesCorrection *correction, const SeriesFrame *fk,
     }
 }
 
-/* The mean squared difference of a line and its prediction (over the
- * predicted pixels), each without its mean: line offsets do not count, and
- * a featureless line costs the same under either drift, where a
- * correlation of its noise would pull the jump anywhere.  NAN when too
- * little of the line is predicted. */
+/* The mean squared difference of a line and its prediction over the
+ * pixels both have, after the best quadratic in the column is taken out
+ * of the difference: line offsets, tilts and bows along x differ between
+ * raw frames and do not count, and a featureless line costs the same under
+ * either drift, where a correlation of its noise would pull the jump
+ * anywhere.  Raw data, not conditioned: conditioning filters across lines
+ * and so carries content from beyond the jump into the lines before it
+ * (a particle's halo), which then match the wrong side (a jump 5 lines
+ * into a frame was placed at its first line).  NAN when too little of the
+ * line is predicted.  u and d are work space of n. */
 static gdouble
-line_mismatch(const gdouble *data, const gdouble *pred, gint n)
+line_mismatch(const gdouble *data, const gdouble *pred, gint n, gdouble *u,
+              gdouble *d)
 {
-    gdouble sa = 0.0, sb = 0.0, sdd = 0.0, d;
+    gdouble coeffs[3], sdd = 0.0, e;
     gint c, m = 0;
 
     for (c = 0; c < n; c++) {
-        if (isnan(pred[c]))
+        if (!isfinite(pred[c]) || !isfinite(data[c]))
             continue;
-        sa += data[c];
-        sb += pred[c];
+        u[m] = (2.0*c - (n - 1))/MAX(n - 1, 1);
+        d[m] = data[c] - pred[c];
         m++;
     }
     if (m < 8)
         return NAN;
-    sa /= m;
-    sb /= m;
-    for (c = 0; c < n; c++) {
-        if (isnan(pred[c]))
-            continue;
-        d = (data[c] - sa) - (pred[c] - sb);
-        sdd += d*d;
+    gwy_math_fit_polynom(m, u, d, 2, coeffs);
+    for (c = 0; c < m; c++) {
+        e = d[c] - (coeffs[0] + u[c]*(coeffs[1] + u[c]*coeffs[2]));
+        sdd += e*e;
     }
     return sdd/m;
-}
-
-/* Frame k conditioned as registration sees it (frame-conditioning.h):
- * raw line offsets, bows and 1/f noise would outweigh a jump's few
- * pixels.  Made when first asked for. */
-static const gdouble*
-conditioned(const FrameSeries *series, ConditionedFrame **cache, gint k,
-            gdouble aspect)
-{
-    const SeriesFrame *f = series->frames + k;
-
-    if (!cache[k])
-        cache[k] = frame_condition(gwy_data_field_get_data_const(f->field),
-                                   NULL, f->timing.xres, f->timing.yres,
-                                   aspect);
-    return cache[k] ? cache[k]->data : NULL;
 }
 
 /* How well line r of frame k matches the frames near it (those not
@@ -795,27 +781,26 @@ conditioned(const FrameSeries *series, ConditionedFrame **cache, gint k,
  * either way: content seen under one only would favour the other). */
 static void
 line_costs(const SeriesCorrection *correction, const FrameSeries *series,
-           ConditionedFrame **cache, gint k, gint r, gdouble *line,
-           gdouble *before, gdouble *after)
+           gint k, gint r, gdouble *line, gdouble *before, gdouble *after)
 {
     const SeriesFrame *fk = series->frames + k;
-    gdouble aspect = correction->ystep/correction->xstep, eb, ea;
-    const gdouble *data = conditioned(series, cache, k, aspect), *ref, *row;
     gint j, count = 0, xres = fk->timing.xres;
+    const gdouble *row = gwy_data_field_get_data_const(fk->field) + (gsize)r*xres;
+    gdouble eb, ea, *u = line + xres, *d = u + xres;
+    const gdouble *ref;
 
     *before = *after = 0.0;
-    for (j = k - JUMP_PARTNER_REACH; j <= k + JUMP_PARTNER_REACH && data; j++) {
+    for (j = k - JUMP_PARTNER_REACH; j <= k + JUMP_PARTNER_REACH; j++) {
         if (j == k || j < 0 || j >= series->n_frames
-            || correction->frames[j].flagged
-            || !(ref = conditioned(series, cache, j, aspect)))
+            || correction->frames[j].flagged)
             continue;
-        row = data + (gsize)r*xres;
+        ref = gwy_data_field_get_data_const(series->frames[j].field);
         predict_line(correction, fk, series->frames + j, ref, r, JUMP_NEVER,
                      line);
-        eb = line_mismatch(row, line, xres);
+        eb = line_mismatch(row, line, xres, u, d);
         predict_line(correction, fk, series->frames + j, ref, r, JUMP_ALWAYS,
                      line);
-        ea = line_mismatch(row, line, xres);
+        ea = line_mismatch(row, line, xres, u, d);
         if (isnan(eb) || isnan(ea))
             continue;
         *before += eb;
@@ -891,18 +876,16 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     DriftFit *fit = correction->fit.fits + correction->fit.chosen;
     gint nf = series->n_frames, k, r, i, n = 0, first = 0, last = 0, most = 0;
     gdouble *line, *after, *before, *when, *ends, total, lowest, window, t;
-    gdouble t_lo, t_hi;
-    ConditionedFrame **cache;
+    gdouble t_lo, t_hi, tie;
 
     if (fit->type != DRIFT_MODEL_JUMP || nf < 2)
         return;
-    cache = g_new0(ConditionedFrame*, nf);
     window = JUMP_SEARCH_BLOCKS*block_span;
     jump_search_window(correction, series, fit->nonlinear, window, &t_lo,
                        &t_hi);
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
-    line = g_new(gdouble, series->frames[0].timing.xres);
+    line = g_new(gdouble, 3*series->frames[0].timing.xres);
     after = g_new(gdouble, 4*most);
     before = after + most;
     when = before + most;
@@ -917,37 +900,64 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
             t = scan_timing_rows_time(&fk->timing, r, r+1);
             if (t < t_lo || t > t_hi)
                 continue;
-            line_costs(correction, series, cache, k, r, line, before + n,
-                       after + n);
+            line_costs(correction, series, k, r, line, before + n, after + n);
             when[n] = scan_timing_row_start(&fk->timing, r);
             ends[n] = when[n] + fk->timing.line_time;
             n++;
         }
     }
-    /* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it. */
-    total = 0.0;
-    for (i = 0; i < n; i++)
+    /* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it.  Costs
+     * are in the data's squared units: splits tie within a tiny fraction
+     * of all of them. */
+    total = tie = 0.0;
+    for (i = 0; i < n; i++) {
         total += after[i];
+        tie += before[i] + after[i];
+    }
+    tie *= 1e-9;
     lowest = total;
     for (i = 0; i < n; i++) {
         total += before[i] - after[i];
-        if (total < lowest - 1e-12) {
+        if (total < lowest - tie) {
             lowest = total;
             first = last = i + 1;
         }
-        else if (total <= lowest + 1e-12 && last == i)
+        else if (total <= lowest + tie && last == i)
             last = i + 1;
     }
     if (n >= 2 && last > 0 && first < n)
         fit->nonlinear = jump_within_ties(fit->nonlinear, when, ends, n,
                                           first, last, t_lo, t_hi);
-    for (k = 0; k < nf; k++) {
-        if (cache[k])
-            conditioned_frame_free(cache[k]);
-    }
-    g_free(cache);
     g_free(line);
     g_free(after);
+}
+
+/* Blocks straddling the jump pull the fitted time and with it the step and
+ * the velocity; once the lines place the jump, the model is refitted with
+ * the jump there and the lines looked at again under the better model
+ * (a jump placed 4 lines early by the blocks stayed there when the
+ * lines were judged by the model fitted to that early time). */
+#define JUMP_LOCATE_ROUNDS 3
+
+static void
+locate_jump(SeriesCorrection *correction, const FrameSeries *series,
+            gdouble block_span)
+{
+    FitReport *report = &correction->fit;
+    DriftFit *fit = report->fits + report->chosen;
+    gdouble before;
+    gint round;
+
+    for (round = 0; round < JUMP_LOCATE_ROUNDS; round++) {
+        before = fit->nonlinear;
+        localise_jump(correction, series, block_span);
+        if (fit->type != DRIFT_MODEL_JUMP
+            || fit->creep != DRIFT_FIT_CREEP_NONE
+            || fit->nonlinear == before
+            || !drift_fit_refit_at(report->meas, report->n_meas,
+                                   fit->nonlinear, fit))
+            break;
+    }
 }
 
 static void
@@ -1027,8 +1037,8 @@ series_correction_compute(const FrameSeries *series,
         }
     }
     if (ok) {
-        localise_jump(correction, series,
-                      series->frames[0].timing.yres*series->frames[0].timing.line_time/d.n_blocks);
+        locate_jump(correction, series,
+                    series->frames[0].timing.yres*series->frames[0].timing.line_time/d.n_blocks);
         fit_smooth(correction, series, d.n_blocks);
         judge_frames(correction, registered);
         if (series->n_frames > SERIES_CORRECTION_LEAVE_OUT_UP_TO) {
