@@ -224,14 +224,22 @@ simscan_output_json(const SimscanScene *scene, const SimscanMeasurement *m)
     return json_values_finish(b);
 }
 
-static GByteArray*
-gwy_file_bytes(const SimscanScene *scene, const SimscanMeasurement *m)
+GByteArray*
+simscan_output_gwy_bytes(GwyContainer *data)
 {
-    GwyContainer *data = simscan_output_container(scene, m);
     GByteArray *bytes = g_byte_array_new();
 
     g_byte_array_append(bytes, (const guint8*)GWY_MAGIC, strlen(GWY_MAGIC));
     gwy_serializable_serialize(G_OBJECT(data), bytes);
+    return bytes;
+}
+
+static GByteArray*
+gwy_file_bytes(const SimscanScene *scene, const SimscanMeasurement *m)
+{
+    GwyContainer *data = simscan_output_container(scene, m);
+    GByteArray *bytes = simscan_output_gwy_bytes(data);
+
     g_object_unref(data);
     return bytes;
 }

@@ -30,6 +30,8 @@ G_BEGIN_DECLS
 /* The container written to the .gwy file (new reference). */
 GwyContainer*  simscan_output_container  (const SimscanScene *scene,
                                           const SimscanMeasurement *m);
+/* data as the bytes of a .gwy file (Gwyddion's native format). */
+GByteArray*    simscan_output_gwy_bytes  (GwyContainer *data);
 /* The particle list of a simulator file (SIMSCAN_META_PARTICLES of
  * channel 0), or NULL. */
 const gchar*   simscan_output_particles  (GwyContainer *data);

@@ -58,14 +58,12 @@ sample_without_missing(GwyDataField *field, const gchar *filename, GError **erro
     return filled;
 }
 
-GwyDataField*
-simscan_load_channel(const gchar *filename, gint id, GError **error)
+GwyContainer*
+simscan_load_file(const gchar *filename, GError **error)
 {
     static gboolean initialised = FALSE;
     GwyContainer *data;
-    GwyDataField *field = NULL;
     GError *err = NULL;
-    gint *ids;
 
     if (!initialised) {
         gwy_app_init_nongui("enable-threads", FALSE, NULL);
@@ -76,8 +74,19 @@ simscan_load_channel(const gchar *filename, gint id, GError **error)
     if (!(data = isolated_load(filename, &err))) {
         g_set_error(error, simscan_sample_error_quark(), 0, _("cannot read %s"), err->message);
         g_clear_error(&err);
-        return NULL;
     }
+    return data;
+}
+
+GwyDataField*
+simscan_load_channel(const gchar *filename, gint id, GError **error)
+{
+    GwyContainer *data;
+    GwyDataField *field = NULL;
+    gint *ids;
+
+    if (!(data = simscan_load_file(filename, error)))
+        return NULL;
     if (id < 0) {
         ids = localscan_channel_ids(data);
         if (ids[0] >= 0)

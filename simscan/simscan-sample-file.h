@@ -12,6 +12,11 @@
 
 G_BEGIN_DECLS
 
+/* The whole file (screened, loaded in a child process), a new reference,
+ * or NULL with error set.  Starts Gwyddion's application library headless
+ * on first use. */
+GwyContainer*  simscan_load_file     (const gchar *filename,
+                                      GError **error);
 /* Channel id of filename (-1: the lowest id), a new reference.  Starts
  * Gwyddion's application library headless on first use. */
 GwyDataField*  simscan_load_channel  (const gchar *filename,

@@ -10,6 +10,7 @@
 #include "n-sweep.h"
 #include "simscan-compare.h"
 #include "fit-command.h"
+#include "benchmark-command.h"
 #include "simscan-i18n.h"
 #include "library-log.h"
 
@@ -52,5 +53,9 @@ main(int argc, char **argv)
         return simscan_compare_main(argc - 1, argv + 1);
     if (argc > 1 && strcmp(argv[1], "fit") == 0)
         return simscan_fit_main(argc - 1, argv + 1);
+    if (argc > 1 && strcmp(argv[1], "benchmark") == 0)
+        return simscan_benchmark_main(argc - 1, argv + 1);
+    if (argc > 1 && strcmp(argv[1], "score") == 0)
+        return simscan_score_main(argc - 1, argv + 1);
     return simscan_generate_main(argc, argv);
 }
