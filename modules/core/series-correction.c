@@ -863,6 +863,61 @@ jump_within_ties(gdouble fitted, const gdouble *when, const gdouble *ends,
     return CLAMP(fitted, lo, hi);
 }
 
+/* The evidence of each line, its cost without the step minus its cost
+ * with it (positive: the line lies after the jump), as the median of the
+ * line and its neighbours in the same frame: a single line that disagrees
+ * with those around it, at the weak level of a nearly featureless line,
+ * must not move a jump across a frame boundary (seed 3000021), while a run
+ * of such lines that agree still counts (seed 2000427), and the median
+ * keeps a true switch from one side to the other sharp.  A frame's first
+ * or last line has one neighbour: the two count only when they agree, by
+ * the weaker of them. */
+static void
+steady_votes(const gdouble *before, const gdouble *after, const gint *frame,
+             gint n, gdouble *votes)
+{
+    gdouble v[3];
+    gint i, j, m;
+
+    for (i = 0; i < n; i++) {
+        m = 0;
+        for (j = MAX(i - 1, 0); j <= MIN(i + 1, n - 1); j++) {
+            if (frame[j] == frame[i])
+                v[m++] = before[j] - after[j];
+        }
+        if (m == 3)
+            votes[i] = gwy_math_median(3, v);
+        else if (m == 2)
+            votes[i] = (v[0]*v[1] > 0.0) ? (fabs(v[0]) < fabs(v[1]) ? v[0] : v[1]) : 0.0;
+        else
+            votes[i] = v[0];
+    }
+}
+
+/* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it; the best
+ * splits are first .. last.  Costs are in the data's squared units: splits
+ * tie within a tiny fraction of all of them. */
+static void
+best_split(const gdouble *votes, gint n, gint *first, gint *last)
+{
+    gdouble total = 0.0, lowest = 0.0, tie = 0.0;
+    gint i;
+
+    for (i = 0; i < n; i++)
+        tie += fabs(votes[i]);
+    tie *= 1e-9;
+    *first = *last = 0;
+    for (i = 0; i < n; i++) {
+        total += votes[i];
+        if (total < lowest - tie) {
+            lowest = total;
+            *first = *last = i + 1;
+        }
+        else if (total <= lowest + tie && *last == i)
+            *last = i + 1;
+    }
+}
+
 /* The fit places a jump within a block or so (blocks straddling it register
  * to either side).  Line by line, against a neighbouring frame, the lines
  * before the jump match the drift without the step and those after it the
@@ -874,22 +929,23 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
               gdouble block_span)
 {
     DriftFit *fit = correction->fit.fits + correction->fit.chosen;
-    gint nf = series->n_frames, k, r, i, n = 0, first = 0, last = 0, most = 0;
-    gdouble *line, *after, *before, *when, *ends, total, lowest, window, t;
-    gdouble t_lo, t_hi, tie;
+    gint nf = series->n_frames, k, r, i, n = 0, first, last, most = 0;
+    gdouble *line, *after, *before, *when, *ends, *votes, t, t_lo, t_hi;
+    gint *frame;
 
     if (fit->type != DRIFT_MODEL_JUMP || nf < 2)
         return;
-    window = JUMP_SEARCH_BLOCKS*block_span;
-    jump_search_window(correction, series, fit->nonlinear, window, &t_lo,
-                       &t_hi);
+    jump_search_window(correction, series, fit->nonlinear,
+                       JUMP_SEARCH_BLOCKS*block_span, &t_lo, &t_hi);
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
     line = g_new(gdouble, 3*series->frames[0].timing.xres);
-    after = g_new(gdouble, 4*most);
+    after = g_new(gdouble, 5*most);
     before = after + most;
     when = before + most;
     ends = when + most;
+    votes = ends + most;
+    frame = g_new(gint, most);
     /* The lines around the jump in the order they were scanned. */
     for (k = 0; k < nf; k++) {
         const SeriesFrame *fk = series->frames + k;
@@ -903,31 +959,16 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
             line_costs(correction, series, k, r, line, before + n, after + n);
             when[n] = scan_timing_row_start(&fk->timing, r);
             ends[n] = when[n] + fk->timing.line_time;
+            frame[n] = k;
             n++;
         }
     }
-    /* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it.  Costs
-     * are in the data's squared units: splits tie within a tiny fraction
-     * of all of them. */
-    total = tie = 0.0;
-    for (i = 0; i < n; i++) {
-        total += after[i];
-        tie += before[i] + after[i];
-    }
-    tie *= 1e-9;
-    lowest = total;
-    for (i = 0; i < n; i++) {
-        total += before[i] - after[i];
-        if (total < lowest - tie) {
-            lowest = total;
-            first = last = i + 1;
-        }
-        else if (total <= lowest + tie && last == i)
-            last = i + 1;
-    }
+    steady_votes(before, after, frame, n, votes);
+    best_split(votes, n, &first, &last);
     if (n >= 2 && last > 0 && first < n)
         fit->nonlinear = jump_within_ties(fit->nonlinear, when, ends, n,
                                           first, last, t_lo, t_hi);
+    g_free(frame);
     g_free(line);
     g_free(after);
 }
