@@ -32,6 +32,7 @@
 #include "missing-data.h"
 #include "paper-compensate.h"
 #include "output-files.h"
+#include "trajectory-csv.h"
 #include "gwy-stream-save.h"
 #include "rigid-baseline.h"
 #include "gwyddion-drift-baseline.h"
@@ -133,17 +134,6 @@ write_text(const gchar *dir, const gchar *name, GString *text)
     return ok;
 }
 
-static void
-append_line(GString *text, gint k, gint r, gdouble t, gdouble dx, gdouble dy)
-{
-    gchar a[G_ASCII_DTOSTR_BUF_SIZE], b[G_ASCII_DTOSTR_BUF_SIZE],
-          c[G_ASCII_DTOSTR_BUF_SIZE];
-
-    g_string_append_printf(text, "%d,%d,%s,%s,%s\n", k, r,
-                           g_ascii_formatd(a, sizeof(a), "%.6f", t),
-                           g_ascii_formatd(b, sizeof(b), "%.4f", dx),
-                           g_ascii_formatd(c, sizeof(c), "%.4f", dy));
-}
 
 /* The trajectory of per-frame shifts plus, when row_dx is given, each
  * frame's own line-by-line x drift (frame k's rows at row_dx + k*yres). */
@@ -151,10 +141,12 @@ static GString*
 trajectory_text(const FrameSeries *series, const gdouble *dx,
                 const gdouble *dy, const gdouble *row_dx)
 {
-    GString *text = g_string_new("frame,row,t_s,dx_px,dy_px\n");
+    GString *text = g_string_new(NULL);
     gint k, r, yres;
     gdouble t, own, first = 0.0;
 
+    trajectory_csv_begin(text, "drift trajectory",
+                         frame_series_dx(series), frame_series_dy(series));
     for (k = 0; k < series->n_frames; k++) {
         const ScanTiming *timing = &series->frames[k].timing;
 
@@ -164,7 +156,7 @@ trajectory_text(const FrameSeries *series, const gdouble *dx,
             own = row_dx ? row_dx[k*yres + r] : 0.0;
             if (k == 0 && r == 0)
                 first = own;
-            append_line(text, k, r, t, dx[k] + own - first, dy[k]);
+            trajectory_csv_line(text, k, r, t, dx[k] + own - first, dy[k], 4);
         }
     }
     return text;

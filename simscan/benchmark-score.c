@@ -17,6 +17,7 @@
 #include <app/gwyapp.h>
 #include "displacement-measure.h"
 #include "localscan-channel.h"
+#include "trajectory-csv.h"
 #include "simscan-sample-file.h"
 #include "simscan-i18n.h"
 #include "benchmark-score.h"
@@ -25,8 +26,6 @@
 #define JUMP_LINES 3
 /* Stripes a corrected frame is judged in. */
 #define JUDGE_STRIPES 8
-/* The trajectory format's header (series-correction.h). */
-#define TRAJECTORY_HEADER "frame,row,t_s,dx_px,dy_px"
 /* Corrected channels are those titled so, when any is. */
 #define CORRECTED_SUFFIX "(drift corrected)"
 
@@ -38,132 +37,26 @@ typedef struct {
     gdouble p0[2];             /* px: where the truth lies in corrected
                                   frames */
     gboolean *disturbed;       /* per frame */
-    gdouble *dx, *dy, *t;      /* per frame and row */
-    gboolean *have;
+    TrajectoryTable truth;     /* per frame and row */
 } TruthCase;
 
-typedef struct {
-    gdouble *dx, *dy, *t;
-    gboolean *have;
-} Trajectory;
-
-static void
-trajectory_alloc(Trajectory *tr, gint n)
-{
-    tr->dx = g_new0(gdouble, 3*n);
-    tr->dy = tr->dx + n;
-    tr->t = tr->dy + n;
-    tr->have = g_new0(gboolean, n);
-}
-
-static void
-trajectory_free(Trajectory *tr)
-{
-    g_free(tr->dx);
-    g_free(tr->have);
-}
-
-static gboolean
-parse_int(const gchar *s, gint lo, gint hi, gint *value)
-{
-    gchar *end;
-    gint64 v;
-
-    while (*s == ' ')
-        s++;
-    v = g_ascii_strtoll(s, &end, 10);
-    while (*end == ' ')
-        end++;
-    if (end == s || *end || v < lo || v > hi)
-        return FALSE;
-    *value = (gint)v;
-    return TRUE;
-}
-
-static gboolean
-parse_double(const gchar *s, gdouble *value)
-{
-    gchar *end;
-
-    while (*s == ' ')
-        s++;
-    *value = g_ascii_strtod(s, &end);
-    while (*end == ' ' || *end == '\r')
-        end++;
-    return end != s && !*end && isfinite(*value);
-}
-
-/* One data line of the trajectory format into tr; a message on failure. */
+/* Reads the trajectory CSV at path into table (trajectory-csv.h); NULL,
+ * or why it cannot be read. */
 static gchar*
-parse_trajectory_line(const gchar *line, gint n_frames, gint yres,
-                      Trajectory *tr)
+read_trajectory(const gchar *path, gint n_frames, gint yres,
+                TrajectoryTable *table)
 {
-    gchar **f = g_strsplit(line, ",", -1);
-    gdouble t, dx, dy;
-    gint frame, row, i;
-    gchar *failure = NULL;
-
-    if (g_strv_length(f) != 5)
-        failure = g_strdup(_("not 5 fields"));
-    else if (!parse_int(f[0], 0, n_frames - 1, &frame))
-        failure = g_strdup_printf(_("frame '%s' is not 0 to %d"), f[0],
-                                  n_frames - 1);
-    else if (!parse_int(f[1], 0, yres - 1, &row))
-        failure = g_strdup_printf(_("row '%s' is not 0 to %d"), f[1],
-                                  yres - 1);
-    else if (!parse_double(f[2], &t) || !parse_double(f[3], &dx)
-             || !parse_double(f[4], &dy))
-        failure = g_strdup(_("a value is not a finite number"));
-    else if (tr->have[i = frame*yres + row])
-        failure = g_strdup_printf(_("frame %d row %d given twice"), frame,
-                                  row);
-    else {
-        tr->have[i] = TRUE;
-        tr->t[i] = t;
-        tr->dx[i] = dx;
-        tr->dy[i] = dy;
-    }
-    g_strfreev(f);
-    return failure;
-}
-
-/* Reads a trajectory CSV (comment lines, the header, one line per scan
- * line) into tr (allocated for n_frames x yres); NULL, or why it cannot
- * be read. */
-static gchar*
-read_trajectory(const gchar *path, gint n_frames, gint yres, Trajectory *tr)
-{
-    gchar *text = NULL, **lines, *failure = NULL, *why;
-    gboolean header = FALSE;
+    gchar *text = NULL, *failure;
     GError *err = NULL;
-    gint i;
 
+    memset(table, 0, sizeof(TrajectoryTable));
     if (!g_file_get_contents(path, &text, NULL, &err)) {
         failure = g_strdup(err->message);
         g_clear_error(&err);
         return failure;
     }
-    lines = g_strsplit(text, "\n", -1);
+    failure = trajectory_csv_parse(text, n_frames, yres, table);
     g_free(text);
-    for (i = 0; lines[i] && !failure; i++) {
-        g_strchomp(lines[i]);
-        if (!*lines[i] || lines[i][0] == '#')
-            continue;
-        if (!header) {
-            if (strcmp(lines[i], TRAJECTORY_HEADER) != 0)
-                failure = g_strdup_printf(_("line %d: the header is not '%s'"),
-                                          i + 1, TRAJECTORY_HEADER);
-            header = TRUE;
-            continue;
-        }
-        if ((why = parse_trajectory_line(lines[i], n_frames, yres, tr))) {
-            failure = g_strdup_printf(_("line %d: %s"), i + 1, why);
-            g_free(why);
-        }
-    }
-    if (!failure && !header)
-        failure = g_strdup_printf(_("no header '%s'"), TRAJECTORY_HEADER);
-    g_strfreev(lines);
     return failure;
 }
 
@@ -265,15 +158,13 @@ static void
 truth_case_free(TruthCase *tc)
 {
     g_free(tc->disturbed);
-    g_free(tc->dx);
-    g_free(tc->have);
+    trajectory_table_free(&tc->truth);
 }
 
 static gboolean
 read_truth(const gchar *dir, TruthCase *tc, GError **error)
 {
     gchar *path = g_build_filename(dir, "case.json", NULL), *failure;
-    Trajectory tr;
     gboolean ok;
 
     memset(tc, 0, sizeof(TruthCase));
@@ -281,13 +172,8 @@ read_truth(const gchar *dir, TruthCase *tc, GError **error)
     g_free(path);
     if (!ok)
         return FALSE;
-    trajectory_alloc(&tr, tc->n_frames*tc->yres);
-    tc->dx = tr.dx;
-    tc->dy = tr.dy;
-    tc->t = tr.t;
-    tc->have = tr.have;
     path = g_build_filename(dir, "truth.csv", NULL);
-    if ((failure = read_trajectory(path, tc->n_frames, tc->yres, &tr))) {
+    if ((failure = read_trajectory(path, tc->n_frames, tc->yres, &tc->truth))) {
         g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL, "%s: %s", path,
                     failure);
         g_free(failure);
@@ -300,21 +186,21 @@ read_truth(const gchar *dir, TruthCase *tc, GError **error)
 static gboolean
 line_scored(const TruthCase *tc, gint k, gint i)
 {
-    return (tc->have[i] && !tc->disturbed[k]
-            && !(fabs(tc->t[i] - tc->t_jump) < JUMP_LINES*tc->line_time));
+    return (tc->truth.have[i] && !tc->disturbed[k]
+            && !(fabs(tc->truth.t[i] - tc->t_jump) < JUMP_LINES*tc->line_time));
 }
 
 static gchar*
 score_trajectory(const TruthCase *tc, const gchar *path, BenchmarkScore *score)
 {
-    gint n = tc->n_frames*tc->yres, k, r, i, count = 0;
+    gint k, r, i, count = 0;
     gdouble sum = 0.0, e;
+    const TrajectoryTable *truth = &tc->truth;
+    TrajectoryTable tr;
     gchar *failure;
-    Trajectory tr;
 
     if (!g_file_test(path, G_FILE_TEST_EXISTS))
         return g_strdup(_("trajectory.csv absent"));
-    trajectory_alloc(&tr, n);
     failure = read_trajectory(path, tc->n_frames, tc->yres, &tr);
     score->trajectory_worst_px = 0.0;
     for (k = 0; k < tc->n_frames && !failure; k++) {
@@ -326,14 +212,14 @@ score_trajectory(const TruthCase *tc, const gchar *path, BenchmarkScore *score)
                                           r);
                 break;
             }
-            e = hypot(tr.dx[i] - tc->dx[i], tr.dy[i] - tc->dy[i]);
+            e = hypot(tr.dx[i] - truth->dx[i], tr.dy[i] - truth->dy[i]);
             sum += e*e;
             score->trajectory_worst_px = MAX(score->trajectory_worst_px, e);
             count++;
         }
     }
     score->trajectory_rms_px = sqrt(sum/MAX(count, 1));
-    trajectory_free(&tr);
+    trajectory_table_free(&tr);
     if (failure) {
         gchar *why = g_strdup_printf("trajectory.csv: %s", failure);
 
@@ -481,6 +367,7 @@ read_flags(const gchar *dir, gint n_frames, gboolean *flagged, gboolean *given)
 {
     gchar *path = g_build_filename(dir, "flagged.txt", NULL), *text = NULL;
     gchar **lines, *failure = NULL;
+    gint64 v;
     gint i, k;
 
     *given = FALSE;
@@ -491,8 +378,9 @@ read_flags(const gchar *dir, gint n_frames, gboolean *flagged, gboolean *given)
             g_strstrip(lines[i]);
             if (!*lines[i] || lines[i][0] == '#')
                 continue;
-            if (parse_int(lines[i], 0, n_frames - 1, &k))
-                flagged[k] = TRUE;
+            if (g_ascii_string_to_signed(lines[i], 10, 0, n_frames - 1, &v,
+                                         NULL))
+                flagged[v] = TRUE;
             else
                 failure = g_strdup_printf(_("flagged.txt line %d: not a frame "
                                             "0 to %d"), i + 1, n_frames - 1);

@@ -15,6 +15,7 @@
 #include <libprocess/gwyprocess.h>
 #include "json-values.h"
 #include "output-files.h"
+#include "trajectory-csv.h"
 #include "raw-artefacts.h"
 #include "sample.h"
 #include "scanner.h"
@@ -189,13 +190,8 @@ static gboolean
 add_text(OutputFiles *files, const gchar *dir, const gchar *name,
          gchar *text, GError **error)
 {
-    gchar *path = g_build_filename(dir, name, NULL);
-    gboolean ok = output_files_add(files, path, (const guchar*)text,
-                                   strlen(text), error);
-
-    g_free(text);
-    g_free(path);
-    return ok;
+    return add_bytes(files, dir, name,
+                     g_byte_array_new_take((guint8*)text, strlen(text)), error);
 }
 
 /* The truth in the series trajectory format of `gwy-localscan series
@@ -207,30 +203,18 @@ truth_trajectory_csv(const BenchmarkCase *bc)
     GString *text = g_string_new(NULL);
     gdouble xstep = bc->field/bc->xres, ystep = bc->field/bc->yres;
     gdouble x0, y0, x, y, t;
-    gchar a[G_ASCII_DTOSTR_BUF_SIZE], b[G_ASCII_DTOSTR_BUF_SIZE],
-          c[G_ASCII_DTOSTR_BUF_SIZE];
     ScanTiming timing;
     gint k, r;
 
-    g_string_append(text, "# true drift p(t) - p(0), t = 0 at the start of "
-                    "the first frame, t_s the centre of the line's trace\n");
-    g_string_append_printf(text, "# pixels of the first frame: dx %s m, ",
-                           g_ascii_formatd(a, sizeof(a), "%.6g", xstep));
-    g_string_append_printf(text, "dy %s m\n",
-                           g_ascii_formatd(a, sizeof(a), "%.6g", ystep));
-    g_string_append(text, "frame,row,t_s,dx_px,dy_px\n");
+    trajectory_csv_begin(text, "true drift", xstep, ystep);
     drift_model_eval(&bc->drift, 0.0, &x0, &y0);
     for (k = 0; k < bc->n_frames; k++) {
         benchmark_case_timing(bc, k, &timing);
         for (r = 0; r < bc->yres; r++) {
             t = scan_timing_rows_time(&timing, r, r+1);
             drift_model_eval(&bc->drift, t, &x, &y);
-            g_string_append_printf(text, "%d,%d,%s,%s,%s\n", k, r,
-                                   g_ascii_formatd(a, sizeof(a), "%.6f", t),
-                                   g_ascii_formatd(b, sizeof(b), "%.6f",
-                                                   (x - x0)/xstep),
-                                   g_ascii_formatd(c, sizeof(c), "%.6f",
-                                                   (y - y0)/ystep));
+            trajectory_csv_line(text, k, r, t, (x - x0)/xstep, (y - y0)/ystep,
+                                6);
         }
     }
     return g_string_free(text, FALSE);

@@ -14,6 +14,7 @@
 #include "localscan-channel.h"
 #include "missing-data.h"
 #include "series-correction.h"
+#include "trajectory-csv.h"
 #include "localscan-intl.h"
 
 /* A frame is flagged when even its best-agreeing pair lies this many times
@@ -1304,35 +1305,19 @@ series_correction_trajectory_csv(const SeriesCorrection *correction,
                                  const FrameSeries *series)
 {
     GString *text = g_string_new(NULL);
-    gchar t[G_ASCII_DTOSTR_BUF_SIZE], x[G_ASCII_DTOSTR_BUF_SIZE],
-          y[G_ASCII_DTOSTR_BUF_SIZE];
+    gdouble dx, dy, when;
     gint k, i, r;
 
-    g_string_append(text, "# drift trajectory p(t) - p(0), t = 0 at the "
-                    "start of the first frame, t_s the centre of the line's "
-                    "trace\n");
-    g_string_append_printf(text, "# pixels of the first frame: dx %s m, ",
-                           g_ascii_formatd(x, sizeof(x), "%.6g",
-                                           correction->xstep));
-    g_string_append_printf(text, "dy %s m\n",
-                           g_ascii_formatd(y, sizeof(y), "%.6g",
-                                           correction->ystep));
-    g_string_append(text, "frame,row,t_s,dx_px,dy_px\n");
+    trajectory_csv_begin(text, "drift trajectory", correction->xstep,
+                         correction->ystep);
     for (k = 0; k < series->n_frames; k++) {
         const ScanTiming *timing = &series->frames[k].timing;
 
         for (i = 0; i < timing->yres; i++) {
-            gdouble dx, dy, when;
-
             r = (timing->direction == SCAN_DIRECTION_UP) ? timing->yres-1 - i : i;
             when = scan_timing_rows_time(timing, r, r+1);
             series_correction_eval(correction, when, &dx, &dy);
-            g_string_append_printf(text, "%d,%d,%s,", k, r,
-                                   g_ascii_formatd(t, sizeof(t), "%.6f", when));
-            g_string_append_printf(text, "%s,",
-                                   g_ascii_formatd(x, sizeof(x), "%.4f", dx));
-            g_string_append_printf(text, "%s\n",
-                                   g_ascii_formatd(y, sizeof(y), "%.4f", dy));
+            trajectory_csv_line(text, k, r, when, dx, dy, 4);
         }
     }
     return g_string_free(text, FALSE);
