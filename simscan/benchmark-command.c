@@ -106,6 +106,61 @@ end:
     return status;
 }
 
+/* A case's folder name: letters, digits, '-', '_' and '.', not starting
+ * with '.', so a manifest from elsewhere names nothing outside DIR. */
+static gboolean
+plain_case_name(const gchar *name)
+{
+    const gchar *p;
+
+    if (!name || !*name || *name == '.' || strlen(name) > 200)
+        return FALSE;
+    for (p = name; *p; p++) {
+        if (!g_ascii_isalnum(*p) && !strchr("-_.", *p))
+            return FALSE;
+    }
+    return TRUE;
+}
+
+static gboolean
+json_string_member(JsonObject *o, const gchar *name)
+{
+    JsonNode *node = json_object_get_member(o, name);
+
+    return node && json_node_get_value_type(node) == G_TYPE_STRING;
+}
+
+/* The case names benchmark.json lists, each a plain name; NULL when the
+ * manifest is not one. */
+static gchar**
+manifest_case_names(JsonObject *o)
+{
+    JsonNode *node = json_object_get_member(o, "cases");
+    JsonArray *a;
+    gchar **names;
+    guint i;
+
+    if (!node || !JSON_NODE_HOLDS_ARRAY(node)
+        || !json_string_member(o, "benchmark_version")
+        || !json_string_member(o, "size")
+        || !json_object_has_member(o, "seed")
+        || json_node_get_value_type(json_object_get_member(o, "seed")) != G_TYPE_INT64)
+        return NULL;
+    a = json_node_get_array(node);
+    names = g_new0(gchar*, json_array_get_length(a) + 1);
+    for (i = 0; i < json_array_get_length(a); i++) {
+        JsonNode *e = json_array_get_element(a, i);
+
+        if (json_node_get_value_type(e) != G_TYPE_STRING
+            || !plain_case_name(json_node_get_string(e))) {
+            g_strfreev(names);
+            return NULL;
+        }
+        names[i] = g_strdup(json_node_get_string(e));
+    }
+    return names;
+}
+
 /* The case names benchmark.json lists, and its header figures. */
 static gchar**
 read_manifest(const gchar *truth, gchar **summary, GError **error)
@@ -113,31 +168,22 @@ read_manifest(const gchar *truth, gchar **summary, GError **error)
     gchar *path = g_build_filename(truth, "benchmark.json", NULL);
     JsonParser *parser = json_parser_new();
     JsonObject *o = NULL;
-    JsonArray *a = NULL;
     JsonNode *root;
     gchar **names = NULL;
-    guint i;
 
     if (json_parser_load_from_file(parser, path, error)) {
         root = json_parser_get_root(parser);
         if (root && JSON_NODE_HOLDS_OBJECT(root))
             o = json_node_get_object(root);
-        if (o && json_object_has_member(o, "cases")
-            && json_object_has_member(o, "benchmark_version"))
-            a = json_object_get_array_member(o, "cases");
-        if (!a)
+        if (o && (names = manifest_case_names(o)))
+            *summary = g_strdup_printf("benchmark version %s, seed %" G_GINT64_FORMAT
+                                       ", size %s",
+                                       json_object_get_string_member(o, "benchmark_version"),
+                                       json_object_get_int_member(o, "seed"),
+                                       json_object_get_string_member(o, "size"));
+        else
             g_set_error(error, benchmark_error_quark(), 0,
                         _("%s: not a benchmark manifest"), path);
-    }
-    if (a) {
-        names = g_new0(gchar*, json_array_get_length(a) + 1);
-        for (i = 0; i < json_array_get_length(a); i++)
-            names[i] = g_strdup(json_array_get_string_element(a, i));
-        *summary = g_strdup_printf("benchmark version %s, seed %" G_GINT64_FORMAT
-                                   ", size %s",
-                                   json_object_get_string_member(o, "benchmark_version"),
-                                   json_object_get_int_member(o, "seed"),
-                                   json_object_get_string_member(o, "size"));
     }
     g_object_unref(parser);
     g_free(path);

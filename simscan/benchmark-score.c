@@ -24,6 +24,9 @@
 
 /* Lines within this many line times of a jump are scored by nobody. */
 #define JUMP_LINES 3
+/* Scan lines a case may have (frames x rows): a case description from
+ * elsewhere must not make the scorer allocate without bound. */
+#define MAX_LINES (1 << 22)
 /* Stripes a corrected frame is judged in. */
 #define JUDGE_STRIPES 8
 /* Corrected channels are those titled so, when any is. */
@@ -76,7 +79,8 @@ json_get_double(JsonObject *o, const gchar *name, gdouble *v)
 {
     JsonNode *node = json_object_get_member(o, name);
 
-    if (!node || !JSON_NODE_HOLDS_VALUE(node))
+    if (!node || (json_node_get_value_type(node) != G_TYPE_DOUBLE
+                  && json_node_get_value_type(node) != G_TYPE_INT64))
         return FALSE;
     *v = json_node_get_double(node);
     return isfinite(*v);
@@ -87,10 +91,17 @@ json_get_pair(JsonObject *o, const gchar *name, gdouble *v)
 {
     JsonNode *node = json_object_get_member(o, name);
     JsonArray *a;
+    guint i;
 
     if (!node || !JSON_NODE_HOLDS_ARRAY(node)
         || json_array_get_length(a = json_node_get_array(node)) != 2)
         return FALSE;
+    for (i = 0; i < 2; i++) {
+        GType type = json_node_get_value_type(json_array_get_element(a, i));
+
+        if (type != G_TYPE_DOUBLE && type != G_TYPE_INT64)
+            return FALSE;
+    }
     v[0] = json_array_get_double_element(a, 0);
     v[1] = json_array_get_double_element(a, 1);
     return isfinite(v[0]) && isfinite(v[1]);
@@ -108,6 +119,8 @@ read_disturbed(JsonObject *o, TruthCase *tc)
         return FALSE;
     a = json_node_get_array(node);
     for (i = 0; i < json_array_get_length(a); i++) {
+        if (json_node_get_value_type(json_array_get_element(a, i)) != G_TYPE_INT64)
+            return FALSE;
         k = json_array_get_int_element(a, i);
         if (k < 0 || k >= tc->n_frames)
             return FALSE;
@@ -136,7 +149,9 @@ read_case_json(const gchar *path, TruthCase *tc, GError **error)
               && json_get_double(o, "line_time_s", &tc->line_time)
               && json_get_pair(o, "pixel_m", pixel) && pixel[0] > 0.0
               && json_get_pair(o, "p0_px", tc->p0)
-              && json_object_has_member(o, "drift"));
+              && json_object_has_member(o, "drift")
+              && JSON_NODE_HOLDS_OBJECT(json_object_get_member(o, "drift"))
+              && (gint64)tc->n_frames*tc->yres <= MAX_LINES);
         if (ok) {
             tc->aspect = pixel[1]/pixel[0];
             tc->disturbed = g_new0(gboolean, tc->n_frames);

@@ -154,7 +154,16 @@ done
 check
 [ "$(cat "$tmp/full/x")" = keep ] && [ "$(ls "$tmp/full" | wc -l)" -eq 1 ] \
     || fail "a non-empty folder was touched"
-for args in "--truth $tmp/r/truth $tmp/r/truth" "--truth $tmp/a" "$tmp/r/truth"; do
+# A manifest naming a case outside its folder, a case description with
+# absurd sizes: refused with one line.
+mkdir -p "$tmp/evil/c1"
+printf '{"benchmark_version":"1","seed":1,"size":"small","cases":["../a"]}' > "$tmp/evil/benchmark.json"
+mkdir -p "$tmp/huge/c1"
+printf '{"benchmark_version":"1","seed":1,"size":"small","cases":["c1"]}' > "$tmp/huge/benchmark.json"
+printf '{"frames":100000,"xres":64,"yres":65536,"line_time_s":1,"pixel_m":[1e-9,1e-9],"p0_px":[0,0],"drift":{},"disturbed_frames":[]}' \
+    > "$tmp/huge/c1/case.json"
+for args in "--truth $tmp/r/truth $tmp/r/truth" "--truth $tmp/a" "$tmp/r/truth" \
+            "--truth $tmp/evil $tmp/r/truth" "--truth $tmp/huge $tmp/r/truth"; do
     check
     # shellcheck disable=SC2086
     if "$simscan" score $args >"$tmp/out" 2>"$tmp/err"; then
