@@ -864,35 +864,55 @@ jump_within_ties(gdouble fitted, const gdouble *when, const gdouble *ends,
     return CLAMP(fitted, lo, hi);
 }
 
+/* Evidence below this fraction of a typical line's is weak. */
+#define JUMP_WEAK_EVIDENCE 0.1
+
+/* The median of the vote of line i and its neighbours in the same frame.
+ * A frame's first or last line has one neighbour: the two count only when
+ * they agree, by the weaker of them. */
+static gdouble
+median_vote(const gdouble *raw, const gint *frame, gint n, gint i)
+{
+    gdouble v[3];
+    gint j, m = 0;
+
+    for (j = MAX(i - 1, 0); j <= MIN(i + 1, n - 1); j++) {
+        if (frame[j] == frame[i])
+            v[m++] = raw[j];
+    }
+    if (m == 3)
+        return gwy_math_median(3, v);
+    if (m == 2)
+        return (v[0]*v[1] > 0.0) ? (fabs(v[0]) < fabs(v[1]) ? v[0] : v[1]) : 0.0;
+    return v[0];
+}
+
 /* The evidence of each line, its cost without the step minus its cost
- * with it (positive: the line lies after the jump), as the median of the
- * line and its neighbours in the same frame: a single line that disagrees
- * with those around it, at the weak level of a nearly featureless line,
- * must not move a jump across a frame boundary (seed 3000021), while a run
- * of such lines that agree still counts (seed 2000427), and the median
- * keeps a true switch from one side to the other sharp.  A frame's first
- * or last line has one neighbour: the two count only when they agree, by
- * the weaker of them. */
+ * with it (positive: the line lies after the jump).  A line with the
+ * evidence of a typical line (a tenth of the median over the lines with
+ * any) speaks for itself: the one line after a jump before a frame's
+ * unseen last lines must count (seed 5000182).  A weak line, nearly
+ * featureless, counts by the median of itself and its neighbours in the
+ * frame: alone against the lines around it, it must not move a jump
+ * across a frame boundary (seed 3000021), while a run of weak lines that
+ * agree still counts (seed 2000427). */
 static void
 steady_votes(const gdouble *before, const gdouble *after, const gint *frame,
              gint n, gdouble *votes)
 {
-    gdouble v[3];
-    gint i, j, m;
+    gdouble *raw = g_new(gdouble, 2*MAX(n, 1)), *strength = raw + MAX(n, 1);
+    gdouble strong;
+    gint i, m = 0;
 
     for (i = 0; i < n; i++) {
-        m = 0;
-        for (j = MAX(i - 1, 0); j <= MIN(i + 1, n - 1); j++) {
-            if (frame[j] == frame[i])
-                v[m++] = before[j] - after[j];
-        }
-        if (m == 3)
-            votes[i] = gwy_math_median(3, v);
-        else if (m == 2)
-            votes[i] = (v[0]*v[1] > 0.0) ? (fabs(v[0]) < fabs(v[1]) ? v[0] : v[1]) : 0.0;
-        else
-            votes[i] = v[0];
+        raw[i] = before[i] - after[i];
+        if (before[i] + after[i] > 0.0)
+            strength[m++] = fabs(raw[i]);
     }
+    strong = m ? JUMP_WEAK_EVIDENCE*gwy_math_median(m, strength) : 0.0;
+    for (i = 0; i < n; i++)
+        votes[i] = (fabs(raw[i]) >= strong) ? raw[i] : median_vote(raw, frame, n, i);
+    g_free(raw);
 }
 
 /* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it; the best
