@@ -73,6 +73,17 @@
  * by half as much again (a jump inside frame 0 with frame 1 slipped, seed
  * 30477 of test-series-correction: 0.10 against 0.15 px). */
 #define LEAVE_OUT_TIE 2.0
+/* A disturbed frame disagrees with the others everywhere; a frame that
+ * agrees with them in part (more than this fraction of its blocks) holds
+ * an effect of its own, such as a jump inside it.  Where a frame that
+ * agrees nowhere explains the rest within LEAVE_OUT_WIDE_TIE of the best,
+ * it is the one flagged: with frame 1 slipped and a jump late in frame 0,
+ * leaving frame 0 out reads the slip as a jump between frames 1 and 2 and
+ * fits the rest 2-3 times better than leaving frame 1 out, whose jump
+ * inside frame 0 the straddling blocks blur (seeds 7000245, 7000287:
+ * frame 0 flagged, the slip taken for drift, 3.4-6.9 px). */
+#define LEAVE_OUT_PART_AGREES 0.1
+#define LEAVE_OUT_WIDE_TIE 4.0
 
 /* A pair counts as registered with this many accepted blocks. */
 #define PAIR_MIN_BLOCKS 3
@@ -354,6 +365,8 @@ typedef struct {
     gdouble residual;     /* its residual against the others' fit */
     gdouble typical;      /* the others' typical residual */
     gdouble spread;       /* the others' mean block residual */
+    gdouble agreeing;     /* the fraction of its blocks that agree with the
+                             others' fit */
     gint n_params;        /* of the model the others chose */
 } LeftOut;
 
@@ -384,6 +397,29 @@ others_spread(const SeriesCorrection *correction, const DriftFit *fit, gint k,
     for (i = 0; i < n; i++)
         sum += MIN(values[i], clip);
     return sum/n;
+}
+
+/* The fraction of frame k's registered blocks with frames not flagged that
+ * lie within the flagging limit of a fit. */
+static gdouble
+agreeing_blocks(const SeriesCorrection *correction, const DriftFit *fit,
+                gint k, const gdouble *registered, gdouble typical)
+{
+    const FitReport *report = &correction->fit;
+    gint i, count = 0, agree = 0, j;
+
+    for (i = 0; i < report->n_meas; i++) {
+        const DriftMeasurement *m = report->meas + i;
+
+        if (registered[i] <= 0.0 || (m->frame_a != k && m->frame_b != k))
+            continue;
+        j = (m->frame_a == k) ? m->frame_b : m->frame_a;
+        if (correction->frames[j].flagged)
+            continue;
+        count++;
+        agree += !beyond_limit(residual_px(correction, fit, m), typical);
+    }
+    return count ? (gdouble)agree/count : 0.0;
 }
 
 /* The fit of the frames neither k nor flagged: frame k's residual
@@ -429,6 +465,8 @@ fit_leaving_out(const SeriesCorrection *correction, gint k,
         result->typical = median_of(others, count);
         result->spread = others_spread(correction, fits + chosen, k,
                                        registered, values);
+        result->agreeing = agreeing_blocks(correction, fits + chosen, k,
+                                           registered, result->typical);
     }
     g_free(others);
     return (chosen >= 0 && count >= 2 && isfinite(result->residual)
@@ -454,17 +492,25 @@ is_end_frame(gint k, gint n_frames)
 static gint
 pick_left_out(const LeftOut *cand, gint n, gint n_frames)
 {
-    gdouble lowest = G_MAXDOUBLE;
+    gdouble lowest = G_MAXDOUBLE, tie = LEAVE_OUT_TIE;
+    gboolean nowhere = FALSE, end, best_end;
     gint i, best = -1;
 
     for (i = 0; i < n; i++)
         lowest = MIN(lowest, cand[i].spread);
     for (i = 0; i < n; i++) {
-        if (cand[i].spread > LEAVE_OUT_TIE*lowest)
+        if (cand[i].spread <= LEAVE_OUT_WIDE_TIE*lowest
+            && cand[i].agreeing <= LEAVE_OUT_PART_AGREES)
+            nowhere = TRUE;
+    }
+    if (nowhere)
+        tie = LEAVE_OUT_WIDE_TIE;
+    for (i = 0; i < n; i++) {
+        if (cand[i].spread > tie*lowest
+            || (nowhere && cand[i].agreeing > LEAVE_OUT_PART_AGREES))
             continue;
-        gboolean end = is_end_frame(cand[i].frame, n_frames);
-        gboolean best_end = best >= 0 && is_end_frame(cand[best].frame, n_frames);
-
+        end = is_end_frame(cand[i].frame, n_frames);
+        best_end = best >= 0 && is_end_frame(cand[best].frame, n_frames);
         if (best < 0 || cand[i].n_params < cand[best].n_params
             || (cand[i].n_params == cand[best].n_params
                 && (best_end > end
