@@ -113,30 +113,43 @@ copy_shifts(const StripeShift *shifts, gint n, gdouble *dx, gdouble *dy,
     }
 }
 
-void
-displacement_register_blocks(const gdouble *image, const gdouble *reference,
-                             gint xres, gint yres, gint n,
-                             const DisplacementOptions *options,
-                             gdouble pixel_aspect, const gdouble *guess,
-                             gdouble *dx, gdouble *dy, gdouble *score,
-                             gdouble *global)
+/* A frame levelled and blurred as displacement_register_blocks()
+ * registers it, then conditioned (stripe-registration.h): what a series
+ * does once per frame, however many partners the frame has.  NULL when it
+ * cannot be registered at all. */
+static StripeRegistrationFrame*
+prepare_frame(const gdouble *data, gint xres, gint yres,
+              const DisplacementOptions *options, gdouble pixel_aspect)
 {
-    DisplacementOptions defaults;
-    gdouble *a, *b, sigma_x, sigma_y, radius, centre[2] = { 0.0, 0.0 };
+    StripeRegistrationFrame *frame;
+    gdouble sigma_x, sigma_y, *levelled;
+
+    /* The same physical blur along both axes: pixel_aspect = dy/dx. */
+    sigma_x = options->smooth*MIN(xres, yres*pixel_aspect);
+    sigma_y = sigma_x/pixel_aspect;
+    levelled = level_lines(data, xres, yres, sigma_x, sigma_y);
+    /* Conditioned for square pixels, as stripe_registration_measure_around()
+     * conditions its frames. */
+    frame = stripe_registration_frame_new(levelled, xres, yres, 1.0);
+    g_free(levelled);
+    return frame;
+}
+
+/* displacement_register_blocks() for prepared frames (either may be NULL:
+ * nothing registered). */
+static void
+register_prepared(StripeRegistrationFrame *image,
+                  StripeRegistrationFrame *reference, gint xres, gint yres,
+                  gint n, const DisplacementOptions *options,
+                  const gdouble *guess, gdouble *dx, gdouble *dy,
+                  gdouble *score, gdouble *global)
+{
+    gdouble radius, centre[2] = { 0.0, 0.0 };
     gdouble *pdx = g_new(gdouble, n), *pdy = g_new(gdouble, n);
     StripeShift whole, *shifts = g_new0(StripeShift, n);
     gint s, side = MIN(xres, yres);
     gboolean ok;
 
-    if (!options) {
-        displacement_options_init(&defaults);
-        options = &defaults;
-    }
-    /* The same physical blur along both axes: pixel_aspect = dy/dx. */
-    sigma_x = options->smooth*MIN(xres, yres*pixel_aspect);
-    sigma_y = sigma_x/pixel_aspect;
-    a = level_lines(image, xres, yres, sigma_x, sigma_y);
-    b = level_lines(reference, xres, yres, sigma_x, sigma_y);
     radius = MAX(options->block_range*side, 4.0);
     /* The frame's overall shift first, so that blocks (less content, more
      * prone to a wrong peak) search near it only. */
@@ -145,12 +158,13 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
         centre[1] = guess[1];
     }
     memset(&whole, 0, sizeof(whole));
-    ok = stripe_registration_measure_around(a, b, xres, yres, 1, centre,
-                                            centre + 1,
-                                            guess ? radius
-                                            : MAX(options->max_shift*side, 2.0),
-                                            STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
-                                            &whole, NULL);
+    ok = (image && reference
+          && stripe_registration_measure_around_frames(image, reference, 1, centre,
+                                                       centre + 1,
+                                                       guess ? radius
+                                                       : MAX(options->max_shift*side, 2.0),
+                                                       STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
+                                                       &whole, NULL));
     if (ok && whole.peak > -1.0) {
         centre[0] = whole.dx;
         centre[1] = whole.dy;
@@ -159,9 +173,9 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
         pdx[s] = centre[0];
         pdy[s] = centre[1];
     }
-    if (!ok || !stripe_registration_measure_around(a, b, xres, yres, n, pdx, pdy, radius,
-                                                   STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
-                                                   shifts, NULL))
+    if (!ok || !stripe_registration_measure_around_frames(image, reference, n, pdx, pdy, radius,
+                                                          STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
+                                                          shifts, NULL))
         memset(shifts, 0, n*sizeof(StripeShift));
     copy_shifts(shifts, n, dx, dy, score);
     if (global) {
@@ -172,8 +186,29 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
     g_free(shifts);
     g_free(pdx);
     g_free(pdy);
-    g_free(a);
-    g_free(b);
+}
+
+void
+displacement_register_blocks(const gdouble *image, const gdouble *reference,
+                             gint xres, gint yres, gint n,
+                             const DisplacementOptions *options,
+                             gdouble pixel_aspect, const gdouble *guess,
+                             gdouble *dx, gdouble *dy, gdouble *score,
+                             gdouble *global)
+{
+    DisplacementOptions defaults;
+    StripeRegistrationFrame *a, *b;
+
+    if (!options) {
+        displacement_options_init(&defaults);
+        options = &defaults;
+    }
+    a = prepare_frame(image, xres, yres, options, pixel_aspect);
+    b = prepare_frame(reference, xres, yres, options, pixel_aspect);
+    register_prepared(a, b, xres, yres, n, options, guess, dx, dy, score,
+                      global);
+    stripe_registration_frame_free(a);
+    stripe_registration_frame_free(b);
 }
 
 /* The row a block's registration speaks for: its rows weighted by their
@@ -201,13 +236,53 @@ detail_row(const gdouble *data, gint xres, gint r0, gint r1)
     return (wsum > 0.0 && isfinite(rsum)) ? rsum/wsum : 0.5*(r0 + r1 - 1);
 }
 
+/* Frames of a series prepared for registration (prepare_frame), each
+ * once while its partners are registered against it; those beyond the
+ * reach of the frames still to come are let go. */
+typedef struct {
+    const FrameSeries *series;
+    const DisplacementOptions *options;
+    StripeRegistrationFrame **frames;
+    gboolean *prepared;
+} PreparedFrames;
+
+/* When every earlier frame is a partner, at most this many frames are held
+ * (about 2.5 MB each at 256 x 256 px); older ones are prepared anew for
+ * each pair. */
+#define PREPARED_MAX_FRAMES 32
+
+static StripeRegistrationFrame*
+prepared_frame(PreparedFrames *cache, gint k)
+{
+    const SeriesFrame *f = cache->series->frames + k;
+
+    if (!cache->prepared[k]) {
+        cache->frames[k] = prepare_frame(gwy_data_field_get_data_const(f->field),
+                                         f->timing.xres, f->timing.yres,
+                                         cache->options,
+                                         frame_series_dy(cache->series)
+                                         /frame_series_dx(cache->series));
+        cache->prepared[k] = TRUE;
+    }
+    return cache->frames[k];
+}
+
+static void
+release_frame(PreparedFrames *cache, gint k)
+{
+    stripe_registration_frame_free(cache->frames[k]);
+    cache->frames[k] = NULL;
+    cache->prepared[k] = FALSE;
+}
+
 /* Registers frame ka against frame kb and appends the block measurements;
  * global gets the frame's overall shift. */
 static void
-measure_pair(const FrameSeries *series, gint ka, gint kb,
-             const DisplacementOptions *options, const gdouble *guess,
+measure_pair(PreparedFrames *cache, gint ka, gint kb, const gdouble *guess,
              gdouble *global, GArray *out)
 {
+    const FrameSeries *series = cache->series;
+    const DisplacementOptions *options = cache->options;
     const SeriesFrame *fa = series->frames + ka, *fb = series->frames + kb;
     gdouble xstep = frame_series_dx(series), ystep = frame_series_dy(series);
     gint xres = fa->timing.xres, yres = fa->timing.yres, n = options->n_blocks;
@@ -215,10 +290,8 @@ measure_pair(const FrameSeries *series, gint ka, gint kb,
             *score = g_new(gdouble, n);
     gint s;
 
-    displacement_register_blocks(gwy_data_field_get_data_const(fa->field),
-                                 gwy_data_field_get_data_const(fb->field),
-                                 xres, yres, n, options, ystep/xstep, guess,
-                                 dx, dy, score, global);
+    register_prepared(prepared_frame(cache, ka), prepared_frame(cache, kb),
+                      xres, yres, n, options, guess, dx, dy, score, global);
     for (s = 0; s < n; s++) {
         gint r0 = s*yres/n, r1 = (s + 1)*yres/n;
         gdouble ccol = 0.5*(xres - 1), crow;
@@ -245,40 +318,66 @@ measure_pair(const FrameSeries *series, gint ka, gint kb,
     g_free(score);
 }
 
+/* Frame k against the earlier frames within reach, the previous one first:
+ * its overall shift and those of the consecutive pairs before, chained,
+ * tell where to look in an older frame, whose shift may exceed any blind
+ * search range.  The consecutive pair goes to next, the others to far. */
+static void
+measure_frame_pairs(PreparedFrames *cache, gint k, gint reach, gdouble *step,
+                    GArray *next, GArray *far)
+{
+    gdouble guess[2], global[3];
+    gint j;
+
+    measure_pair(cache, k, k-1, NULL, step + 3*k, next);
+    for (j = k-2; j >= MAX(k - reach, 0); j--) {
+        if (j == k-2) {
+            guess[0] = step[3*k] + step[3*(k-1)];
+            guess[1] = step[3*k + 1] + step[3*(k-1) + 1];
+        }
+        else {
+            guess[0] = global[0] + step[3*(j+1)];
+            guess[1] = global[1] + step[3*(j+1) + 1];
+        }
+        measure_pair(cache, k, j, guess, global, far);
+    }
+}
+
 DriftMeasurement*
 displacement_measure_series(const FrameSeries *series,
                             const DisplacementOptions *options, gint *n)
 {
     DisplacementOptions defaults;
     GArray *out = g_array_new(FALSE, FALSE, sizeof(DriftMeasurement));
-    gint nf = series->n_frames, k, j;
-    gdouble *step = g_new0(gdouble, 3*nf), guess[2], global[3];
+    GArray *far = g_array_new(FALSE, FALSE, sizeof(DriftMeasurement));
+    gint nf = series->n_frames, k, j, reach, keep;
+    gdouble *step = g_new0(gdouble, 3*nf);
+    PreparedFrames cache;
 
     if (!options) {
         displacement_options_init(&defaults);
         options = &defaults;
     }
-    /* Consecutive frames first: their overall shifts, chained, tell where
-     * to look when a frame is registered against an older one, whose shift
-     * may exceed any blind search range. */
-    for (k = 1; k < nf; k++)
-        measure_pair(series, k, k-1, options, NULL, step + 3*k, out);
-    for (k = 2; k < nf; k++) {
-        gint reach = options->pair_reach > 0 ? options->pair_reach : k;
-
-        for (j = k-2; j >= MAX(k - reach, 0); j--) {
-            guess[0] = guess[1] = 0.0;
-            if (j == k-2) {
-                guess[0] = step[3*k] + step[3*(k-1)];
-                guess[1] = step[3*k + 1] + step[3*(k-1) + 1];
-            }
-            else {
-                guess[0] = global[0] + step[3*(j+1)];
-                guess[1] = global[1] + step[3*(j+1) + 1];
-            }
-            measure_pair(series, k, j, options, guess, global, out);
-        }
+    cache.series = series;
+    cache.options = options;
+    cache.frames = g_new0(StripeRegistrationFrame*, MAX(nf, 1));
+    cache.prepared = g_new0(gboolean, MAX(nf, 1));
+    keep = options->pair_reach > 0 ? options->pair_reach : PREPARED_MAX_FRAMES;
+    /* Frame by frame, so that each is prepared once; the measurements keep
+     * the order of every consecutive pair first, then the others frame by
+     * frame (the fit of a long series takes a spread subset by order). */
+    for (k = 1; k < nf; k++) {
+        reach = options->pair_reach > 0 ? options->pair_reach : k;
+        measure_frame_pairs(&cache, k, reach, step, out, far);
+        for (j = 0; j <= k - keep; j++)
+            release_frame(&cache, j);
     }
+    for (k = 0; k < nf; k++)
+        release_frame(&cache, k);
+    g_array_append_vals(out, far->data, far->len);
+    g_array_free(far, TRUE);
+    g_free(cache.frames);
+    g_free(cache.prepared);
     g_free(step);
     *n = out->len;
     return (DriftMeasurement*)g_array_free(out, FALSE);

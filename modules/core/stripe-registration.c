@@ -961,6 +961,75 @@ stripe_registration_measure_around(const gdouble *image, const gdouble *referenc
     return ok;
 }
 
+struct _StripeRegistrationFrame {
+    ConditionedFrame *unfiltered;  /* conditioned up to the band-pass */
+    gdouble noise_scale;           /* the narrow blur its own noise calls for */
+    gdouble pixel_aspect;
+    ConditionedFrame *passed;      /* band-passed with passed_narrow, or NULL */
+    gdouble passed_narrow;
+};
+
+StripeRegistrationFrame*
+stripe_registration_frame_new(const gdouble *data, gint xres, gint yres, gdouble pixel_aspect)
+{
+    StripeRegistrationFrame *frame;
+    ConditionedFrame *unfiltered;
+
+    g_return_val_if_fail(data, NULL);
+    if (xres < 4 || yres < 4 || !(unfiltered = frame_condition_level(data, NULL, xres, yres)))
+        return NULL;
+    frame = g_new0(StripeRegistrationFrame, 1);
+    frame->unfiltered = unfiltered;
+    frame->pixel_aspect = pixel_aspect;
+    frame->noise_scale = conditioned_frame_noise_scale(unfiltered, pixel_aspect);
+    return frame;
+}
+
+void
+stripe_registration_frame_free(StripeRegistrationFrame *frame)
+{
+    if (!frame)
+        return;
+    conditioned_frame_free(frame->unfiltered);
+    conditioned_frame_free(frame->passed);
+    g_free(frame);
+}
+
+/* The frame band-passed with narrow; consecutive pairs mostly ask for the
+ * same band (frames of a series have alike noise), and then the copy made
+ * for the previous pair serves. */
+static const ConditionedFrame*
+band_passed(StripeRegistrationFrame *frame, gdouble narrow)
+{
+    if (!frame->passed || frame->passed_narrow != narrow) {
+        conditioned_frame_free(frame->passed);
+        frame->passed = conditioned_frame_copy(frame->unfiltered);
+        conditioned_frame_band_pass(frame->passed, frame->pixel_aspect, narrow);
+        frame->passed_narrow = narrow;
+    }
+    return frame->passed;
+}
+
+gboolean
+stripe_registration_measure_around_frames(StripeRegistrationFrame *image,
+                                          StripeRegistrationFrame *reference, gint n,
+                                          const gdouble *predicted_dx, const gdouble *predicted_dy,
+                                          gdouble radius_px, gdouble min_score,
+                                          StripeShift *shifts, GError **error)
+{
+    gdouble narrow;
+    const ConditionedFrame *cimage, *creference;
+
+    g_return_val_if_fail(image && reference, FALSE);
+    /* The same band as condition_pair() gives the two frames. */
+    narrow = MAX(image->noise_scale, reference->noise_scale);
+    cimage = band_passed(image, narrow);
+    creference = band_passed(reference, narrow);
+    return stripe_registration_measure_around_conditioned(cimage, creference, n, predicted_dx,
+                                                          predicted_dy, radius_px, min_score,
+                                                          shifts, error);
+}
+
 gboolean
 stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference, gint n,
                                    const StripeRegistrationOptions *options, StripeShift *shifts,

@@ -126,6 +126,33 @@ gboolean     stripe_registration_measure_around_conditioned(const ConditionedFra
                                                             StripeShift *shifts,
                                                             GError **error);
 
+/* A frame conditioned once for registration against several others (a
+ * series registers each frame against its neighbours): the steps up to
+ * the band-pass are its own; the band-pass, which two frames share, is
+ * made for each pair (the noisier frame's) and kept for the next pair
+ * that asks for the same.  NULL when the frame is smaller than 4 x 4 px
+ * or has no valid pixel. */
+typedef struct _StripeRegistrationFrame StripeRegistrationFrame;
+
+StripeRegistrationFrame* stripe_registration_frame_new(const gdouble *data,
+                                                       gint xres,
+                                                       gint yres,
+                                                       gdouble pixel_aspect);
+
+void         stripe_registration_frame_free(StripeRegistrationFrame *frame);
+
+/* stripe_registration_measure_around() for two such frames, conditioned
+ * as it would condition them; the frames keep their band-passed copies. */
+gboolean     stripe_registration_measure_around_frames(StripeRegistrationFrame *image,
+                                                       StripeRegistrationFrame *reference,
+                                                       gint n,
+                                                       const gdouble *predicted_dx,
+                                                       const gdouble *predicted_dy,
+                                                       gdouble radius_px,
+                                                       gdouble min_score,
+                                                       StripeShift *shifts,
+                                                       GError **error);
+
 /* The same for two channels; refuses (with a message giving both sizes)
  * fields of different pixel dimensions.  The pixel aspect comes from the
  * image's pixel sizes (options' is ignored); options may be NULL. */
