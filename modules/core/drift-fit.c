@@ -833,15 +833,33 @@ lowest_bic(const DriftFit *fits, gint n_types)
     return best;
 }
 
-/* The kept measurement with the largest residual under fit, when it is a
- * gross outlier (a failed registration) by a robust (median) scale of the
- * kept residuals; else -1. */
+/* Outliers are cut in rounds, each taking those within this factor of the
+ * round's worst residual: a failed registration pulls the fit towards
+ * itself by a fraction of its own residual, so what it makes of good
+ * measurements stays well below it and waits for the refit, while the
+ * tail of alike residuals goes at once (refitting after each of them cost
+ * half the time of a short series). */
+#define OUTLIER_ROUND 0.5
+
 static gint
-worst_outlier(const DriftMeasurement *meas, gint n, const DriftFit *fit,
-              gdouble sigmas, const gboolean *mask)
+compare_residuals(gconstpointer a, gconstpointer b, gpointer user_data)
 {
-    gdouble *r = g_new(gdouble, n), *sorted = g_new(gdouble, n), scale;
-    gint i, m = 0, worst = -1;
+    const gdouble *r = user_data;
+    gdouble x = r[*(const gint*)a], y = r[*(const gint*)b];
+
+    return (x < y) - (x > y);
+}
+
+/* The kept measurements that are gross outliers (failed registrations) by
+ * a robust (median) scale of the kept residuals and lie within
+ * OUTLIER_ROUND of the largest residual, at most `most` of them (the
+ * largest), lose their place in mask; returns how many did. */
+static gint
+cut_outliers(const DriftMeasurement *meas, gint n, const DriftFit *fit,
+             gdouble sigmas, gint most, gboolean *mask)
+{
+    gdouble *r = g_new(gdouble, n), *sorted = g_new(gdouble, n), limit, cut;
+    gint *beyond = g_new(gint, n), i, m = 0, worst = -1, count = 0;
 
     for (i = 0; i < n; i++) {
         gdouble dx, dy;
@@ -860,31 +878,42 @@ worst_outlier(const DriftMeasurement *meas, gint n, const DriftFit *fit,
     }
     if (m) {
         /* The median of a 2-D radial residual is about 1.18 sigma. */
-        scale = gwy_math_kth_rank(m, sorted, m/2)/1.1774;
-        if (!(r[worst] > sigmas*MAX(scale, 1e-6)))
-            worst = -1;
+        limit = sigmas*MAX(gwy_math_kth_rank(m, sorted, m/2)/1.1774, 1e-6);
+        cut = MAX(limit, OUTLIER_ROUND*r[worst]);
+        for (i = 0; i < n && r[worst] > limit; i++) {
+            if (r[i] > cut)
+                beyond[count++] = i;
+        }
+        if (count > most) {
+            g_qsort_with_data(beyond, count, sizeof(gint), compare_residuals, r);
+            count = most;
+        }
+        for (i = 0; i < count; i++)
+            mask[beyond[i]] = FALSE;
     }
+    g_free(beyond);
     g_free(r);
     g_free(sorted);
-    return worst;
+    return count;
 }
 
-/* Drops gross outliers one at a time, the worst first, refitting fit's
- * model after each: a single failed registration pulls a least-squares fit
- * far enough that a whole group of good measurements (those spanning a
- * jump, say) would look like outliers if all were judged at once. */
+/* Drops gross outliers round by round, the worst first, refitting fit's
+ * model after each round: a single failed registration pulls a
+ * least-squares fit far enough that a whole group of good measurements
+ * (those spanning a jump, say) would look like outliers if all were judged
+ * at once. */
 static void
 drop_outliers(const DriftMeasurement *meas, gint n,
               const DriftFitOptions *options, DriftFit *fit, gboolean *mask)
 {
     FitKind kind = fit_kind(fit);
-    gint dropped, worst;
+    gint dropped, cut;
 
-    for (dropped = 0; dropped < n/4; dropped++) {
-        worst = worst_outlier(meas, n, fit, options->outlier_sigmas, mask);
-        if (worst < 0)
+    for (dropped = 0; dropped < n/4; dropped += cut) {
+        cut = cut_outliers(meas, n, fit, options->outlier_sigmas, n/4 - dropped,
+                           mask);
+        if (!cut)
             break;
-        mask[worst] = FALSE;
         if (!fit_masked(meas, n, mask, kind, options, fit))
             break;
     }
