@@ -323,6 +323,34 @@ solve_small(gdouble *a, gdouble *b, gint k, gdouble *x)
     }
 }
 
+/* The least-squares coefficients of both axes from the normal equations
+ * (ata k x k, atb per axis) and the weighted residual sum of squares, from
+ * sdd, the weighted d.d of each axis; NAN when ata is not finite. */
+static gdouble
+solve_normal(const gdouble *ata, gdouble atb[2][MAX_BASIS],
+             const gdouble *sdd, gint k, gdouble coef[2][MAX_BASIS])
+{
+    gdouble a[MAX_BASIS*MAX_BASIS], row[MAX_BASIS], rss = 0.0;
+    gint j, ax;
+
+    for (j = 0; j < k*k; j++) {
+        if (!isfinite(ata[j]))
+            return NAN;
+    }
+    /* The residual sum of squares of a least-squares solution is
+     * d.d - coef.(A^T d): no second pass over the measurements (the grid
+     * searches call this thousands of times). */
+    for (ax = 0; ax < 2; ax++) {
+        memcpy(a, ata, k*k*sizeof(gdouble));
+        memcpy(row, atb[ax], k*sizeof(gdouble));
+        solve_small(a, row, k, coef[ax]);
+        rss += sdd[ax];
+        for (j = 0; j < k; j++)
+            rss -= coef[ax][j]*atb[ax][j];
+    }
+    return MAX(rss, 0.0);
+}
+
 /* Weighted least squares for a fixed nonlinear parameter; returns the
  * weighted residual sum of squares (nm^2) over both axes. */
 static gdouble
@@ -330,9 +358,9 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
             gdouble coef[2][MAX_BASIS], gint *n_basis)
 {
     gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], fa[MAX_BASIS],
-            fb[MAX_BASIS], row[MAX_BASIS], a[MAX_BASIS*MAX_BASIS];
-    gdouble rss = 0.0, sdd[2] = { 0.0, 0.0 };
-    gint i, j, l, k = 1, ax;
+            fb[MAX_BASIS], row[MAX_BASIS];
+    gdouble sdd[2] = { 0.0, 0.0 };
+    gint i, j, l, k = 1;
 
     memset(ata, 0, sizeof(ata));
     memset(atb, 0, sizeof(atb));
@@ -355,23 +383,8 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
         sdd[0] += pm->w[i]*pm->d[0][i]*pm->d[0][i];
         sdd[1] += pm->w[i]*pm->d[1][i]*pm->d[1][i];
     }
-    for (j = 0; j < k*k; j++) {
-        if (!isfinite(ata[j]))
-            return NAN;
-    }
-    /* The residual sum of squares of a least-squares solution is
-     * d.d - coef.(A^T d): no second pass over the measurements (the grid
-     * searches call this thousands of times). */
-    for (ax = 0; ax < 2; ax++) {
-        memcpy(a, ata, sizeof(a));
-        memcpy(row, atb[ax], sizeof(row));
-        solve_small(a, row, k, coef[ax]);
-        rss += sdd[ax];
-        for (j = 0; j < k; j++)
-            rss -= coef[ax][j]*atb[ax][j];
-    }
     *n_basis = k;
-    return MAX(rss, 0.0);
+    return solve_normal(ata, atb, sdd, k, coef);
 }
 
 /* The periods an oscillation can be seen with in these measurements.  At
@@ -425,16 +438,152 @@ oscillation_visibility(const Prepared *pm, gdouble period)
     return (wsum > 0.0) ? sum/wsum : 0.0;
 }
 
-/* Candidate values of the nonlinear parameter; 0 when there are none. */
+/* Recomputed exactly every this many frequencies, so that the rounding of
+ * the rotations cannot build up. */
+#define SCAN_RESEED 32
+
+/* sin and cos of a phase, and of the step that takes it to the next
+ * frequency. */
+typedef struct {
+    gdouble s, c, rs, rc;
+} Phasor;
+
+static void
+phasor_set(Phasor *p, gdouble phase, gdouble step)
+{
+    p->s = sin(phase);
+    p->c = cos(phase);
+    p->rs = sin(step);
+    p->rc = cos(step);
+}
+
+/* Angle addition: the phase one step on. */
+static void
+phasor_step(Phasor *p)
+{
+    gdouble s = p->s*p->rc + p->c*p->rs;
+
+    p->c = p->c*p->rc - p->s*p->rs;
+    p->s = s;
+}
+
+/* One frequency of oscillation_scan(): the normal equations (as
+ * solve_fixed() sums them) and the visibility, from the phasors of the
+ * used measurements at it, each stepped on to the next frequency. */
+static gdouble
+scan_frequency(const Prepared *pm, const gint *used, gint nu, gdouble f,
+               Phasor *pa, Phasor *pb, Phasor *ph, const gdouble *sdd,
+               gdouble *visibility)
+{
+    gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], coef[2][MAX_BASIS];
+    gdouble row[3], x, w, wi, vsum = 0.0, wsum = 0.0, rss;
+    gint u, i, j, l;
+
+    memset(ata, 0, sizeof(ata));
+    memset(atb, 0, sizeof(atb));
+    for (u = 0; u < nu; u++) {
+        i = used[u];
+        wi = pm->w[i];
+        /* The basis averaged over the span (model_basis_mean). */
+        x = 2.0*G_PI*pm->half[i]*f;
+        w = (pm->half[i] > 0.0) ? (fabs(x) < 1e-4 ? 1.0 - x*x/6.0 : ph[u].s/x) : 1.0;
+        row[0] = pm->ta[i] - pm->tb[i];
+        row[1] = w*(pa[u].s - pb[u].s);
+        row[2] = w*(pa[u].c - pb[u].c);
+        for (j = 0; j < 3; j++) {
+            for (l = 0; l < 3; l++)
+                ata[j*3 + l] += wi*row[j]*row[l];
+            atb[0][j] += wi*row[j]*pm->d[0][i];
+            atb[1][j] += wi*row[j]*pm->d[1][i];
+        }
+        /* 1 - cos(w (t_a - t_b)), as oscillation_visibility() sums it. */
+        vsum += wi*(1.0 - (pa[u].c*pb[u].c + pa[u].s*pb[u].s));
+        wsum += wi;
+        phasor_step(pa + u);
+        phasor_step(pb + u);
+        phasor_step(ph + u);
+    }
+    *visibility = (wsum > 0.0) ? vsum/wsum : 0.0;
+    rss = solve_normal(ata, atb, sdd, 3, coef);
+    return isfinite(rss) ? rss : G_MAXDOUBLE;
+}
+
+/* The oscillation's residual sum of squares and visibility at m
+ * frequencies evenly from fmin to fmax in one pass: each measurement's
+ * sines and cosines step from one frequency to the next by a rotation,
+ * a few multiplications where sin and cos cost a hundred (the grid of a
+ * long series is thousands of frequencies times thousands of
+ * measurements, refitted after each outlier round and in each fold). */
+static void
+oscillation_scan(const Prepared *pm, gdouble fmin, gdouble fmax, gint m,
+                 gdouble *rss, gdouble *visibility)
+{
+    gint n = MAX(pm->n, 1), *used = g_new(gint, n), nu = 0, i, j, u;
+    Phasor *pa = g_new(Phasor, 3*n), *pb = pa + n, *ph = pb + n;
+    gdouble df = (fmax - fmin)/(m - 1.0), f, sdd[2] = { 0.0, 0.0 };
+
+    for (i = 0; i < pm->n; i++) {
+        if (pm->w[i] <= 0.0)
+            continue;
+        used[nu++] = i;
+        sdd[0] += pm->w[i]*pm->d[0][i]*pm->d[0][i];
+        sdd[1] += pm->w[i]*pm->d[1][i]*pm->d[1][i];
+    }
+    for (j = 0; j < m; j++) {
+        f = fmin + (fmax - fmin)*j/(m - 1.0);
+        for (u = 0; u < nu && j % SCAN_RESEED == 0; u++) {
+            i = used[u];
+            phasor_set(pa + u, 2.0*G_PI*pm->ta[i]*f, 2.0*G_PI*pm->ta[i]*df);
+            phasor_set(pb + u, 2.0*G_PI*pm->tb[i]*f, 2.0*G_PI*pm->tb[i]*df);
+            phasor_set(ph + u, 2.0*G_PI*pm->half[i]*f, 2.0*G_PI*pm->half[i]*df);
+        }
+        rss[j] = scan_frequency(pm, used, nu, f, pa, pb, ph, sdd, visibility + j);
+    }
+    g_free(pa);
+    g_free(used);
+}
+
+/* The oscillation's grid, uniform in frequency from fmin to fmax (m
+ * values), without the periods whose cycles cancel between the frames,
+ * and the residual sums of squares at it; returns its size. */
+static gint
+oscillation_grid(const Prepared *pm, gdouble fmin, gdouble fmax, gint m,
+                 gdouble **grid, gdouble **rss)
+{
+    gdouble *all = g_new(gdouble, 2*m), *visibility = all + m;
+    gint i, nt = 0;
+
+    oscillation_scan(pm, fmin, fmax, m, all, visibility);
+    *grid = g_new(gdouble, m);
+    *rss = g_new(gdouble, m);
+    for (i = 0; i < m; i++) {
+        if (visibility[i] >= MIN_VISIBILITY) {
+            (*grid)[nt] = 1.0/(fmin + (fmax - fmin)*i/(m - 1.0));
+            (*rss)[nt++] = all[i];
+        }
+    }
+    g_free(all);
+    if (!nt) {
+        g_free(*grid);
+        g_free(*rss);
+        *grid = *rss = NULL;
+    }
+    return nt;
+}
+
+/* Candidate values of the nonlinear parameter; 0 when there are none.
+ * *rss gets their residual sums of squares where the grid comes with them
+ * (an oscillation's), else NULL. */
 static gint
 parameter_grid(const Prepared *pm, FitKind kind,
-               const DriftFitOptions *options, gdouble **grid)
+               const DriftFitOptions *options, gdouble **grid, gdouble **rss)
 {
     gdouble tmin = MAX(2.0*pm->t_resolution, options->min_period);
     gdouble tmax = MAX(pm->t_max, 2.0*tmin), *g, *times;
     gdouble pshort, plong;
     gint i, m, nt;
 
+    *rss = NULL;
     if (kind == DRIFT_MODEL_SETTLING || kind == KIND_LOG_CREEP) {
         m = 80;
         g = g_new(gdouble, m);
@@ -452,18 +601,7 @@ parameter_grid(const Prepared *pm, FitKind kind,
         fmin = 1.0/plong;
         fmax = 1.0/pshort;
         m = CLAMP((gint)ceil((fmax - fmin)/df) + 1, 8, MAX_GRID);
-        g = g_new(gdouble, m);
-        for (i = nt = 0; i < m; i++) {
-            gdouble period = 1.0/(fmin + (fmax - fmin)*i/(m - 1.0));
-
-            if (oscillation_visibility(pm, period) >= MIN_VISIBILITY)
-                g[nt++] = period;
-        }
-        m = nt;
-        if (!m) {
-            g_free(g);
-            g = NULL;
-        }
+        m = oscillation_grid(pm, fmin, fmax, m, &g, rss);
     }
     else {
         /* A step between each pair of consecutive distinct times, with at
@@ -560,16 +698,13 @@ refine_grid_value(const Prepared *pm, FitKind kind, const gdouble *grid,
  * refined, not just the lowest: a narrow true minimum can fall between grid
  * values and look worse there than a broad wrong one. */
 static gint
-search_grid(const Prepared *pm, FitKind kind, const gdouble *grid, gint m,
-            gdouble *theta)
+search_grid(const Prepared *pm, FitKind kind, const gdouble *grid,
+            const gdouble *rss, gint m, gdouble *theta)
 {
-    gdouble coef[2][MAX_BASIS], *rss = g_new(gdouble, m), best, value, t;
-    gint i, k, ibest = 0;
+    gdouble best, value, t;
+    gint i, ibest = 0;
 
     for (i = 0; i < m; i++) {
-        rss[i] = solve_fixed(pm, kind, grid[i], coef, &k);
-        if (!isfinite(rss[i]))
-            rss[i] = G_MAXDOUBLE;
         if (rss[i] < rss[ibest])
             ibest = i;
     }
@@ -600,8 +735,23 @@ search_grid(const Prepared *pm, FitKind kind, const gdouble *grid, gint m,
         }
         g_free(minima);
     }
-    g_free(rss);
     return ibest;
+}
+
+/* The residual sums of squares at every grid value (G_MAXDOUBLE where the
+ * fit is not finite). */
+static gdouble*
+grid_rss(const Prepared *pm, FitKind kind, const gdouble *grid, gint m)
+{
+    gdouble coef[2][MAX_BASIS], *rss = g_new(gdouble, m);
+    gint i, k;
+
+    for (i = 0; i < m; i++) {
+        rss[i] = solve_fixed(pm, kind, grid[i], coef, &k);
+        if (!isfinite(rss[i]))
+            rss[i] = G_MAXDOUBLE;
+    }
+    return rss;
 }
 
 /* Every coefficient and the nonlinear parameter finite. */
@@ -625,7 +775,7 @@ static gboolean
 fit_prepared(const Prepared *pm, FitKind kind,
              const DriftFitOptions *options, DriftFit *fit)
 {
-    gdouble coef[2][MAX_BASIS], *grid = NULL, theta = 0.0, rss;
+    gdouble coef[2][MAX_BASIS], *grid = NULL, *rss_grid, theta = 0.0, rss;
     gint m, k, ibest, nn;
 
     memset(fit, 0, sizeof(DriftFit));
@@ -641,11 +791,14 @@ fit_prepared(const Prepared *pm, FitKind kind,
         return FALSE;
 
     if (model_has_nonlinear(kind)) {
-        if (!(m = parameter_grid(pm, kind, options, &grid)))
+        if (!(m = parameter_grid(pm, kind, options, &grid, &rss_grid)))
             return FALSE;
+        if (!rss_grid)
+            rss_grid = grid_rss(pm, kind, grid, m);
         fit->range[0] = MIN(grid[0], grid[m-1]);
         fit->range[1] = MAX(grid[0], grid[m-1]);
-        ibest = search_grid(pm, kind, grid, m, &theta);
+        ibest = search_grid(pm, kind, grid, rss_grid, m, &theta);
+        g_free(rss_grid);
         fit->at_limit = (grid[ibest] == fit->range[1]) ? 1
                         : (grid[ibest] == fit->range[0]) ? -1 : 0;
         g_free(grid);
