@@ -138,8 +138,8 @@ prepare_frame(const gdouble *data, gint xres, gint yres,
 /* displacement_register_blocks() for prepared frames (either may be NULL:
  * nothing registered). */
 static void
-register_prepared(StripeRegistrationFrame *image,
-                  StripeRegistrationFrame *reference, gint xres, gint yres,
+register_prepared(const StripeRegistrationFrame *image,
+                  const StripeRegistrationFrame *reference, gint xres, gint yres,
                   gint n, const DisplacementOptions *options,
                   const gdouble *guess, gdouble *dx, gdouble *dy,
                   gdouble *score, gdouble *global)
@@ -236,110 +236,186 @@ detail_row(const gdouble *data, gint xres, gint r0, gint r1)
     return (wsum > 0.0 && isfinite(rsum)) ? rsum/wsum : 0.5*(r0 + r1 - 1);
 }
 
-/* Frames of a series prepared for registration (prepare_frame), each
- * once while its partners are registered against it; those beyond the
- * reach of the frames still to come are let go. */
+/* A series registered pair by pair.  Each frame is prepared once
+ * (prepare_frame) and held while the frames within reach of it are
+ * registered against it.  Frames go in chunks: their preparation, then
+ * their consecutive pairs, then their older pairs, each step spread over
+ * the processor's cores (the pairs of a step do not depend on each other:
+ * an older pair's search starts from the consecutive pairs' shifts).
+ * Every pair writes its own place of meas, so the order and the values
+ * do not depend on the threads. */
 typedef struct {
     const FrameSeries *series;
     const DisplacementOptions *options;
-    StripeRegistrationFrame **frames;
-    gboolean *prepared;
-} PreparedFrames;
+    gint reach;                        /* older frames per frame (all: k) */
+    StripeRegistrationFrame **frames;  /* prepared (NULL: not registrable) */
+    gboolean *prepared;                /* held in frames */
+    gdouble *step;                     /* 3 per frame: the consecutive pair's
+                                          overall shift and correlation */
+    gint *far_first;                   /* frame k's first older pair */
+    DriftMeasurement *meas;            /* every pair's blocks, in order */
+} SeriesRegistration;
 
-/* When every earlier frame is a partner, at most this many frames are held
- * (about 2.5 MB each at 256 x 256 px); older ones are prepared anew for
- * each pair. */
+/* Frames registered per chunk: enough to keep the cores busy, few enough
+ * to hold (about 2.5 MB each at 256 x 256 px). */
+#define CHUNK_FRAMES 16
+/* When every earlier frame is a partner, at most this many frames are
+ * held; older ones are prepared anew for each pair. */
 #define PREPARED_MAX_FRAMES 32
 
-static StripeRegistrationFrame*
-prepared_frame(PreparedFrames *cache, gint k)
-{
-    const SeriesFrame *f = cache->series->frames + k;
+typedef void (*RegistrationTask)(SeriesRegistration *reg, gint k);
 
-    if (!cache->prepared[k]) {
-        cache->frames[k] = prepare_frame(gwy_data_field_get_data_const(f->field),
-                                         f->timing.xres, f->timing.yres,
-                                         cache->options,
-                                         frame_series_dy(cache->series)
-                                         /frame_series_dx(cache->series));
-        cache->prepared[k] = TRUE;
+typedef struct {
+    SeriesRegistration *reg;
+    RegistrationTask task;
+    gint next;
+    gint end;
+} ParallelRun;
+
+static gpointer
+parallel_worker(gpointer data)
+{
+    ParallelRun *run = data;
+    gint k;
+
+    while ((k = g_atomic_int_add(&run->next, 1)) < run->end)
+        run->task(run->reg, k);
+    return NULL;
+}
+
+/* task for every k from first to end - 1, on every core. */
+static void
+run_parallel(SeriesRegistration *reg, RegistrationTask task, gint first,
+             gint end)
+{
+    ParallelRun run = { reg, task, first, end };
+    gint n_threads = MIN((gint)g_get_num_processors(), end - first), t;
+    GThread **threads;
+
+    if (n_threads <= 1) {
+        parallel_worker(&run);
+        return;
     }
-    return cache->frames[k];
+    threads = g_new(GThread*, n_threads - 1);
+    for (t = 0; t < n_threads - 1; t++)
+        threads[t] = g_thread_new("registration", parallel_worker, &run);
+    parallel_worker(&run);
+    for (t = 0; t < n_threads - 1; t++)
+        g_thread_join(threads[t]);
+    g_free(threads);
+}
+
+static StripeRegistrationFrame*
+prepare_series_frame(const SeriesRegistration *reg, gint k)
+{
+    const SeriesFrame *f = reg->series->frames + k;
+
+    return prepare_frame(gwy_data_field_get_data_const(f->field),
+                         f->timing.xres, f->timing.yres, reg->options,
+                         frame_series_dy(reg->series)/frame_series_dx(reg->series));
 }
 
 static void
-release_frame(PreparedFrames *cache, gint k)
+prepare_task(SeriesRegistration *reg, gint k)
 {
-    stripe_registration_frame_free(cache->frames[k]);
-    cache->frames[k] = NULL;
-    cache->prepared[k] = FALSE;
+    if (!reg->prepared[k]) {
+        reg->frames[k] = prepare_series_frame(reg, k);
+        reg->prepared[k] = TRUE;
+    }
 }
 
-/* Registers frame ka against frame kb and appends the block measurements;
- * global gets the frame's overall shift. */
 static void
-measure_pair(PreparedFrames *cache, gint ka, gint kb, const gdouble *guess,
-             gdouble *global, GArray *out)
+release_frame(SeriesRegistration *reg, gint k)
 {
-    const FrameSeries *series = cache->series;
-    const DisplacementOptions *options = cache->options;
+    stripe_registration_frame_free(reg->frames[k]);
+    reg->frames[k] = NULL;
+    reg->prepared[k] = FALSE;
+}
+
+/* Registers frame ka against frame kb into pair slot `pair` of meas;
+ * global gets the frame's overall shift.  A frame no longer held is
+ * prepared for this pair alone. */
+static void
+measure_pair(const SeriesRegistration *reg, gint ka, gint kb,
+             const gdouble *guess, gdouble *global, gint pair)
+{
+    const FrameSeries *series = reg->series;
+    const DisplacementOptions *options = reg->options;
     const SeriesFrame *fa = series->frames + ka, *fb = series->frames + kb;
     gdouble xstep = frame_series_dx(series), ystep = frame_series_dy(series);
     gint xres = fa->timing.xres, yres = fa->timing.yres, n = options->n_blocks;
     gdouble *dx = g_new(gdouble, n), *dy = g_new(gdouble, n),
             *score = g_new(gdouble, n);
+    StripeRegistrationFrame *own_a = NULL, *own_b = NULL;
     gint s;
 
-    register_prepared(prepared_frame(cache, ka), prepared_frame(cache, kb),
+    if (!reg->prepared[ka])
+        own_a = prepare_series_frame(reg, ka);
+    if (!reg->prepared[kb])
+        own_b = prepare_series_frame(reg, kb);
+    register_prepared(reg->prepared[ka] ? reg->frames[ka] : own_a,
+                      reg->prepared[kb] ? reg->frames[kb] : own_b,
                       xres, yres, n, options, guess, dx, dy, score, global);
+    stripe_registration_frame_free(own_a);
+    stripe_registration_frame_free(own_b);
     for (s = 0; s < n; s++) {
         gint r0 = s*yres/n, r1 = (s + 1)*yres/n;
         gdouble ccol = 0.5*(xres - 1), crow;
-        DriftMeasurement m;
+        DriftMeasurement *m = reg->meas + (gsize)pair*n + s;
 
         /* The block's content was scanned in the reference dy rows
          * earlier (higher up), dx columns to the left. */
         crow = detail_row(gwy_data_field_get_data_const(fa->field), xres,
                           r0, r1);
-        m.t_a = scan_timing_pixel_time(&fa->timing, crow, ccol);
-        m.t_b = scan_timing_pixel_time(&fb->timing, crow - dy[s],
-                                       ccol - dx[s]);
-        m.dx = dx[s]*xstep;
-        m.dy = dy[s]*ystep;
-        m.weight = (score[s] >= options->min_score) ? score[s] : 0.0;
-        m.group = s;
-        m.frame_a = ka;
-        m.frame_b = kb;
-        m.span = (r1 - r0)*fa->timing.line_time;
-        g_array_append_val(out, m);
+        m->t_a = scan_timing_pixel_time(&fa->timing, crow, ccol);
+        m->t_b = scan_timing_pixel_time(&fb->timing, crow - dy[s],
+                                        ccol - dx[s]);
+        m->dx = dx[s]*xstep;
+        m->dy = dy[s]*ystep;
+        m->weight = (score[s] >= options->min_score) ? score[s] : 0.0;
+        m->group = s;
+        m->frame_a = ka;
+        m->frame_b = kb;
+        m->span = (r1 - r0)*fa->timing.line_time;
     }
     g_free(dx);
     g_free(dy);
     g_free(score);
 }
 
-/* Frame k against the earlier frames within reach, the previous one first:
- * its overall shift and those of the consecutive pairs before, chained,
- * tell where to look in an older frame, whose shift may exceed any blind
- * search range.  The consecutive pair goes to next, the others to far. */
+/* Consecutive pairs come first in meas, frame k's as pair k - 1. */
 static void
-measure_frame_pairs(PreparedFrames *cache, gint k, gint reach, gdouble *step,
-                    GArray *next, GArray *far)
+consecutive_task(SeriesRegistration *reg, gint k)
 {
-    gdouble guess[2], global[3];
-    gint j;
+    measure_pair(reg, k, k-1, NULL, reg->step + 3*k, k-1);
+}
 
-    measure_pair(cache, k, k-1, NULL, step + 3*k, next);
-    for (j = k-2; j >= MAX(k - reach, 0); j--) {
+static gint
+oldest_partner(const SeriesRegistration *reg, gint k)
+{
+    return MAX(k - (reg->reach > 0 ? reg->reach : k), 0);
+}
+
+/* Frame k against its older frames, the nearest first: the overall shifts
+ * of the consecutive pairs between, chained, tell where to look in an
+ * older frame, whose shift may exceed any blind search range. */
+static void
+older_task(SeriesRegistration *reg, gint k)
+{
+    gint nf = reg->series->n_frames, j;
+    gdouble guess[2], global[3];
+
+    for (j = k-2; j >= oldest_partner(reg, k); j--) {
         if (j == k-2) {
-            guess[0] = step[3*k] + step[3*(k-1)];
-            guess[1] = step[3*k + 1] + step[3*(k-1) + 1];
+            guess[0] = reg->step[3*k] + reg->step[3*(k-1)];
+            guess[1] = reg->step[3*k + 1] + reg->step[3*(k-1) + 1];
         }
         else {
-            guess[0] = global[0] + step[3*(j+1)];
-            guess[1] = global[1] + step[3*(j+1) + 1];
+            guess[0] = global[0] + reg->step[3*(j+1)];
+            guess[1] = global[1] + reg->step[3*(j+1) + 1];
         }
-        measure_pair(cache, k, j, guess, global, far);
+        measure_pair(reg, k, j, guess, global,
+                     nf - 1 + reg->far_first[k] + (k-2 - j));
     }
 }
 
@@ -348,37 +424,42 @@ displacement_measure_series(const FrameSeries *series,
                             const DisplacementOptions *options, gint *n)
 {
     DisplacementOptions defaults;
-    GArray *out = g_array_new(FALSE, FALSE, sizeof(DriftMeasurement));
-    GArray *far = g_array_new(FALSE, FALSE, sizeof(DriftMeasurement));
-    gint nf = series->n_frames, k, j, reach, keep;
-    gdouble *step = g_new0(gdouble, 3*nf);
-    PreparedFrames cache;
+    SeriesRegistration reg;
+    gint nf = series->n_frames, k, k0, k1, keep, released = 0, pairs;
 
     if (!options) {
         displacement_options_init(&defaults);
         options = &defaults;
     }
-    cache.series = series;
-    cache.options = options;
-    cache.frames = g_new0(StripeRegistrationFrame*, MAX(nf, 1));
-    cache.prepared = g_new0(gboolean, MAX(nf, 1));
-    keep = options->pair_reach > 0 ? options->pair_reach : PREPARED_MAX_FRAMES;
-    /* Frame by frame, so that each is prepared once; the measurements keep
-     * the order of every consecutive pair first, then the others frame by
-     * frame (the fit of a long series takes a spread subset by order). */
-    for (k = 1; k < nf; k++) {
-        reach = options->pair_reach > 0 ? options->pair_reach : k;
-        measure_frame_pairs(&cache, k, reach, step, out, far);
-        for (j = 0; j <= k - keep; j++)
-            release_frame(&cache, j);
+    reg.series = series;
+    reg.options = options;
+    reg.reach = options->pair_reach;
+    reg.frames = g_new0(StripeRegistrationFrame*, MAX(nf, 1));
+    reg.prepared = g_new0(gboolean, MAX(nf, 1));
+    reg.step = g_new0(gdouble, 3*MAX(nf, 1));
+    reg.far_first = g_new0(gint, MAX(nf, 1) + 1);
+    /* Every consecutive pair first, then the older pairs frame by frame
+     * (the fit of a long series takes a spread subset by order). */
+    for (k = 0; k < nf; k++)
+        reg.far_first[k+1] = reg.far_first[k] + MAX(k-2 - oldest_partner(&reg, k) + 1, 0);
+    pairs = MAX(nf - 1, 0) + reg.far_first[nf];
+    reg.meas = g_new0(DriftMeasurement, MAX((gsize)pairs*options->n_blocks, 1));
+    keep = reg.reach > 0 ? reg.reach : PREPARED_MAX_FRAMES;
+    for (k0 = 0; k0 < nf; k0 = k1) {
+        k1 = MIN(k0 + CHUNK_FRAMES, nf);
+        run_parallel(&reg, prepare_task, k0, k1);
+        run_parallel(&reg, consecutive_task, MAX(k0, 1), k1);
+        run_parallel(&reg, older_task, MAX(k0, 2), k1);
+        /* Frames from k1 on reach back to k1 - keep at most. */
+        for (; released < k1 - keep; released++)
+            release_frame(&reg, released);
     }
     for (k = 0; k < nf; k++)
-        release_frame(&cache, k);
-    g_array_append_vals(out, far->data, far->len);
-    g_array_free(far, TRUE);
-    g_free(cache.frames);
-    g_free(cache.prepared);
-    g_free(step);
-    *n = out->len;
-    return (DriftMeasurement*)g_array_free(out, FALSE);
+        release_frame(&reg, k);
+    g_free(reg.frames);
+    g_free(reg.prepared);
+    g_free(reg.step);
+    g_free(reg.far_first);
+    *n = pairs*options->n_blocks;
+    return reg.meas;
 }

@@ -965,9 +965,18 @@ struct _StripeRegistrationFrame {
     ConditionedFrame *unfiltered;  /* conditioned up to the band-pass */
     gdouble noise_scale;           /* the narrow blur its own noise calls for */
     gdouble pixel_aspect;
-    ConditionedFrame *passed;      /* band-passed with passed_narrow, or NULL */
-    gdouble passed_narrow;
+    ConditionedFrame *passed;      /* band-passed with noise_scale */
 };
+
+/* A frame band-passed with narrow. */
+static ConditionedFrame*
+band_pass_copy(const StripeRegistrationFrame *frame, gdouble narrow)
+{
+    ConditionedFrame *passed = conditioned_frame_copy(frame->unfiltered);
+
+    conditioned_frame_band_pass(passed, frame->pixel_aspect, narrow);
+    return passed;
+}
 
 StripeRegistrationFrame*
 stripe_registration_frame_new(const gdouble *data, gint xres, gint yres, gdouble pixel_aspect)
@@ -982,6 +991,9 @@ stripe_registration_frame_new(const gdouble *data, gint xres, gint yres, gdouble
     frame->unfiltered = unfiltered;
     frame->pixel_aspect = pixel_aspect;
     frame->noise_scale = conditioned_frame_noise_scale(unfiltered, pixel_aspect);
+    /* Frames of a series have alike noise: a pair mostly asks for the
+     * band each frame's own noise calls for. */
+    frame->passed = band_pass_copy(frame, frame->noise_scale);
     return frame;
 }
 
@@ -995,39 +1007,41 @@ stripe_registration_frame_free(StripeRegistrationFrame *frame)
     g_free(frame);
 }
 
-/* The frame band-passed with narrow; consecutive pairs mostly ask for the
- * same band (frames of a series have alike noise), and then the copy made
- * for the previous pair serves. */
+/* The frame band-passed with narrow: its own copy when that is its band,
+ * else one made for the pair in *made (freed by the caller).  The frame is
+ * not changed, so pairs can be registered in parallel. */
 static const ConditionedFrame*
-band_passed(StripeRegistrationFrame *frame, gdouble narrow)
+band_passed(const StripeRegistrationFrame *frame, gdouble narrow, ConditionedFrame **made)
 {
-    if (!frame->passed || frame->passed_narrow != narrow) {
-        conditioned_frame_free(frame->passed);
-        frame->passed = conditioned_frame_copy(frame->unfiltered);
-        conditioned_frame_band_pass(frame->passed, frame->pixel_aspect, narrow);
-        frame->passed_narrow = narrow;
-    }
-    return frame->passed;
+    *made = NULL;
+    if (narrow == frame->noise_scale)
+        return frame->passed;
+    return *made = band_pass_copy(frame, narrow);
 }
 
 gboolean
-stripe_registration_measure_around_frames(StripeRegistrationFrame *image,
-                                          StripeRegistrationFrame *reference, gint n,
+stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
+                                          const StripeRegistrationFrame *reference, gint n,
                                           const gdouble *predicted_dx, const gdouble *predicted_dy,
                                           gdouble radius_px, gdouble min_score,
                                           StripeShift *shifts, GError **error)
 {
-    gdouble narrow;
+    ConditionedFrame *made_image, *made_reference;
     const ConditionedFrame *cimage, *creference;
+    gdouble narrow;
+    gboolean ok;
 
     g_return_val_if_fail(image && reference, FALSE);
     /* The same band as condition_pair() gives the two frames. */
     narrow = MAX(image->noise_scale, reference->noise_scale);
-    cimage = band_passed(image, narrow);
-    creference = band_passed(reference, narrow);
-    return stripe_registration_measure_around_conditioned(cimage, creference, n, predicted_dx,
-                                                          predicted_dy, radius_px, min_score,
-                                                          shifts, error);
+    cimage = band_passed(image, narrow, &made_image);
+    creference = band_passed(reference, narrow, &made_reference);
+    ok = stripe_registration_measure_around_conditioned(cimage, creference, n, predicted_dx,
+                                                        predicted_dy, radius_px, min_score,
+                                                        shifts, error);
+    conditioned_frame_free(made_image);
+    conditioned_frame_free(made_reference);
+    return ok;
 }
 
 gboolean

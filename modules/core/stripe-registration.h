@@ -128,10 +128,11 @@ gboolean     stripe_registration_measure_around_conditioned(const ConditionedFra
 
 /* A frame conditioned once for registration against several others (a
  * series registers each frame against its neighbours): the steps up to
- * the band-pass are its own; the band-pass, which two frames share, is
- * made for each pair (the noisier frame's) and kept for the next pair
- * that asks for the same.  NULL when the frame is smaller than 4 x 4 px
- * or has no valid pixel. */
+ * the band-pass are its own; the band-pass, which two frames share (the
+ * noisier frame's), is made with the frame's own band beforehand and for
+ * a pair that asks for another one when registered.  Not changed after:
+ * several threads may register it at once.  NULL when the frame is
+ * smaller than 4 x 4 px or has no valid pixel. */
 typedef struct _StripeRegistrationFrame StripeRegistrationFrame;
 
 StripeRegistrationFrame* stripe_registration_frame_new(const gdouble *data,
@@ -142,9 +143,9 @@ StripeRegistrationFrame* stripe_registration_frame_new(const gdouble *data,
 void         stripe_registration_frame_free(StripeRegistrationFrame *frame);
 
 /* stripe_registration_measure_around() for two such frames, conditioned
- * as it would condition them; the frames keep their band-passed copies. */
-gboolean     stripe_registration_measure_around_frames(StripeRegistrationFrame *image,
-                                                       StripeRegistrationFrame *reference,
+ * as it would condition them. */
+gboolean     stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
+                                                       const StripeRegistrationFrame *reference,
                                                        gint n,
                                                        const gdouble *predicted_dx,
                                                        const gdouble *predicted_dy,
