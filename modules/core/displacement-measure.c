@@ -158,13 +158,11 @@ register_prepared(const StripeRegistrationFrame *image,
         centre[1] = guess[1];
     }
     memset(&whole, 0, sizeof(whole));
+    /* To whole pixels, near enough: the blocks search around it. */
     ok = (image && reference
-          && stripe_registration_measure_around_frames(image, reference, 1, centre,
-                                                       centre + 1,
-                                                       guess ? radius
-                                                       : MAX(options->max_shift*side, 2.0),
-                                                       STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
-                                                       &whole, NULL));
+          && stripe_registration_frame_shift(image, reference, centre[0], centre[1],
+                                             guess ? radius : MAX(options->max_shift*side, 2.0),
+                                             &whole));
     if (ok && whole.peak > -1.0) {
         centre[0] = whole.dx;
         centre[1] = whole.dy;

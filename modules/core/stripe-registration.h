@@ -154,6 +154,18 @@ gboolean     stripe_registration_measure_around_frames(const StripeRegistrationF
                                                        StripeShift *shifts,
                                                        GError **error);
 
+/* The whole frame's shift (px, table convention) within radius_px of the
+ * predicted one, to the correlation map's resolution (its peak refined by
+ * a quadratic), without the sub-pixel match, which would cost as much as
+ * all the stripes' together: where to search the stripes.  shift->peak
+ * is the correlation at the peak. */
+gboolean     stripe_registration_frame_shift(const StripeRegistrationFrame *image,
+                                             const StripeRegistrationFrame *reference,
+                                             gdouble predicted_dx,
+                                             gdouble predicted_dy,
+                                             gdouble radius_px,
+                                             StripeShift *shift);
+
 /* The same for two channels; refuses (with a message giving both sizes)
  * fields of different pixel dimensions.  The pixel aspect comes from the
  * image's pixel sizes (options' is ignored); options may be NULL. */
