@@ -9,6 +9,7 @@
 #include <string.h>
 #include <math.h>
 #include <libprocess/gwyprocess.h>
+#include "parallel-run.h"
 #include "stripe-registration.h"
 #include "displacement-measure.h"
 
@@ -261,48 +262,6 @@ typedef struct {
  * held; older ones are prepared anew for each pair. */
 #define PREPARED_MAX_FRAMES 32
 
-typedef void (*RegistrationTask)(SeriesRegistration *reg, gint k);
-
-typedef struct {
-    SeriesRegistration *reg;
-    RegistrationTask task;
-    gint next;
-    gint end;
-} ParallelRun;
-
-static gpointer
-parallel_worker(gpointer data)
-{
-    ParallelRun *run = data;
-    gint k;
-
-    while ((k = g_atomic_int_add(&run->next, 1)) < run->end)
-        run->task(run->reg, k);
-    return NULL;
-}
-
-/* task for every k from first to end - 1, on every core. */
-static void
-run_parallel(SeriesRegistration *reg, RegistrationTask task, gint first,
-             gint end)
-{
-    ParallelRun run = { reg, task, first, end };
-    gint n_threads = MIN((gint)g_get_num_processors(), end - first), t;
-    GThread **threads;
-
-    if (n_threads <= 1) {
-        parallel_worker(&run);
-        return;
-    }
-    threads = g_new(GThread*, n_threads - 1);
-    for (t = 0; t < n_threads - 1; t++)
-        threads[t] = g_thread_new("registration", parallel_worker, &run);
-    parallel_worker(&run);
-    for (t = 0; t < n_threads - 1; t++)
-        g_thread_join(threads[t]);
-    g_free(threads);
-}
-
 static StripeRegistrationFrame*
 prepare_series_frame(const SeriesRegistration *reg, gint k)
 {
@@ -314,8 +273,10 @@ prepare_series_frame(const SeriesRegistration *reg, gint k)
 }
 
 static void
-prepare_task(SeriesRegistration *reg, gint k)
+prepare_task(gpointer data, gint k)
 {
+    SeriesRegistration *reg = data;
+
     if (!reg->prepared[k]) {
         reg->frames[k] = prepare_series_frame(reg, k);
         reg->prepared[k] = TRUE;
@@ -383,8 +344,10 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb,
 
 /* Consecutive pairs come first in meas, frame k's as pair k - 1. */
 static void
-consecutive_task(SeriesRegistration *reg, gint k)
+consecutive_task(gpointer data, gint k)
 {
+    SeriesRegistration *reg = data;
+
     measure_pair(reg, k, k-1, NULL, reg->step + 3*k, k-1);
 }
 
@@ -398,8 +361,9 @@ oldest_partner(const SeriesRegistration *reg, gint k)
  * of the consecutive pairs between, chained, tell where to look in an
  * older frame, whose shift may exceed any blind search range. */
 static void
-older_task(SeriesRegistration *reg, gint k)
+older_task(gpointer data, gint k)
 {
+    SeriesRegistration *reg = data;
     gint nf = reg->series->n_frames, j;
     gdouble guess[2], global[3];
 
@@ -445,9 +409,9 @@ displacement_measure_series(const FrameSeries *series,
     keep = reg.reach > 0 ? reg.reach : PREPARED_MAX_FRAMES;
     for (k0 = 0; k0 < nf; k0 = k1) {
         k1 = MIN(k0 + CHUNK_FRAMES, nf);
-        run_parallel(&reg, prepare_task, k0, k1);
-        run_parallel(&reg, consecutive_task, MAX(k0, 1), k1);
-        run_parallel(&reg, older_task, MAX(k0, 2), k1);
+        parallel_run(k0, k1, prepare_task, &reg);
+        parallel_run(MAX(k0, 1), k1, consecutive_task, &reg);
+        parallel_run(MAX(k0, 2), k1, older_task, &reg);
         /* Frames from k1 on reach back to k1 - keep at most. */
         for (; released < k1 - keep; released++)
             release_frame(&reg, released);

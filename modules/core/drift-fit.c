@@ -8,6 +8,7 @@
 #include <math.h>
 #include <libgwyddion/gwymath.h>
 #include "drift-fit.h"
+#include "parallel-run.h"
 
 #define MAX_BASIS 4
 #define GOLDEN_STEPS 40
@@ -1105,6 +1106,44 @@ acceleration_as_good(const DriftFit *fits, const DriftModelType *types,
     return FALSE;
 }
 
+/* The candidate models fitted by fit_every_model(), each on its own. */
+typedef struct {
+    const DriftMeasurement *meas;
+    gint n;
+    const gboolean *mask;     /* NULL: no cross-validation */
+    const Prepared *pm;
+    const DriftFitOptions *options;
+    const DriftModelType *types;
+    DriftFit *fits;
+} ModelFits;
+
+static void
+fit_model_task(gpointer data, gint i)
+{
+    ModelFits *mf = data;
+    DriftFit *fit = mf->fits + i;
+
+    fit_prepared(mf->pm, mf->types[i], mf->options, fit);
+    if (mf->mask && fit->ok && mf->options->n_folds >= 2)
+        fit->cv_rms_nm = cross_validate_masked(mf->meas, mf->n, mf->mask, mf->types[i],
+                                               mf->options);
+}
+
+/* Every candidate model fitted to pm and, with mask (the measurements pm
+ * was prepared from), cross-validated.  The models are independent, so
+ * they run on every core: the oscillation's and the jump's searches take
+ * most of a long series' fit. */
+static void
+fit_every_model(const DriftMeasurement *meas, gint n, const gboolean *mask,
+           const Prepared *pm, const DriftFitOptions *options, DriftFit *fits)
+{
+    ModelFits mf = { meas, n, mask, pm, options, NULL, fits };
+    gint n_types;
+
+    mf.types = drift_fit_candidates(&n_types);
+    parallel_run(0, n_types, fit_model_task, &mf);
+}
+
 gint
 drift_fit_select_kept(const DriftMeasurement *meas, gint n,
                       const DriftFitOptions *options, DriftFit *fits,
@@ -1120,8 +1159,7 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
     options = options_or_defaults(options, &defaults);
     prepare(meas, n, NULL, &pm);
     span = pm.t_max - pm.t_min;
-    for (i = 0; i < n_types; i++)
-        fit_prepared(&pm, types[i], options, fits + i);
+    fit_every_model(meas, n, NULL, &pm, options, fits);
     prepared_free(&pm);
     if ((best = lowest_bic(fits, n_types)) < 0) {
         if (kept)
@@ -1137,11 +1175,8 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
     if (kept)
         memcpy(kept, mask, n*sizeof(gboolean));
     prepare(meas, n, mask, &pm);
+    fit_every_model(meas, n, mask, &pm, options, fits);
     for (i = 0; i < n_types; i++) {
-        fit_prepared(&pm, types[i], options, fits + i);
-        if (fits[i].ok && options->n_folds >= 2)
-            fits[i].cv_rms_nm = cross_validate_masked(meas, n, mask, types[i],
-                                                      options);
         if (types[i] == DRIFT_MODEL_NONE)
             inone = i;
     }
