@@ -107,6 +107,24 @@ sinc(gdouble x)
     return fabs(x) < 1e-4 ? 1.0 - x*x/6.0 : sin(x)/x;
 }
 
+/* What averaging over [t - h, t + h] leaves of an oscillation of period
+ * theta. */
+static gdouble
+oscillation_span_factor(gdouble theta, gdouble h)
+{
+    return (h > 0.0) ? sinc(2.0*G_PI*h/theta) : 1.0;
+}
+
+/* The oscillation's basis at t, its sine and cosine scaled by w. */
+static gint
+oscillation_basis(gdouble theta, gdouble t, gdouble w, gdouble *f)
+{
+    f[0] = t;
+    f[1] = w*sin(2.0*G_PI*t/theta);
+    f[2] = w*cos(2.0*G_PI*t/theta);
+    return 3;
+}
+
 /* Basis functions of the trajectory for nonlinear parameter theta,
  * averaged over [t - h, t + h] (h = 0: at t). */
 static gint
@@ -127,10 +145,7 @@ model_basis_mean(FitKind kind, gdouble theta, gdouble t, gdouble h,
         return 2;
 
         case DRIFT_MODEL_OSCILLATION:
-        w = (h > 0.0) ? sinc(2.0*G_PI*h/theta) : 1.0;
-        f[1] = w*sin(2.0*G_PI*t/theta);
-        f[2] = w*cos(2.0*G_PI*t/theta);
-        return 3;
+        return oscillation_basis(theta, t, oscillation_span_factor(theta, h), f);
 
         case DRIFT_MODEL_JUMP:
         if (h > 0.0)
@@ -360,7 +375,7 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
 {
     gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], fa[MAX_BASIS],
             fb[MAX_BASIS], row[MAX_BASIS];
-    gdouble sdd[2] = { 0.0, 0.0 };
+    gdouble sdd[2] = { 0.0, 0.0 }, half = NAN, w = 1.0;
     gint i, j, l, k = 1;
 
     memset(ata, 0, sizeof(ata));
@@ -371,8 +386,21 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
     for (i = 0; i < pm->n; i++) {
         if (pm->w[i] <= 0.0)
             continue;
-        k = model_basis_mean(kind, theta, pm->ta[i], pm->half[i], fa);
-        model_basis_mean(kind, theta, pm->tb[i], pm->half[i], fb);
+        if (kind == DRIFT_MODEL_OSCILLATION) {
+            /* The span factor, a sine, depends on the span alone: blocks of
+             * one height share it (the golden search of the period calls
+             * this hundreds of times per fit). */
+            if (pm->half[i] != half) {
+                half = pm->half[i];
+                w = oscillation_span_factor(theta, half);
+            }
+            k = oscillation_basis(theta, pm->ta[i], w, fa);
+            oscillation_basis(theta, pm->tb[i], w, fb);
+        }
+        else {
+            k = model_basis_mean(kind, theta, pm->ta[i], pm->half[i], fa);
+            model_basis_mean(kind, theta, pm->tb[i], pm->half[i], fb);
+        }
         for (j = 0; j < k; j++)
             row[j] = fa[j] - fb[j];
         for (j = 0; j < k; j++) {
@@ -881,16 +909,65 @@ drift_fit_predict(const DriftFit *fit, const DriftMeasurement *m,
     *dy = 1e-9*(a[1] - b[1]);
 }
 
+static gboolean
+held_out(const DriftMeasurement *m, gint folds, gint f)
+{
+    return (m->group % folds + folds) % folds == f;
+}
+
+/* The folds of cross_validate_masked(), fitted each on its own. */
+typedef struct {
+    const DriftMeasurement *meas;
+    gint n;
+    const gboolean *mask;
+    FitKind kind;
+    const DriftFitOptions *options;
+    gint folds;
+    gboolean have_periods;
+    gdouble periods[2];
+    DriftFit *fits;       /* one per fold */
+    gboolean *fitted;     /* one per fold */
+} FoldFits;
+
+/* The model fitted without fold f (nothing when it holds nothing out). */
+static void
+fit_fold_task(gpointer data, gint f)
+{
+    FoldFits *ff = data;
+    gboolean *train = g_new(gboolean, MAX(ff->n, 1)), any = FALSE;
+    Prepared pm;
+    gint i;
+
+    for (i = 0; i < ff->n; i++) {
+        gboolean held = held_out(ff->meas + i, ff->folds, f);
+
+        train[i] = !held && (!ff->mask || ff->mask[i]);
+        any |= held;
+    }
+    ff->fitted[f] = FALSE;
+    if (any) {
+        prepare(ff->meas, ff->n, train, &pm);
+        pm.periods_given = TRUE;
+        pm.period_range[0] = ff->have_periods ? ff->periods[0] : 1.0;
+        pm.period_range[1] = ff->have_periods ? ff->periods[1] : 0.0;
+        ff->fitted[f] = fit_prepared(&pm, ff->kind, ff->options, ff->fits + f);
+        prepared_free(&pm);
+    }
+    g_free(train);
+}
+
+/* The folds are fitted on every core (each a whole search of the model's
+ * nonlinear parameter), then their held-out measurements are summed in
+ * fold order, as one fold after another would. */
 static gdouble
 cross_validate_masked(const DriftMeasurement *meas, gint n,
                       const gboolean *mask, FitKind kind,
                       const DriftFitOptions *options)
 {
     gint folds = MAX(options->n_folds, 2), f, i, count = 0;
-    gboolean *train = g_new(gboolean, n);
-    gdouble sum = 0.0, wsum = 0.0, periods[2];
-    gboolean have_periods;
-    DriftFit fit;
+    gdouble sum = 0.0, wsum = 0.0;
+    FoldFits ff = { meas, n, mask, kind, options, folds, FALSE, { 0.0, 0.0 },
+                    g_new(DriftFit, folds), g_new(gboolean, folds) };
     Prepared pm;
 
     /* The periods searched are those the whole series can show.  A held-out
@@ -898,39 +975,26 @@ cross_validate_masked(const DriftMeasurement *meas, gint n,
      * longest gap) would shut out periods the series shows well, and the
      * held-out groups would then be predicted by a wrong period. */
     prepare(meas, n, mask, &pm);
-    have_periods = observable_periods(&pm, options, periods, periods + 1);
+    ff.have_periods = observable_periods(&pm, options, ff.periods, ff.periods + 1);
     prepared_free(&pm);
+    parallel_run(0, folds, fit_fold_task, &ff);
     for (f = 0; f < folds; f++) {
-        gboolean any = FALSE;
+        for (i = 0; i < n && ff.fitted[f]; i++) {
+            gdouble dx, dy, rx, ry;
 
-        for (i = 0; i < n; i++) {
-            gboolean held = ((meas[i].group % folds + folds) % folds == f);
-            train[i] = !held && (!mask || mask[i]);
-            any |= held;
+            if (!held_out(meas + i, folds, f) || (mask && !mask[i])
+                || !(meas[i].weight > 0.0))
+                continue;
+            drift_fit_predict(ff.fits + f, meas + i, &dx, &dy);
+            rx = 1e9*(meas[i].dx - dx);
+            ry = 1e9*(meas[i].dy - dy);
+            sum += meas[i].weight*(rx*rx + ry*ry);
+            wsum += 2.0*meas[i].weight;
+            count++;
         }
-        if (!any)
-            continue;
-        prepare(meas, n, train, &pm);
-        pm.periods_given = TRUE;
-        pm.period_range[0] = have_periods ? periods[0] : 1.0;
-        pm.period_range[1] = have_periods ? periods[1] : 0.0;
-        if (fit_prepared(&pm, kind, options, &fit)) {
-            for (i = 0; i < n; i++) {
-                gdouble dx, dy, rx, ry;
-
-                if (train[i] || (mask && !mask[i]) || !(meas[i].weight > 0.0))
-                    continue;
-                drift_fit_predict(&fit, meas + i, &dx, &dy);
-                rx = 1e9*(meas[i].dx - dx);
-                ry = 1e9*(meas[i].dy - dy);
-                sum += meas[i].weight*(rx*rx + ry*ry);
-                wsum += 2.0*meas[i].weight;
-                count++;
-            }
-        }
-        prepared_free(&pm);
     }
-    g_free(train);
+    g_free(ff.fits);
+    g_free(ff.fitted);
     return count ? sqrt(sum/wsum) : NAN;
 }
 
