@@ -9,6 +9,7 @@
 #include <string.h>
 #include <math.h>
 #include <libprocess/gwyprocess.h>
+#include "parallel-run.h"
 #include "stripe-registration.h"
 #include "displacement-measure.h"
 
@@ -113,30 +114,43 @@ copy_shifts(const StripeShift *shifts, gint n, gdouble *dx, gdouble *dy,
     }
 }
 
-void
-displacement_register_blocks(const gdouble *image, const gdouble *reference,
-                             gint xres, gint yres, gint n,
-                             const DisplacementOptions *options,
-                             gdouble pixel_aspect, const gdouble *guess,
-                             gdouble *dx, gdouble *dy, gdouble *score,
-                             gdouble *global)
+/* A frame levelled and blurred as displacement_register_blocks()
+ * registers it, then conditioned (stripe-registration.h): what a series
+ * does once per frame, however many partners the frame has.  NULL when it
+ * cannot be registered at all. */
+static StripeRegistrationFrame*
+prepare_frame(const gdouble *data, gint xres, gint yres,
+              const DisplacementOptions *options, gdouble pixel_aspect)
 {
-    DisplacementOptions defaults;
-    gdouble *a, *b, sigma_x, sigma_y, radius, centre[2] = { 0.0, 0.0 };
+    StripeRegistrationFrame *frame;
+    gdouble sigma_x, sigma_y, *levelled;
+
+    /* The same physical blur along both axes: pixel_aspect = dy/dx. */
+    sigma_x = options->smooth*MIN(xres, yres*pixel_aspect);
+    sigma_y = sigma_x/pixel_aspect;
+    levelled = level_lines(data, xres, yres, sigma_x, sigma_y);
+    /* Conditioned for square pixels, as stripe_registration_measure_around()
+     * conditions its frames. */
+    frame = stripe_registration_frame_new(levelled, xres, yres, 1.0);
+    g_free(levelled);
+    return frame;
+}
+
+/* displacement_register_blocks() for prepared frames (either may be NULL:
+ * nothing registered). */
+static void
+register_prepared(const StripeRegistrationFrame *image,
+                  const StripeRegistrationFrame *reference, gint xres, gint yres,
+                  gint n, const DisplacementOptions *options,
+                  const gdouble *guess, gdouble *dx, gdouble *dy,
+                  gdouble *score, gdouble *global)
+{
+    gdouble radius, centre[2] = { 0.0, 0.0 };
     gdouble *pdx = g_new(gdouble, n), *pdy = g_new(gdouble, n);
     StripeShift whole, *shifts = g_new0(StripeShift, n);
     gint s, side = MIN(xres, yres);
     gboolean ok;
 
-    if (!options) {
-        displacement_options_init(&defaults);
-        options = &defaults;
-    }
-    /* The same physical blur along both axes: pixel_aspect = dy/dx. */
-    sigma_x = options->smooth*MIN(xres, yres*pixel_aspect);
-    sigma_y = sigma_x/pixel_aspect;
-    a = level_lines(image, xres, yres, sigma_x, sigma_y);
-    b = level_lines(reference, xres, yres, sigma_x, sigma_y);
     radius = MAX(options->block_range*side, 4.0);
     /* The frame's overall shift first, so that blocks (less content, more
      * prone to a wrong peak) search near it only. */
@@ -145,12 +159,11 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
         centre[1] = guess[1];
     }
     memset(&whole, 0, sizeof(whole));
-    ok = stripe_registration_measure_around(a, b, xres, yres, 1, centre,
-                                            centre + 1,
-                                            guess ? radius
-                                            : MAX(options->max_shift*side, 2.0),
-                                            STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
-                                            &whole, NULL);
+    /* To whole pixels, near enough: the blocks search around it. */
+    ok = (image && reference
+          && stripe_registration_frame_shift(image, reference, centre[0], centre[1],
+                                             guess ? radius : MAX(options->max_shift*side, 2.0),
+                                             &whole));
     if (ok && whole.peak > -1.0) {
         centre[0] = whole.dx;
         centre[1] = whole.dy;
@@ -159,9 +172,9 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
         pdx[s] = centre[0];
         pdy[s] = centre[1];
     }
-    if (!ok || !stripe_registration_measure_around(a, b, xres, yres, n, pdx, pdy, radius,
-                                                   STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
-                                                   shifts, NULL))
+    if (!ok || !stripe_registration_measure_around_frames(image, reference, n, pdx, pdy, radius,
+                                                          STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
+                                                          shifts, NULL))
         memset(shifts, 0, n*sizeof(StripeShift));
     copy_shifts(shifts, n, dx, dy, score);
     if (global) {
@@ -172,8 +185,29 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
     g_free(shifts);
     g_free(pdx);
     g_free(pdy);
-    g_free(a);
-    g_free(b);
+}
+
+void
+displacement_register_blocks(const gdouble *image, const gdouble *reference,
+                             gint xres, gint yres, gint n,
+                             const DisplacementOptions *options,
+                             gdouble pixel_aspect, const gdouble *guess,
+                             gdouble *dx, gdouble *dy, gdouble *score,
+                             gdouble *global)
+{
+    DisplacementOptions defaults;
+    StripeRegistrationFrame *a, *b;
+
+    if (!options) {
+        displacement_options_init(&defaults);
+        options = &defaults;
+    }
+    a = prepare_frame(image, xres, yres, options, pixel_aspect);
+    b = prepare_frame(reference, xres, yres, options, pixel_aspect);
+    register_prepared(a, b, xres, yres, n, options, guess, dx, dy, score,
+                      global);
+    stripe_registration_frame_free(a);
+    stripe_registration_frame_free(b);
 }
 
 /* The row a block's registration speaks for: its rows weighted by their
@@ -201,48 +235,150 @@ detail_row(const gdouble *data, gint xres, gint r0, gint r1)
     return (wsum > 0.0 && isfinite(rsum)) ? rsum/wsum : 0.5*(r0 + r1 - 1);
 }
 
-/* Registers frame ka against frame kb and appends the block measurements;
- * global gets the frame's overall shift. */
-static void
-measure_pair(const FrameSeries *series, gint ka, gint kb,
-             const DisplacementOptions *options, const gdouble *guess,
-             gdouble *global, GArray *out)
+/* A series registered pair by pair.  Each frame is prepared once
+ * (prepare_frame) and held while the frames within reach of it are
+ * registered against it.  Frames go in chunks: their preparation, then
+ * their consecutive pairs, then their older pairs, each step spread over
+ * the processor's cores (the pairs of a step do not depend on each other:
+ * an older pair's search starts from the consecutive pairs' shifts).
+ * Every pair writes its own place of meas, so the order and the values
+ * do not depend on the threads. */
+typedef struct {
+    const FrameSeries *series;
+    const DisplacementOptions *options;
+    gint reach;                        /* older frames per frame (all: k) */
+    StripeRegistrationFrame **frames;  /* prepared (NULL: not registrable) */
+    gboolean *prepared;                /* held in frames */
+    gdouble *step;                     /* 3 per frame: the consecutive pair's
+                                          overall shift and correlation */
+    gint *far_first;                   /* frame k's first older pair */
+    DriftMeasurement *meas;            /* every pair's blocks, in order */
+} SeriesRegistration;
+
+/* Frames registered per chunk: enough to keep the cores busy, few enough
+ * to hold (about 2.5 MB each at 256 x 256 px). */
+#define CHUNK_FRAMES 16
+/* When every earlier frame is a partner, at most this many frames are
+ * held; older ones are prepared anew for each pair. */
+#define PREPARED_MAX_FRAMES 32
+
+static StripeRegistrationFrame*
+prepare_series_frame(const SeriesRegistration *reg, gint k)
 {
+    const SeriesFrame *f = reg->series->frames + k;
+
+    return prepare_frame(gwy_data_field_get_data_const(f->field),
+                         f->timing.xres, f->timing.yres, reg->options,
+                         frame_series_dy(reg->series)/frame_series_dx(reg->series));
+}
+
+static void
+prepare_task(gpointer data, gint k)
+{
+    SeriesRegistration *reg = data;
+
+    if (!reg->prepared[k]) {
+        reg->frames[k] = prepare_series_frame(reg, k);
+        reg->prepared[k] = TRUE;
+    }
+}
+
+static void
+release_frame(SeriesRegistration *reg, gint k)
+{
+    stripe_registration_frame_free(reg->frames[k]);
+    reg->frames[k] = NULL;
+    reg->prepared[k] = FALSE;
+}
+
+/* Registers frame ka against frame kb into pair slot `pair` of meas;
+ * global gets the frame's overall shift.  A frame no longer held is
+ * prepared for this pair alone. */
+static void
+measure_pair(const SeriesRegistration *reg, gint ka, gint kb,
+             const gdouble *guess, gdouble *global, gint pair)
+{
+    const FrameSeries *series = reg->series;
+    const DisplacementOptions *options = reg->options;
     const SeriesFrame *fa = series->frames + ka, *fb = series->frames + kb;
     gdouble xstep = frame_series_dx(series), ystep = frame_series_dy(series);
     gint xres = fa->timing.xres, yres = fa->timing.yres, n = options->n_blocks;
     gdouble *dx = g_new(gdouble, n), *dy = g_new(gdouble, n),
             *score = g_new(gdouble, n);
+    StripeRegistrationFrame *own_a = NULL, *own_b = NULL;
     gint s;
 
-    displacement_register_blocks(gwy_data_field_get_data_const(fa->field),
-                                 gwy_data_field_get_data_const(fb->field),
-                                 xres, yres, n, options, ystep/xstep, guess,
-                                 dx, dy, score, global);
+    if (!reg->prepared[ka])
+        own_a = prepare_series_frame(reg, ka);
+    if (!reg->prepared[kb])
+        own_b = prepare_series_frame(reg, kb);
+    register_prepared(reg->prepared[ka] ? reg->frames[ka] : own_a,
+                      reg->prepared[kb] ? reg->frames[kb] : own_b,
+                      xres, yres, n, options, guess, dx, dy, score, global);
+    stripe_registration_frame_free(own_a);
+    stripe_registration_frame_free(own_b);
     for (s = 0; s < n; s++) {
         gint r0 = s*yres/n, r1 = (s + 1)*yres/n;
         gdouble ccol = 0.5*(xres - 1), crow;
-        DriftMeasurement m;
+        DriftMeasurement *m = reg->meas + (gsize)pair*n + s;
 
         /* The block's content was scanned in the reference dy rows
          * earlier (higher up), dx columns to the left. */
         crow = detail_row(gwy_data_field_get_data_const(fa->field), xres,
                           r0, r1);
-        m.t_a = scan_timing_pixel_time(&fa->timing, crow, ccol);
-        m.t_b = scan_timing_pixel_time(&fb->timing, crow - dy[s],
-                                       ccol - dx[s]);
-        m.dx = dx[s]*xstep;
-        m.dy = dy[s]*ystep;
-        m.weight = (score[s] >= options->min_score) ? score[s] : 0.0;
-        m.group = s;
-        m.frame_a = ka;
-        m.frame_b = kb;
-        m.span = (r1 - r0)*fa->timing.line_time;
-        g_array_append_val(out, m);
+        m->t_a = scan_timing_pixel_time(&fa->timing, crow, ccol);
+        m->t_b = scan_timing_pixel_time(&fb->timing, crow - dy[s],
+                                        ccol - dx[s]);
+        m->dx = dx[s]*xstep;
+        m->dy = dy[s]*ystep;
+        m->weight = (score[s] >= options->min_score) ? score[s] : 0.0;
+        m->group = s;
+        m->frame_a = ka;
+        m->frame_b = kb;
+        m->span = (r1 - r0)*fa->timing.line_time;
     }
     g_free(dx);
     g_free(dy);
     g_free(score);
+}
+
+/* Consecutive pairs come first in meas, frame k's as pair k - 1. */
+static void
+consecutive_task(gpointer data, gint k)
+{
+    SeriesRegistration *reg = data;
+
+    measure_pair(reg, k, k-1, NULL, reg->step + 3*k, k-1);
+}
+
+static gint
+oldest_partner(const SeriesRegistration *reg, gint k)
+{
+    return MAX(k - (reg->reach > 0 ? reg->reach : k), 0);
+}
+
+/* Frame k against its older frames, the nearest first: the overall shifts
+ * of the consecutive pairs between, chained, tell where to look in an
+ * older frame, whose shift may exceed any blind search range. */
+static void
+older_task(gpointer data, gint k)
+{
+    SeriesRegistration *reg = data;
+    gint nf = reg->series->n_frames, j;
+    gdouble guess[2], global[3];
+
+    for (j = k-2; j >= oldest_partner(reg, k); j--) {
+        if (j == k-2) {
+            guess[0] = reg->step[3*k] + reg->step[3*(k-1)];
+            guess[1] = reg->step[3*k + 1] + reg->step[3*(k-1) + 1];
+        }
+        else {
+            guess[0] = global[0] + reg->step[3*(j+1)];
+            guess[1] = global[1] + reg->step[3*(j+1) + 1];
+        }
+        measure_pair(reg, k, j, guess, global,
+                     nf - 1 + reg->far_first[k] + (k-2 - j));
+    }
 }
 
 DriftMeasurement*
@@ -250,36 +386,42 @@ displacement_measure_series(const FrameSeries *series,
                             const DisplacementOptions *options, gint *n)
 {
     DisplacementOptions defaults;
-    GArray *out = g_array_new(FALSE, FALSE, sizeof(DriftMeasurement));
-    gint nf = series->n_frames, k, j;
-    gdouble *step = g_new0(gdouble, 3*nf), guess[2], global[3];
+    SeriesRegistration reg;
+    gint nf = series->n_frames, k, k0, k1, keep, released = 0, pairs;
 
     if (!options) {
         displacement_options_init(&defaults);
         options = &defaults;
     }
-    /* Consecutive frames first: their overall shifts, chained, tell where
-     * to look when a frame is registered against an older one, whose shift
-     * may exceed any blind search range. */
-    for (k = 1; k < nf; k++)
-        measure_pair(series, k, k-1, options, NULL, step + 3*k, out);
-    for (k = 2; k < nf; k++) {
-        gint reach = options->pair_reach > 0 ? options->pair_reach : k;
-
-        for (j = k-2; j >= MAX(k - reach, 0); j--) {
-            guess[0] = guess[1] = 0.0;
-            if (j == k-2) {
-                guess[0] = step[3*k] + step[3*(k-1)];
-                guess[1] = step[3*k + 1] + step[3*(k-1) + 1];
-            }
-            else {
-                guess[0] = global[0] + step[3*(j+1)];
-                guess[1] = global[1] + step[3*(j+1) + 1];
-            }
-            measure_pair(series, k, j, options, guess, global, out);
-        }
+    reg.series = series;
+    reg.options = options;
+    reg.reach = options->pair_reach;
+    reg.frames = g_new0(StripeRegistrationFrame*, MAX(nf, 1));
+    reg.prepared = g_new0(gboolean, MAX(nf, 1));
+    reg.step = g_new0(gdouble, 3*MAX(nf, 1));
+    reg.far_first = g_new0(gint, MAX(nf, 1) + 1);
+    /* Every consecutive pair first, then the older pairs frame by frame
+     * (the fit of a long series takes a spread subset by order). */
+    for (k = 0; k < nf; k++)
+        reg.far_first[k+1] = reg.far_first[k] + MAX(k-2 - oldest_partner(&reg, k) + 1, 0);
+    pairs = MAX(nf - 1, 0) + reg.far_first[nf];
+    reg.meas = g_new0(DriftMeasurement, MAX((gsize)pairs*options->n_blocks, 1));
+    keep = reg.reach > 0 ? reg.reach : PREPARED_MAX_FRAMES;
+    for (k0 = 0; k0 < nf; k0 = k1) {
+        k1 = MIN(k0 + CHUNK_FRAMES, nf);
+        parallel_run(k0, k1, prepare_task, &reg);
+        parallel_run(MAX(k0, 1), k1, consecutive_task, &reg);
+        parallel_run(MAX(k0, 2), k1, older_task, &reg);
+        /* Frames from k1 on reach back to k1 - keep at most. */
+        for (; released < k1 - keep; released++)
+            release_frame(&reg, released);
     }
-    g_free(step);
-    *n = out->len;
-    return (DriftMeasurement*)g_array_free(out, FALSE);
+    for (k = 0; k < nf; k++)
+        release_frame(&reg, k);
+    g_free(reg.frames);
+    g_free(reg.prepared);
+    g_free(reg.step);
+    g_free(reg.far_first);
+    *n = pairs*options->n_blocks;
+    return reg.meas;
 }

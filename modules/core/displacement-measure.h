@@ -40,7 +40,8 @@ void               displacement_options_init (DisplacementOptions *options);
  * pixel_aspect is the physical dy/dx of a pixel.  The frame's overall shift
  * (the whole frame as one stripe) is searched around guess (px, may be NULL:
  * around 0, within max_shift) and stored in global (dx, dy, correlation; may
- * be NULL); the blocks are searched within block_range of it. */
+ * be NULL), to the correlation map's resolution only; the blocks are
+ * searched within block_range of it. */
 void               displacement_register_blocks(const gdouble *image,
                                                 const gdouble *reference,
                                                 gint xres,

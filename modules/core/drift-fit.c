@@ -8,6 +8,7 @@
 #include <math.h>
 #include <libgwyddion/gwymath.h>
 #include "drift-fit.h"
+#include "parallel-run.h"
 
 #define MAX_BASIS 4
 #define GOLDEN_STEPS 40
@@ -106,6 +107,24 @@ sinc(gdouble x)
     return fabs(x) < 1e-4 ? 1.0 - x*x/6.0 : sin(x)/x;
 }
 
+/* What averaging over [t - h, t + h] leaves of an oscillation of period
+ * theta. */
+static gdouble
+oscillation_span_factor(gdouble theta, gdouble h)
+{
+    return (h > 0.0) ? sinc(2.0*G_PI*h/theta) : 1.0;
+}
+
+/* The oscillation's basis at t, its sine and cosine scaled by w. */
+static gint
+oscillation_basis(gdouble theta, gdouble t, gdouble w, gdouble *f)
+{
+    f[0] = t;
+    f[1] = w*sin(2.0*G_PI*t/theta);
+    f[2] = w*cos(2.0*G_PI*t/theta);
+    return 3;
+}
+
 /* Basis functions of the trajectory for nonlinear parameter theta,
  * averaged over [t - h, t + h] (h = 0: at t). */
 static gint
@@ -126,10 +145,7 @@ model_basis_mean(FitKind kind, gdouble theta, gdouble t, gdouble h,
         return 2;
 
         case DRIFT_MODEL_OSCILLATION:
-        w = (h > 0.0) ? sinc(2.0*G_PI*h/theta) : 1.0;
-        f[1] = w*sin(2.0*G_PI*t/theta);
-        f[2] = w*cos(2.0*G_PI*t/theta);
-        return 3;
+        return oscillation_basis(theta, t, oscillation_span_factor(theta, h), f);
 
         case DRIFT_MODEL_JUMP:
         if (h > 0.0)
@@ -323,6 +339,34 @@ solve_small(gdouble *a, gdouble *b, gint k, gdouble *x)
     }
 }
 
+/* The least-squares coefficients of both axes from the normal equations
+ * (ata k x k, atb per axis) and the weighted residual sum of squares, from
+ * sdd, the weighted d.d of each axis; NAN when ata is not finite. */
+static gdouble
+solve_normal(const gdouble *ata, gdouble atb[2][MAX_BASIS],
+             const gdouble *sdd, gint k, gdouble coef[2][MAX_BASIS])
+{
+    gdouble a[MAX_BASIS*MAX_BASIS], row[MAX_BASIS], rss = 0.0;
+    gint j, ax;
+
+    for (j = 0; j < k*k; j++) {
+        if (!isfinite(ata[j]))
+            return NAN;
+    }
+    /* The residual sum of squares of a least-squares solution is
+     * d.d - coef.(A^T d): no second pass over the measurements (the grid
+     * searches call this thousands of times). */
+    for (ax = 0; ax < 2; ax++) {
+        memcpy(a, ata, k*k*sizeof(gdouble));
+        memcpy(row, atb[ax], k*sizeof(gdouble));
+        solve_small(a, row, k, coef[ax]);
+        rss += sdd[ax];
+        for (j = 0; j < k; j++)
+            rss -= coef[ax][j]*atb[ax][j];
+    }
+    return MAX(rss, 0.0);
+}
+
 /* Weighted least squares for a fixed nonlinear parameter; returns the
  * weighted residual sum of squares (nm^2) over both axes. */
 static gdouble
@@ -330,9 +374,9 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
             gdouble coef[2][MAX_BASIS], gint *n_basis)
 {
     gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], fa[MAX_BASIS],
-            fb[MAX_BASIS], row[MAX_BASIS], a[MAX_BASIS*MAX_BASIS];
-    gdouble rss = 0.0, sdd[2] = { 0.0, 0.0 };
-    gint i, j, l, k = 1, ax;
+            fb[MAX_BASIS], row[MAX_BASIS];
+    gdouble sdd[2] = { 0.0, 0.0 }, half = NAN, w = 1.0;
+    gint i, j, l, k = 1;
 
     memset(ata, 0, sizeof(ata));
     memset(atb, 0, sizeof(atb));
@@ -342,8 +386,21 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
     for (i = 0; i < pm->n; i++) {
         if (pm->w[i] <= 0.0)
             continue;
-        k = model_basis_mean(kind, theta, pm->ta[i], pm->half[i], fa);
-        model_basis_mean(kind, theta, pm->tb[i], pm->half[i], fb);
+        if (kind == DRIFT_MODEL_OSCILLATION) {
+            /* The span factor, a sine, depends on the span alone: blocks of
+             * one height share it (the golden search of the period calls
+             * this hundreds of times per fit). */
+            if (pm->half[i] != half) {
+                half = pm->half[i];
+                w = oscillation_span_factor(theta, half);
+            }
+            k = oscillation_basis(theta, pm->ta[i], w, fa);
+            oscillation_basis(theta, pm->tb[i], w, fb);
+        }
+        else {
+            k = model_basis_mean(kind, theta, pm->ta[i], pm->half[i], fa);
+            model_basis_mean(kind, theta, pm->tb[i], pm->half[i], fb);
+        }
         for (j = 0; j < k; j++)
             row[j] = fa[j] - fb[j];
         for (j = 0; j < k; j++) {
@@ -355,23 +412,8 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
         sdd[0] += pm->w[i]*pm->d[0][i]*pm->d[0][i];
         sdd[1] += pm->w[i]*pm->d[1][i]*pm->d[1][i];
     }
-    for (j = 0; j < k*k; j++) {
-        if (!isfinite(ata[j]))
-            return NAN;
-    }
-    /* The residual sum of squares of a least-squares solution is
-     * d.d - coef.(A^T d): no second pass over the measurements (the grid
-     * searches call this thousands of times). */
-    for (ax = 0; ax < 2; ax++) {
-        memcpy(a, ata, sizeof(a));
-        memcpy(row, atb[ax], sizeof(row));
-        solve_small(a, row, k, coef[ax]);
-        rss += sdd[ax];
-        for (j = 0; j < k; j++)
-            rss -= coef[ax][j]*atb[ax][j];
-    }
     *n_basis = k;
-    return MAX(rss, 0.0);
+    return solve_normal(ata, atb, sdd, k, coef);
 }
 
 /* The periods an oscillation can be seen with in these measurements.  At
@@ -425,16 +467,152 @@ oscillation_visibility(const Prepared *pm, gdouble period)
     return (wsum > 0.0) ? sum/wsum : 0.0;
 }
 
-/* Candidate values of the nonlinear parameter; 0 when there are none. */
+/* Recomputed exactly every this many frequencies, so that the rounding of
+ * the rotations cannot build up. */
+#define SCAN_RESEED 32
+
+/* sin and cos of a phase, and of the step that takes it to the next
+ * frequency. */
+typedef struct {
+    gdouble s, c, rs, rc;
+} Phasor;
+
+static void
+phasor_set(Phasor *p, gdouble phase, gdouble step)
+{
+    p->s = sin(phase);
+    p->c = cos(phase);
+    p->rs = sin(step);
+    p->rc = cos(step);
+}
+
+/* Angle addition: the phase one step on. */
+static void
+phasor_step(Phasor *p)
+{
+    gdouble s = p->s*p->rc + p->c*p->rs;
+
+    p->c = p->c*p->rc - p->s*p->rs;
+    p->s = s;
+}
+
+/* One frequency of oscillation_scan(): the normal equations (as
+ * solve_fixed() sums them) and the visibility, from the phasors of the
+ * used measurements at it, each stepped on to the next frequency. */
+static gdouble
+scan_frequency(const Prepared *pm, const gint *used, gint nu, gdouble f,
+               Phasor *pa, Phasor *pb, Phasor *ph, const gdouble *sdd,
+               gdouble *visibility)
+{
+    gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], coef[2][MAX_BASIS];
+    gdouble row[3], x, w, wi, vsum = 0.0, wsum = 0.0, rss;
+    gint u, i, j, l;
+
+    memset(ata, 0, sizeof(ata));
+    memset(atb, 0, sizeof(atb));
+    for (u = 0; u < nu; u++) {
+        i = used[u];
+        wi = pm->w[i];
+        /* The basis averaged over the span (model_basis_mean). */
+        x = 2.0*G_PI*pm->half[i]*f;
+        w = (pm->half[i] > 0.0) ? (fabs(x) < 1e-4 ? 1.0 - x*x/6.0 : ph[u].s/x) : 1.0;
+        row[0] = pm->ta[i] - pm->tb[i];
+        row[1] = w*(pa[u].s - pb[u].s);
+        row[2] = w*(pa[u].c - pb[u].c);
+        for (j = 0; j < 3; j++) {
+            for (l = 0; l < 3; l++)
+                ata[j*3 + l] += wi*row[j]*row[l];
+            atb[0][j] += wi*row[j]*pm->d[0][i];
+            atb[1][j] += wi*row[j]*pm->d[1][i];
+        }
+        /* 1 - cos(w (t_a - t_b)), as oscillation_visibility() sums it. */
+        vsum += wi*(1.0 - (pa[u].c*pb[u].c + pa[u].s*pb[u].s));
+        wsum += wi;
+        phasor_step(pa + u);
+        phasor_step(pb + u);
+        phasor_step(ph + u);
+    }
+    *visibility = (wsum > 0.0) ? vsum/wsum : 0.0;
+    rss = solve_normal(ata, atb, sdd, 3, coef);
+    return isfinite(rss) ? rss : G_MAXDOUBLE;
+}
+
+/* The oscillation's residual sum of squares and visibility at m
+ * frequencies evenly from fmin to fmax in one pass: each measurement's
+ * sines and cosines step from one frequency to the next by a rotation,
+ * a few multiplications where sin and cos cost a hundred (the grid of a
+ * long series is thousands of frequencies times thousands of
+ * measurements, refitted after each outlier round and in each fold). */
+static void
+oscillation_scan(const Prepared *pm, gdouble fmin, gdouble fmax, gint m,
+                 gdouble *rss, gdouble *visibility)
+{
+    gint n = MAX(pm->n, 1), *used = g_new(gint, n), nu = 0, i, j, u;
+    Phasor *pa = g_new(Phasor, 3*n), *pb = pa + n, *ph = pb + n;
+    gdouble df = (fmax - fmin)/(m - 1.0), f, sdd[2] = { 0.0, 0.0 };
+
+    for (i = 0; i < pm->n; i++) {
+        if (pm->w[i] <= 0.0)
+            continue;
+        used[nu++] = i;
+        sdd[0] += pm->w[i]*pm->d[0][i]*pm->d[0][i];
+        sdd[1] += pm->w[i]*pm->d[1][i]*pm->d[1][i];
+    }
+    for (j = 0; j < m; j++) {
+        f = fmin + (fmax - fmin)*j/(m - 1.0);
+        for (u = 0; u < nu && j % SCAN_RESEED == 0; u++) {
+            i = used[u];
+            phasor_set(pa + u, 2.0*G_PI*pm->ta[i]*f, 2.0*G_PI*pm->ta[i]*df);
+            phasor_set(pb + u, 2.0*G_PI*pm->tb[i]*f, 2.0*G_PI*pm->tb[i]*df);
+            phasor_set(ph + u, 2.0*G_PI*pm->half[i]*f, 2.0*G_PI*pm->half[i]*df);
+        }
+        rss[j] = scan_frequency(pm, used, nu, f, pa, pb, ph, sdd, visibility + j);
+    }
+    g_free(pa);
+    g_free(used);
+}
+
+/* The oscillation's grid, uniform in frequency from fmin to fmax (m
+ * values), without the periods whose cycles cancel between the frames,
+ * and the residual sums of squares at it; returns its size. */
+static gint
+oscillation_grid(const Prepared *pm, gdouble fmin, gdouble fmax, gint m,
+                 gdouble **grid, gdouble **rss)
+{
+    gdouble *all = g_new(gdouble, 2*m), *visibility = all + m;
+    gint i, nt = 0;
+
+    oscillation_scan(pm, fmin, fmax, m, all, visibility);
+    *grid = g_new(gdouble, m);
+    *rss = g_new(gdouble, m);
+    for (i = 0; i < m; i++) {
+        if (visibility[i] >= MIN_VISIBILITY) {
+            (*grid)[nt] = 1.0/(fmin + (fmax - fmin)*i/(m - 1.0));
+            (*rss)[nt++] = all[i];
+        }
+    }
+    g_free(all);
+    if (!nt) {
+        g_free(*grid);
+        g_free(*rss);
+        *grid = *rss = NULL;
+    }
+    return nt;
+}
+
+/* Candidate values of the nonlinear parameter; 0 when there are none.
+ * *rss gets their residual sums of squares where the grid comes with them
+ * (an oscillation's), else NULL. */
 static gint
 parameter_grid(const Prepared *pm, FitKind kind,
-               const DriftFitOptions *options, gdouble **grid)
+               const DriftFitOptions *options, gdouble **grid, gdouble **rss)
 {
     gdouble tmin = MAX(2.0*pm->t_resolution, options->min_period);
     gdouble tmax = MAX(pm->t_max, 2.0*tmin), *g, *times;
     gdouble pshort, plong;
     gint i, m, nt;
 
+    *rss = NULL;
     if (kind == DRIFT_MODEL_SETTLING || kind == KIND_LOG_CREEP) {
         m = 80;
         g = g_new(gdouble, m);
@@ -452,18 +630,7 @@ parameter_grid(const Prepared *pm, FitKind kind,
         fmin = 1.0/plong;
         fmax = 1.0/pshort;
         m = CLAMP((gint)ceil((fmax - fmin)/df) + 1, 8, MAX_GRID);
-        g = g_new(gdouble, m);
-        for (i = nt = 0; i < m; i++) {
-            gdouble period = 1.0/(fmin + (fmax - fmin)*i/(m - 1.0));
-
-            if (oscillation_visibility(pm, period) >= MIN_VISIBILITY)
-                g[nt++] = period;
-        }
-        m = nt;
-        if (!m) {
-            g_free(g);
-            g = NULL;
-        }
+        m = oscillation_grid(pm, fmin, fmax, m, &g, rss);
     }
     else {
         /* A step between each pair of consecutive distinct times, with at
@@ -560,16 +727,13 @@ refine_grid_value(const Prepared *pm, FitKind kind, const gdouble *grid,
  * refined, not just the lowest: a narrow true minimum can fall between grid
  * values and look worse there than a broad wrong one. */
 static gint
-search_grid(const Prepared *pm, FitKind kind, const gdouble *grid, gint m,
-            gdouble *theta)
+search_grid(const Prepared *pm, FitKind kind, const gdouble *grid,
+            const gdouble *rss, gint m, gdouble *theta)
 {
-    gdouble coef[2][MAX_BASIS], *rss = g_new(gdouble, m), best, value, t;
-    gint i, k, ibest = 0;
+    gdouble best, value, t;
+    gint i, ibest = 0;
 
     for (i = 0; i < m; i++) {
-        rss[i] = solve_fixed(pm, kind, grid[i], coef, &k);
-        if (!isfinite(rss[i]))
-            rss[i] = G_MAXDOUBLE;
         if (rss[i] < rss[ibest])
             ibest = i;
     }
@@ -600,8 +764,23 @@ search_grid(const Prepared *pm, FitKind kind, const gdouble *grid, gint m,
         }
         g_free(minima);
     }
-    g_free(rss);
     return ibest;
+}
+
+/* The residual sums of squares at every grid value (G_MAXDOUBLE where the
+ * fit is not finite). */
+static gdouble*
+grid_rss(const Prepared *pm, FitKind kind, const gdouble *grid, gint m)
+{
+    gdouble coef[2][MAX_BASIS], *rss = g_new(gdouble, m);
+    gint i, k;
+
+    for (i = 0; i < m; i++) {
+        rss[i] = solve_fixed(pm, kind, grid[i], coef, &k);
+        if (!isfinite(rss[i]))
+            rss[i] = G_MAXDOUBLE;
+    }
+    return rss;
 }
 
 /* Every coefficient and the nonlinear parameter finite. */
@@ -625,7 +804,7 @@ static gboolean
 fit_prepared(const Prepared *pm, FitKind kind,
              const DriftFitOptions *options, DriftFit *fit)
 {
-    gdouble coef[2][MAX_BASIS], *grid = NULL, theta = 0.0, rss;
+    gdouble coef[2][MAX_BASIS], *grid = NULL, *rss_grid, theta = 0.0, rss;
     gint m, k, ibest, nn;
 
     memset(fit, 0, sizeof(DriftFit));
@@ -641,11 +820,14 @@ fit_prepared(const Prepared *pm, FitKind kind,
         return FALSE;
 
     if (model_has_nonlinear(kind)) {
-        if (!(m = parameter_grid(pm, kind, options, &grid)))
+        if (!(m = parameter_grid(pm, kind, options, &grid, &rss_grid)))
             return FALSE;
+        if (!rss_grid)
+            rss_grid = grid_rss(pm, kind, grid, m);
         fit->range[0] = MIN(grid[0], grid[m-1]);
         fit->range[1] = MAX(grid[0], grid[m-1]);
-        ibest = search_grid(pm, kind, grid, m, &theta);
+        ibest = search_grid(pm, kind, grid, rss_grid, m, &theta);
+        g_free(rss_grid);
         fit->at_limit = (grid[ibest] == fit->range[1]) ? 1
                         : (grid[ibest] == fit->range[0]) ? -1 : 0;
         g_free(grid);
@@ -751,16 +933,65 @@ drift_fit_predict(const DriftFit *fit, const DriftMeasurement *m,
     *dy = 1e-9*(a[1] - b[1]);
 }
 
+static gboolean
+held_out(const DriftMeasurement *m, gint folds, gint f)
+{
+    return (m->group % folds + folds) % folds == f;
+}
+
+/* The folds of cross_validate_masked(), fitted each on its own. */
+typedef struct {
+    const DriftMeasurement *meas;
+    gint n;
+    const gboolean *mask;
+    FitKind kind;
+    const DriftFitOptions *options;
+    gint folds;
+    gboolean have_periods;
+    gdouble periods[2];
+    DriftFit *fits;       /* one per fold */
+    gboolean *fitted;     /* one per fold */
+} FoldFits;
+
+/* The model fitted without fold f (nothing when it holds nothing out). */
+static void
+fit_fold_task(gpointer data, gint f)
+{
+    FoldFits *ff = data;
+    gboolean *train = g_new(gboolean, MAX(ff->n, 1)), any = FALSE;
+    Prepared pm;
+    gint i;
+
+    for (i = 0; i < ff->n; i++) {
+        gboolean held = held_out(ff->meas + i, ff->folds, f);
+
+        train[i] = !held && (!ff->mask || ff->mask[i]);
+        any |= held;
+    }
+    ff->fitted[f] = FALSE;
+    if (any) {
+        prepare(ff->meas, ff->n, train, &pm);
+        pm.periods_given = TRUE;
+        pm.period_range[0] = ff->have_periods ? ff->periods[0] : 1.0;
+        pm.period_range[1] = ff->have_periods ? ff->periods[1] : 0.0;
+        ff->fitted[f] = fit_prepared(&pm, ff->kind, ff->options, ff->fits + f);
+        prepared_free(&pm);
+    }
+    g_free(train);
+}
+
+/* The folds are fitted on every core (each a whole search of the model's
+ * nonlinear parameter), then their held-out measurements are summed in
+ * fold order, as one fold after another would. */
 static gdouble
 cross_validate_masked(const DriftMeasurement *meas, gint n,
                       const gboolean *mask, FitKind kind,
                       const DriftFitOptions *options)
 {
     gint folds = MAX(options->n_folds, 2), f, i, count = 0;
-    gboolean *train = g_new(gboolean, n);
-    gdouble sum = 0.0, wsum = 0.0, periods[2];
-    gboolean have_periods;
-    DriftFit fit;
+    gdouble sum = 0.0, wsum = 0.0;
+    FoldFits ff = { meas, n, mask, kind, options, folds, FALSE, { 0.0, 0.0 },
+                    g_new(DriftFit, folds), g_new(gboolean, folds) };
     Prepared pm;
 
     /* The periods searched are those the whole series can show.  A held-out
@@ -768,39 +999,26 @@ cross_validate_masked(const DriftMeasurement *meas, gint n,
      * longest gap) would shut out periods the series shows well, and the
      * held-out groups would then be predicted by a wrong period. */
     prepare(meas, n, mask, &pm);
-    have_periods = observable_periods(&pm, options, periods, periods + 1);
+    ff.have_periods = observable_periods(&pm, options, ff.periods, ff.periods + 1);
     prepared_free(&pm);
+    parallel_run(0, folds, fit_fold_task, &ff);
     for (f = 0; f < folds; f++) {
-        gboolean any = FALSE;
+        for (i = 0; i < n && ff.fitted[f]; i++) {
+            gdouble dx, dy, rx, ry;
 
-        for (i = 0; i < n; i++) {
-            gboolean held = ((meas[i].group % folds + folds) % folds == f);
-            train[i] = !held && (!mask || mask[i]);
-            any |= held;
+            if (!held_out(meas + i, folds, f) || (mask && !mask[i])
+                || !(meas[i].weight > 0.0))
+                continue;
+            drift_fit_predict(ff.fits + f, meas + i, &dx, &dy);
+            rx = 1e9*(meas[i].dx - dx);
+            ry = 1e9*(meas[i].dy - dy);
+            sum += meas[i].weight*(rx*rx + ry*ry);
+            wsum += 2.0*meas[i].weight;
+            count++;
         }
-        if (!any)
-            continue;
-        prepare(meas, n, train, &pm);
-        pm.periods_given = TRUE;
-        pm.period_range[0] = have_periods ? periods[0] : 1.0;
-        pm.period_range[1] = have_periods ? periods[1] : 0.0;
-        if (fit_prepared(&pm, kind, options, &fit)) {
-            for (i = 0; i < n; i++) {
-                gdouble dx, dy, rx, ry;
-
-                if (train[i] || (mask && !mask[i]) || !(meas[i].weight > 0.0))
-                    continue;
-                drift_fit_predict(&fit, meas + i, &dx, &dy);
-                rx = 1e9*(meas[i].dx - dx);
-                ry = 1e9*(meas[i].dy - dy);
-                sum += meas[i].weight*(rx*rx + ry*ry);
-                wsum += 2.0*meas[i].weight;
-                count++;
-            }
-        }
-        prepared_free(&pm);
     }
-    g_free(train);
+    g_free(ff.fits);
+    g_free(ff.fitted);
     return count ? sqrt(sum/wsum) : NAN;
 }
 
@@ -857,15 +1075,33 @@ lowest_bic(const DriftFit *fits, gint n_types)
     return best;
 }
 
-/* The kept measurement with the largest residual under fit, when it is a
- * gross outlier (a failed registration) by a robust (median) scale of the
- * kept residuals; else -1. */
+/* Outliers are cut in rounds, each taking those within this factor of the
+ * round's worst residual: a failed registration pulls the fit towards
+ * itself by a fraction of its own residual, so what it makes of good
+ * measurements stays well below it and waits for the refit, while the
+ * tail of alike residuals goes at once (refitting after each of them cost
+ * half the time of a short series). */
+#define OUTLIER_ROUND 0.5
+
 static gint
-worst_outlier(const DriftMeasurement *meas, gint n, const DriftFit *fit,
-              gdouble sigmas, const gboolean *mask)
+compare_residuals(gconstpointer a, gconstpointer b, gpointer user_data)
 {
-    gdouble *r = g_new(gdouble, n), *sorted = g_new(gdouble, n), scale;
-    gint i, m = 0, worst = -1;
+    const gdouble *r = user_data;
+    gdouble x = r[*(const gint*)a], y = r[*(const gint*)b];
+
+    return (x < y) - (x > y);
+}
+
+/* The kept measurements that are gross outliers (failed registrations) by
+ * a robust (median) scale of the kept residuals and lie within
+ * OUTLIER_ROUND of the largest residual, at most `most` of them (the
+ * largest), lose their place in mask; returns how many did. */
+static gint
+cut_outliers(const DriftMeasurement *meas, gint n, const DriftFit *fit,
+             gdouble sigmas, gint most, gboolean *mask)
+{
+    gdouble *r = g_new(gdouble, n), *sorted = g_new(gdouble, n), limit, cut;
+    gint *beyond = g_new(gint, n), i, m = 0, worst = -1, count = 0;
 
     for (i = 0; i < n; i++) {
         gdouble dx, dy;
@@ -884,31 +1120,42 @@ worst_outlier(const DriftMeasurement *meas, gint n, const DriftFit *fit,
     }
     if (m) {
         /* The median of a 2-D radial residual is about 1.18 sigma. */
-        scale = gwy_math_kth_rank(m, sorted, m/2)/1.1774;
-        if (!(r[worst] > sigmas*MAX(scale, 1e-6)))
-            worst = -1;
+        limit = sigmas*MAX(gwy_math_kth_rank(m, sorted, m/2)/1.1774, 1e-6);
+        cut = MAX(limit, OUTLIER_ROUND*r[worst]);
+        for (i = 0; i < n && r[worst] > limit; i++) {
+            if (r[i] > cut)
+                beyond[count++] = i;
+        }
+        if (count > most) {
+            g_qsort_with_data(beyond, count, sizeof(gint), compare_residuals, r);
+            count = most;
+        }
+        for (i = 0; i < count; i++)
+            mask[beyond[i]] = FALSE;
     }
+    g_free(beyond);
     g_free(r);
     g_free(sorted);
-    return worst;
+    return count;
 }
 
-/* Drops gross outliers one at a time, the worst first, refitting fit's
- * model after each: a single failed registration pulls a least-squares fit
- * far enough that a whole group of good measurements (those spanning a
- * jump, say) would look like outliers if all were judged at once. */
+/* Drops gross outliers round by round, the worst first, refitting fit's
+ * model after each round: a single failed registration pulls a
+ * least-squares fit far enough that a whole group of good measurements
+ * (those spanning a jump, say) would look like outliers if all were judged
+ * at once. */
 static void
 drop_outliers(const DriftMeasurement *meas, gint n,
               const DriftFitOptions *options, DriftFit *fit, gboolean *mask)
 {
     FitKind kind = fit_kind(fit);
-    gint dropped, worst;
+    gint dropped, cut;
 
-    for (dropped = 0; dropped < n/4; dropped++) {
-        worst = worst_outlier(meas, n, fit, options->outlier_sigmas, mask);
-        if (worst < 0)
+    for (dropped = 0; dropped < n/4; dropped += cut) {
+        cut = cut_outliers(meas, n, fit, options->outlier_sigmas, n/4 - dropped,
+                           mask);
+        if (!cut)
             break;
-        mask[worst] = FALSE;
         if (!fit_masked(meas, n, mask, kind, options, fit))
             break;
     }
@@ -947,6 +1194,44 @@ acceleration_as_good(const DriftFit *fits, const DriftModelType *types,
     return FALSE;
 }
 
+/* The candidate models fitted by fit_every_model(), each on its own. */
+typedef struct {
+    const DriftMeasurement *meas;
+    gint n;
+    const gboolean *mask;     /* NULL: no cross-validation */
+    const Prepared *pm;
+    const DriftFitOptions *options;
+    const DriftModelType *types;
+    DriftFit *fits;
+} ModelFits;
+
+static void
+fit_model_task(gpointer data, gint i)
+{
+    ModelFits *mf = data;
+    DriftFit *fit = mf->fits + i;
+
+    fit_prepared(mf->pm, mf->types[i], mf->options, fit);
+    if (mf->mask && fit->ok && mf->options->n_folds >= 2)
+        fit->cv_rms_nm = cross_validate_masked(mf->meas, mf->n, mf->mask, mf->types[i],
+                                               mf->options);
+}
+
+/* Every candidate model fitted to pm and, with mask (the measurements pm
+ * was prepared from), cross-validated.  The models are independent, so
+ * they run on every core: the oscillation's and the jump's searches take
+ * most of a long series' fit. */
+static void
+fit_every_model(const DriftMeasurement *meas, gint n, const gboolean *mask,
+           const Prepared *pm, const DriftFitOptions *options, DriftFit *fits)
+{
+    ModelFits mf = { meas, n, mask, pm, options, NULL, fits };
+    gint n_types;
+
+    mf.types = drift_fit_candidates(&n_types);
+    parallel_run(0, n_types, fit_model_task, &mf);
+}
+
 gint
 drift_fit_select_kept(const DriftMeasurement *meas, gint n,
                       const DriftFitOptions *options, DriftFit *fits,
@@ -962,8 +1247,7 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
     options = options_or_defaults(options, &defaults);
     prepare(meas, n, NULL, &pm);
     span = pm.t_max - pm.t_min;
-    for (i = 0; i < n_types; i++)
-        fit_prepared(&pm, types[i], options, fits + i);
+    fit_every_model(meas, n, NULL, &pm, options, fits);
     prepared_free(&pm);
     if ((best = lowest_bic(fits, n_types)) < 0) {
         if (kept)
@@ -979,11 +1263,8 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
     if (kept)
         memcpy(kept, mask, n*sizeof(gboolean));
     prepare(meas, n, mask, &pm);
+    fit_every_model(meas, n, mask, &pm, options, fits);
     for (i = 0; i < n_types; i++) {
-        fit_prepared(&pm, types[i], options, fits + i);
-        if (fits[i].ok && options->n_folds >= 2)
-            fits[i].cv_rms_nm = cross_validate_masked(meas, n, mask, types[i],
-                                                      options);
         if (types[i] == DRIFT_MODEL_NONE)
             inone = i;
     }

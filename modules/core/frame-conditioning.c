@@ -596,6 +596,21 @@ conditioned_frame_downsample(const ConditionedFrame *frame, gint factor)
     return small;
 }
 
+ConditionedFrame*
+conditioned_frame_copy(const ConditionedFrame *frame)
+{
+    ConditionedFrame *copy;
+    gsize size;
+
+    g_return_val_if_fail(frame, NULL);
+    size = (gsize)frame->xres*frame->yres*sizeof(gdouble);
+    copy = g_memdup2(frame, sizeof(ConditionedFrame));
+    copy->data = g_memdup2(frame->data, size);
+    copy->weight = g_memdup2(frame->weight, size);
+    copy->levelled = frame->levelled ? g_memdup2(frame->levelled, size) : NULL;
+    return copy;
+}
+
 void
 conditioned_frame_free(ConditionedFrame *frame)
 {

@@ -67,6 +67,10 @@ void              conditioned_frame_band_pass(ConditionedFrame *frame,
 ConditionedFrame* conditioned_frame_downsample(const ConditionedFrame *frame,
                                                gint factor);
 
+/* A copy of its own, for a frame levelled once and band-passed for each
+ * partner. */
+ConditionedFrame* conditioned_frame_copy   (const ConditionedFrame *frame);
+
 void              conditioned_frame_free   (ConditionedFrame *frame);
 
 G_END_DECLS

@@ -231,6 +231,61 @@ residual_px(const SeriesCorrection *correction, const DriftFit *fit,
                  (m->dy - dy)/correction->ystep);
 }
 
+/* Each frame's measurements grouped by the other frame of their pair,
+ * partners ascending and measurements in order within each: a frame's
+ * pairs are read without a pass over the whole series for each frame
+ * (a thousand frames have fifty thousand measurements). */
+typedef struct {
+    gint *first;      /* frame k's entries: first[k] .. first[k+1] - 1 */
+    gint *meas;       /* the measurement of each entry */
+    gint *partner;    /* the other frame of its pair */
+} FramePairs;
+
+static gint
+compare_int64(gconstpointer a, gconstpointer b)
+{
+    gint64 x = *(const gint64*)a, y = *(const gint64*)b;
+
+    return (x > y) - (x < y);
+}
+
+/* Sorting (frame, partner, measurement) keys gives the grouping. */
+static void
+frame_pairs_init(FramePairs *pairs, const FitReport *report, gint nf)
+{
+    gint64 n = report->n_meas, *keys = g_new(gint64, 2*n + 1);
+    gint i, e, m = 0;
+
+    for (i = 0; i < n; i++) {
+        gint64 a = report->meas[i].frame_a, b = report->meas[i].frame_b;
+
+        if (a == b)
+            continue;
+        keys[m++] = (a*nf + b)*n + i;
+        keys[m++] = (b*nf + a)*n + i;
+    }
+    qsort(keys, m, sizeof(gint64), compare_int64);
+    pairs->first = g_new0(gint, nf + 1);
+    pairs->meas = g_new(gint, MAX(m, 1));
+    pairs->partner = g_new(gint, MAX(m, 1));
+    for (e = 0; e < m; e++) {
+        pairs->meas[e] = keys[e] % n;
+        pairs->partner[e] = (keys[e]/n) % nf;
+        pairs->first[keys[e]/n/nf + 1]++;
+    }
+    for (i = 0; i < nf; i++)
+        pairs->first[i + 1] += pairs->first[i];
+    g_free(keys);
+}
+
+static void
+frame_pairs_clear(FramePairs *pairs)
+{
+    g_free(pairs->first);
+    g_free(pairs->meas);
+    g_free(pairs->partner);
+}
+
 /* Frame k against a fit: the residual of its best-agreeing pair (the median
  * over the pair's registered blocks) with a frame not flagged, or with any
  * when all its partners are flagged.  A disturbed frame disagrees with
@@ -238,25 +293,21 @@ residual_px(const SeriesCorrection *correction, const DriftFit *fit,
  * number of registered pairs of k. */
 static gdouble
 frame_residual(const SeriesCorrection *correction, const DriftFit *fit,
-               gint k, const gdouble *registered, gint *n_pairs,
-               gdouble *values)
+               const FramePairs *pairs, gint k, const gdouble *registered,
+               gint *n_pairs, gdouble *values)
 {
     const FitReport *report = &correction->fit;
     gdouble best[2] = { NAN, NAN }, r;
-    gint i, j, count, partner_flagged;
+    gint e, next, i, j, count, partner_flagged;
 
     *n_pairs = 0;
-    for (j = 0; j < correction->n_frames; j++) {
-        if (j == k)
-            continue;
+    for (e = pairs->first[k]; e < pairs->first[k+1]; e = next) {
+        j = pairs->partner[e];
         count = 0;
-        for (i = 0; i < report->n_meas; i++) {
-            const DriftMeasurement *m = report->meas + i;
-
-            if (registered[i] > 0.0
-                && ((m->frame_a == k && m->frame_b == j)
-                    || (m->frame_a == j && m->frame_b == k)))
-                values[count++] = residual_px(correction, fit, m);
+        for (next = e; next < pairs->first[k+1] && pairs->partner[next] == j; next++) {
+            i = pairs->meas[next];
+            if (registered[i] > 0.0)
+                values[count++] = residual_px(correction, fit, report->meas + i);
         }
         if (count < PAIR_MIN_BLOCKS)
             continue;
@@ -278,16 +329,19 @@ judge_frames(SeriesCorrection *correction, const gdouble *registered)
     gint nf = correction->n_frames, k, count = 0;
     gdouble *values = g_new(gdouble, report->n_meas + nf + 1);
     gdouble *typical = values + report->n_meas;
+    FramePairs pairs;
 
+    frame_pairs_init(&pairs, report, nf);
     for (k = 0; k < nf; k++) {
         SeriesFrameVerdict *v = correction->frames + k;
 
-        v->residual_px = frame_residual(correction, NULL, k, registered,
+        v->residual_px = frame_residual(correction, NULL, &pairs, k, registered,
                                         &v->n_pairs, values);
         if (!v->flagged && isfinite(v->residual_px))
             typical[count++] = v->residual_px;
     }
     correction->typical_px = median_of(typical, count);
+    frame_pairs_clear(&pairs);
     g_free(values);
 }
 
@@ -425,8 +479,8 @@ agreeing_blocks(const SeriesCorrection *correction, const DriftFit *fit,
 /* The fit of the frames neither k nor flagged: frame k's residual
  * against it, the typical residual of the others and their spread. */
 static gboolean
-fit_leaving_out(const SeriesCorrection *correction, gint k,
-                const gdouble *registered, DriftMeasurement *work,
+fit_leaving_out(const SeriesCorrection *correction, const FramePairs *pairs,
+                gint k, const gdouble *registered, DriftMeasurement *work,
                 gdouble *values, LeftOut *result)
 {
     const FitReport *report = &correction->fit;
@@ -452,13 +506,13 @@ fit_leaving_out(const SeriesCorrection *correction, gint k,
     chosen = plausible_choice(correction, fits, report->n_fits, chosen, FALSE);
     if (chosen >= 0) {
         result->n_params = fits[chosen].n_params;
-        result->residual = frame_residual(correction, fits + chosen, k,
-                                          registered, &n_pairs, values);
+        result->residual = frame_residual(correction, fits + chosen, pairs,
+                                          k, registered, &n_pairs, values);
         for (j = 0; j < nf; j++) {
             if (j == k || correction->frames[j].flagged)
                 continue;
-            r = frame_residual(correction, fits + chosen, j, registered,
-                               &n_pairs, values);
+            r = frame_residual(correction, fits + chosen, pairs, j,
+                               registered, &n_pairs, values);
             if (isfinite(r))
                 others[count++] = r;
         }
@@ -538,7 +592,9 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
     gdouble agreement = correction->typical_px;
     gdouble *in_all = g_new(gdouble, MAX(nf, 1));
     LeftOut *cand = g_new(LeftOut, MAX(nf, 1)), c;
+    FramePairs pairs;
 
+    frame_pairs_init(&pairs, report, nf);
     for (k = 0; k < nf; k++)
         in_all[k] = correction->frames[k].residual_px;
     for (round = 0; round < MAX(nf/3, 1); round++) {
@@ -551,8 +607,8 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
         n = 0;
         for (k = 0; k < nf; k++) {
             if (correction->frames[k].flagged
-                || !fit_leaving_out(correction, k, registered, work, values,
-                                    &c))
+                || !fit_leaving_out(correction, &pairs, k, registered, work,
+                                    values, &c))
                 continue;
             if (beyond_limit(c.residual, c.typical)
                 && (agreement > LEAVE_OUT_GAIN*c.typical
@@ -565,6 +621,7 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
         flag_frame(correction->frames + c.frame, c.residual, c.typical);
         agreement = c.typical;
     }
+    frame_pairs_clear(&pairs);
     g_free(cand);
     g_free(in_all);
     g_free(work);

@@ -792,12 +792,14 @@ levelled_view(const ConditionedFrame *frame)
  * matched on it (scores up to 0.6 in the tests). */
 static void
 measure_fine(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
-             const gdouble *pdy, const gdouble *pdx, gint radius, gdouble min_score, StripeShift *shifts)
+             const gdouble *pdy, const gdouble *pdx, gint radius, gdouble min_score, gboolean polish,
+             StripeShift *shifts)
 {
     ConditionedFrame image_view = levelled_view(image), reference_view = levelled_view(reference);
     Level level;
 
-    level_init(&level, &image_view, &reference_view, image, reference, n, radius, radius);
+    level_init(&level, &image_view, &reference_view, polish ? image : NULL, polish ? reference : NULL,
+               n, radius, radius);
     measure_level(&level, pdy, pdx, radius, radius, 0, FALSE, min_score, shifts);
     level_free(&level);
 }
@@ -853,7 +855,7 @@ stripe_registration_measure_conditioned(const ConditionedFrame *image, const Con
     }
     else {
         radius = MIN(fine_radius(factor), MIN(image->xres, image->yres)/2);
-        measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, shifts);
+        measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, TRUE, shifts);
         for (s = 0; s < n; s++)
             shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres, pdy[s], pdx[s]);
     }
@@ -862,16 +864,15 @@ stripe_registration_measure_conditioned(const ConditionedFrame *image, const Con
     return TRUE;
 }
 
-gboolean
-stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
-                                               const ConditionedFrame *reference, gint n,
-                                               const gdouble *predicted_dx, const gdouble *predicted_dy,
-                                               gdouble radius_px, gdouble min_score,
-                                               StripeShift *shifts, GError **error)
+/* stripe_registration_measure_around_conditioned(); without polish the
+ * shifts stay at the maps' resolution (peaks refined by a quadratic). */
+static gboolean
+measure_around(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
+               const gdouble *predicted_dx, const gdouble *predicted_dy, gdouble radius_px,
+               gdouble min_score, gboolean polish, StripeShift *shifts, GError **error)
 {
     gint s, radius;
 
-    g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
     if (!check_frames(image, reference, n, error))
         return FALSE;
     for (s = 0; s < n; s++) {
@@ -884,12 +885,24 @@ stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
         }
     }
     radius = (gint)CLAMP(ceil(radius_px), 1, MIN(image->xres, image->yres)/2);
-    measure_fine(image, reference, n, predicted_dy, predicted_dx, radius, min_score, shifts);
+    measure_fine(image, reference, n, predicted_dy, predicted_dx, radius, min_score, polish, shifts);
     for (s = 0; s < n; s++) {
         shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres,
                                                      predicted_dy[s], predicted_dx[s]);
     }
     return TRUE;
+}
+
+gboolean
+stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
+                                               const ConditionedFrame *reference, gint n,
+                                               const gdouble *predicted_dx, const gdouble *predicted_dy,
+                                               gdouble radius_px, gdouble min_score,
+                                               StripeShift *shifts, GError **error)
+{
+    g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
+    return measure_around(image, reference, n, predicted_dx, predicted_dy, radius_px, min_score,
+                          TRUE, shifts, error);
 }
 
 static gboolean
@@ -958,6 +971,118 @@ stripe_registration_measure_around(const gdouble *image, const gdouble *referenc
                                                         radius_px, min_score, shifts, error);
     conditioned_frame_free(cimage);
     conditioned_frame_free(creference);
+    return ok;
+}
+
+struct _StripeRegistrationFrame {
+    ConditionedFrame *unfiltered;  /* conditioned up to the band-pass */
+    gdouble noise_scale;           /* the narrow blur its own noise calls for */
+    gdouble pixel_aspect;
+    ConditionedFrame *passed;      /* band-passed with noise_scale */
+};
+
+/* A frame band-passed with narrow. */
+static ConditionedFrame*
+band_pass_copy(const StripeRegistrationFrame *frame, gdouble narrow)
+{
+    ConditionedFrame *passed = conditioned_frame_copy(frame->unfiltered);
+
+    conditioned_frame_band_pass(passed, frame->pixel_aspect, narrow);
+    return passed;
+}
+
+StripeRegistrationFrame*
+stripe_registration_frame_new(const gdouble *data, gint xres, gint yres, gdouble pixel_aspect)
+{
+    StripeRegistrationFrame *frame;
+    ConditionedFrame *unfiltered;
+
+    g_return_val_if_fail(data, NULL);
+    if (xres < 4 || yres < 4 || !(unfiltered = frame_condition_level(data, NULL, xres, yres)))
+        return NULL;
+    frame = g_new0(StripeRegistrationFrame, 1);
+    frame->unfiltered = unfiltered;
+    frame->pixel_aspect = pixel_aspect;
+    frame->noise_scale = conditioned_frame_noise_scale(unfiltered, pixel_aspect);
+    /* Frames of a series have alike noise: a pair mostly asks for the
+     * band each frame's own noise calls for. */
+    frame->passed = band_pass_copy(frame, frame->noise_scale);
+    return frame;
+}
+
+void
+stripe_registration_frame_free(StripeRegistrationFrame *frame)
+{
+    if (!frame)
+        return;
+    conditioned_frame_free(frame->unfiltered);
+    conditioned_frame_free(frame->passed);
+    g_free(frame);
+}
+
+/* The frame band-passed with narrow: its own copy when that is its band,
+ * else one made for the pair in *made (freed by the caller).  The frame is
+ * not changed, so pairs can be registered in parallel. */
+static const ConditionedFrame*
+band_passed(const StripeRegistrationFrame *frame, gdouble narrow, ConditionedFrame **made)
+{
+    *made = NULL;
+    if (narrow == frame->noise_scale)
+        return frame->passed;
+    return *made = band_pass_copy(frame, narrow);
+}
+
+/* The pair's conditioned frames: the frames' own, or made for the pair
+ * (*made_*, to be freed). */
+static void
+pair_frames(const StripeRegistrationFrame *image, const StripeRegistrationFrame *reference,
+            const ConditionedFrame **cimage, const ConditionedFrame **creference,
+            ConditionedFrame **made_image, ConditionedFrame **made_reference)
+{
+    /* The same band as condition_pair() gives the two frames. */
+    gdouble narrow = MAX(image->noise_scale, reference->noise_scale);
+
+    *cimage = band_passed(image, narrow, made_image);
+    *creference = band_passed(reference, narrow, made_reference);
+}
+
+gboolean
+stripe_registration_frame_shift(const StripeRegistrationFrame *image,
+                                const StripeRegistrationFrame *reference,
+                                gdouble predicted_dx, gdouble predicted_dy, gdouble radius_px,
+                                StripeShift *shift)
+{
+    ConditionedFrame *made_image, *made_reference;
+    const ConditionedFrame *cimage, *creference;
+    gboolean ok;
+
+    g_return_val_if_fail(image && reference && shift, FALSE);
+    pair_frames(image, reference, &cimage, &creference, &made_image, &made_reference);
+    ok = measure_around(cimage, creference, 1, &predicted_dx, &predicted_dy, radius_px,
+                        STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, FALSE, shift, NULL);
+    conditioned_frame_free(made_image);
+    conditioned_frame_free(made_reference);
+    return ok;
+}
+
+gboolean
+stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
+                                          const StripeRegistrationFrame *reference, gint n,
+                                          const gdouble *predicted_dx, const gdouble *predicted_dy,
+                                          gdouble radius_px, gdouble min_score,
+                                          StripeShift *shifts, GError **error)
+{
+    ConditionedFrame *made_image, *made_reference;
+    const ConditionedFrame *cimage, *creference;
+    gboolean ok;
+
+    g_return_val_if_fail(image && reference, FALSE);
+    pair_frames(image, reference, &cimage, &creference, &made_image, &made_reference);
+    ok = stripe_registration_measure_around_conditioned(cimage, creference, n, predicted_dx,
+                                                        predicted_dy, radius_px, min_score,
+                                                        shifts, error);
+    conditioned_frame_free(made_image);
+    conditioned_frame_free(made_reference);
     return ok;
 }
 

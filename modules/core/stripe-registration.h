@@ -126,6 +126,46 @@ gboolean     stripe_registration_measure_around_conditioned(const ConditionedFra
                                                             StripeShift *shifts,
                                                             GError **error);
 
+/* A frame conditioned once for registration against several others (a
+ * series registers each frame against its neighbours): the steps up to
+ * the band-pass are its own; the band-pass, which two frames share (the
+ * noisier frame's), is made with the frame's own band beforehand and for
+ * a pair that asks for another one when registered.  Not changed after:
+ * several threads may register it at once.  NULL when the frame is
+ * smaller than 4 x 4 px or has no valid pixel. */
+typedef struct _StripeRegistrationFrame StripeRegistrationFrame;
+
+StripeRegistrationFrame* stripe_registration_frame_new(const gdouble *data,
+                                                       gint xres,
+                                                       gint yres,
+                                                       gdouble pixel_aspect);
+
+void         stripe_registration_frame_free(StripeRegistrationFrame *frame);
+
+/* stripe_registration_measure_around() for two such frames, conditioned
+ * as it would condition them. */
+gboolean     stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
+                                                       const StripeRegistrationFrame *reference,
+                                                       gint n,
+                                                       const gdouble *predicted_dx,
+                                                       const gdouble *predicted_dy,
+                                                       gdouble radius_px,
+                                                       gdouble min_score,
+                                                       StripeShift *shifts,
+                                                       GError **error);
+
+/* The whole frame's shift (px, table convention) within radius_px of the
+ * predicted one, to the correlation map's resolution (its peak refined by
+ * a quadratic), without the sub-pixel match, which would cost as much as
+ * all the stripes' together: where to search the stripes.  shift->peak
+ * is the correlation at the peak. */
+gboolean     stripe_registration_frame_shift(const StripeRegistrationFrame *image,
+                                             const StripeRegistrationFrame *reference,
+                                             gdouble predicted_dx,
+                                             gdouble predicted_dy,
+                                             gdouble radius_px,
+                                             StripeShift *shift);
+
 /* The same for two channels; refuses (with a message giving both sizes)
  * fields of different pixel dimensions.  The pixel aspect comes from the
  * image's pixel sizes (options' is ignored); options may be NULL. */
