@@ -46,13 +46,16 @@ fi
 # Every program whose source takes LOCALSCAN_TEST_SEED through the shared
 # helper (or the frame-pair one), roughly fastest first; the GUI tests last.
 if [ $# -eq 0 ]; then
-    set -- test-drift-model test-simscan-scanner test-local-scan \
+    set -- test-drift-model test-trajectory-csv test-simscan-scanner \
+        test-local-scan test-gwy-stream-save test-hostile-core \
         test-simscan-measured-sample test-continuous-compensate \
         test-drift-trajectory test-drift-fit-creep test-continuous-blocks \
+        test-height-keeping test-frame-series test-benchmark.sh \
         test-continuous-simscan test-stripe-registration \
         test-paper-compensate test-module-immediate test-simscan-cli.sh \
-        test-module-dialog test-gui-dialog.sh test-hidden-effects \
-        test-gwy-localscan
+        test-series-command.sh test-series-module test-series-correction \
+        test-hostile-input test-module-dialog test-gui-dialog.sh \
+        test-hidden-effects test-gwy-localscan
 fi
 
 # What AM_TESTS_ENVIRONMENT (tests/Makefile.inc) sets.
