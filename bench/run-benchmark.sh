@@ -10,7 +10,8 @@
 #   bench/run-benchmark.sh [-b BUILDDIR] [-o OUTDIR] [-s SEED] [-z small|full] [-d]
 #
 # BUILDDIR is the configured build (default _build), OUTDIR where cases and
-# results go (default BUILDDIR/benchmark-run, replaced).
+# results go (default BUILDDIR/benchmark-run; an earlier run there is
+# replaced, anything else refused).
 #
 # Copyright (C) 2026 The gwy-localscan authors.
 # SPDX-License-Identifier: GPL-2.0-or-later
@@ -49,6 +50,13 @@ export LOCALSCAN_MEASURED_DIR
 now() { date +%s.%N; }
 elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1f", b - a }'; }
 
+# Replaced only when it is an earlier run's (or empty): a mistyped -o must
+# not remove anything else.
+if [ -e "$outdir" ] && [ -n "$(ls -A "$outdir" 2>/dev/null)" ] \
+   && [ ! -f "$outdir/cases/benchmark.json" ]; then
+    echo "run-benchmark: $outdir is not an earlier benchmark run; give another -o" >&2
+    exit 1
+fi
 rm -rf "$outdir"
 mkdir -p "$outdir/results/series"
 start=$(now)

@@ -42,8 +42,13 @@ parse_size(const gchar *text, BenchmarkSize *size, GError **error)
         *size = BENCHMARK_SIZE_SMALL;
     else if (strcmp(text, "full") == 0)
         *size = BENCHMARK_SIZE_FULL;
-    else
-        return option_value_refuse("size", _("small or full"), error);
+    else {
+        gchar *what = g_strdup_printf(_("'%.40s' is not small or full"), text);
+        gboolean ok = option_value_refuse("size", what, error);
+
+        g_free(what);
+        return ok;
+    }
     return TRUE;
 }
 
@@ -190,19 +195,27 @@ read_manifest(const gchar *truth, gchar **summary, GError **error)
     return names;
 }
 
+/* Trajectory / frame residual; stripes that did not register against the
+ * truth are named, so that wrecked frames cannot pass for good ones. */
 static void
 print_cell(const BenchmarkScore *s)
 {
-    gchar cell[48];
+    gchar frame[48];
 
-    if (s->failure)
-        g_snprintf(cell, sizeof(cell), "failed");
-    else if (isnan(s->frame_rms_px))
-        g_snprintf(cell, sizeof(cell), "%.3f / —", s->trajectory_rms_px);
+    if (s->failure) {
+        printf(" failed |");
+        return;
+    }
+    if (!s->stripes_judged)
+        g_snprintf(frame, sizeof(frame), "—");
+    else if (s->stripes_lost == s->stripes_judged)
+        g_snprintf(frame, sizeof(frame), "none registered");
+    else if (s->stripes_lost)
+        g_snprintf(frame, sizeof(frame), "%.3f (%d/%d lost)", s->frame_rms_px,
+                   s->stripes_lost, s->stripes_judged);
     else
-        g_snprintf(cell, sizeof(cell), "%.3f / %.3f", s->trajectory_rms_px,
-                   s->frame_rms_px);
-    printf(" %s |", cell);
+        g_snprintf(frame, sizeof(frame), "%.3f", s->frame_rms_px);
+    printf(" %.3f / %s |", s->trajectory_rms_px, frame);
 }
 
 static void
@@ -210,7 +223,9 @@ print_table(gchar **cases, gchar **methods, BenchmarkScore *scores)
 {
     gint nm = g_strv_length(methods), i, j;
 
-    printf("\nTrajectory RMS / corrected-frame residual, px:\n\n| case |");
+    printf("\nTrajectory RMS / corrected-frame residual, px (— where the method "
+           "gives no corrected frames; stripes that do not register against "
+           "the truth are counted as lost):\n\n| case |");
     for (j = 0; j < nm; j++)
         printf(" %s |", methods[j]);
     printf("\n|---|");
@@ -248,10 +263,6 @@ print_notes(gchar **cases, gchar **methods, BenchmarkScore *scores)
             else if (s->disturbed && s->flags_missed < 0)
                 printf("%s, %s: flags no frames (none given)\n", cases[i],
                        methods[j]);
-            if (!s->failure && s->stripes_lost)
-                printf("%s, %s: %d stripe(s) of corrected frames do not "
-                       "register against the truth\n", cases[i], methods[j],
-                       s->stripes_lost);
         }
     }
 }
@@ -273,6 +284,8 @@ add_score(JsonBuilder *b, const gchar *name, const BenchmarkScore *s)
     json_values_set_number(b, "frame_worst_px", s->frame_worst_px);
     json_builder_set_member_name(b, "stripes_lost");
     json_builder_add_int_value(b, s->stripes_lost);
+    json_builder_set_member_name(b, "stripes_judged");
+    json_builder_add_int_value(b, s->stripes_judged);
     json_values_set_number(b, "flags_missed",
                            s->flags_missed >= 0 ? s->flags_missed : NAN);
     json_values_set_number(b, "flags_false",
@@ -328,15 +341,62 @@ score_all(const gchar *truth, gchar **results, gchar **cases,
     return ok;
 }
 
+/* The methods' names, their folders' names: each RESULT must be a folder,
+ * and no two may share a name (their columns could not be told apart). */
 static gchar**
-method_names(gchar **results)
+method_names(gchar **results, GError **error)
 {
-    gint n = g_strv_length(results), j;
+    gint n = g_strv_length(results), j, i;
     gchar **names = g_new0(gchar*, n + 1);
 
-    for (j = 0; j < n; j++)
+    for (j = 0; j < n; j++) {
         names[j] = g_path_get_basename(results[j]);
+        if (!g_file_test(results[j], G_FILE_TEST_IS_DIR)) {
+            g_set_error(error, benchmark_error_quark(), 0,
+                        _("%s: not a folder of results"), results[j]);
+            break;
+        }
+        for (i = 0; i < j && strcmp(names[i], names[j]) != 0; i++)
+            ;
+        if (i < j) {
+            g_set_error(error, benchmark_error_quark(), 0,
+                        _("%s and %s: two methods named %s"), results[i],
+                        results[j], names[j]);
+            break;
+        }
+    }
+    if (j < n) {
+        g_strfreev(names);
+        return NULL;
+    }
     return names;
+}
+
+/* The JSON and the plot, both or neither. */
+static gboolean
+write_outputs(const gchar *json, const gchar *svg, const gchar *summary,
+              gchar **cases, gchar **methods, BenchmarkScore *scores,
+              GError **error)
+{
+    OutputFiles *files = output_files_new();
+    gchar *text;
+    gboolean ok = TRUE;
+
+    if (json) {
+        text = scores_json(summary, cases, methods, scores);
+        ok = output_files_add(files, json, (const guchar*)text, strlen(text),
+                              error);
+        g_free(text);
+    }
+    if (ok && svg) {
+        text = benchmark_plot_svg(cases, methods, scores);
+        ok = output_files_add(files, svg, (const guchar*)text, strlen(text),
+                              error);
+        g_free(text);
+    }
+    ok = ok && output_files_commit(files, error);
+    output_files_free(files);
+    return ok;
 }
 
 int
@@ -344,7 +404,7 @@ simscan_score_main(int argc, char **argv)
 {
     gchar *truth = NULL, *json = NULL, *svg = NULL, **results = NULL;
     gchar **cases = NULL;
-    gchar **methods = NULL, *summary = NULL, *text;
+    gchar **methods = NULL, *summary = NULL;
     GOptionEntry entries[] = {
         { "truth", 0, 0, G_OPTION_ARG_FILENAME, &truth,
           N_("The cases as `simscan benchmark` wrote them"), N_("DIR") },
@@ -375,25 +435,13 @@ simscan_score_main(int argc, char **argv)
     }
     if (!(cases = read_manifest(truth, &summary, &error)))
         goto end;
-    methods = method_names(results);
+    if (!(methods = method_names(results, &error)))
+        goto end;
     n = g_strv_length(cases)*g_strv_length(results);
     scores = g_new0(BenchmarkScore, MAX(n, 1));
-    if (!score_all(truth, results, cases, scores, &error))
+    if (!score_all(truth, results, cases, scores, &error)
+        || !write_outputs(json, svg, summary, cases, methods, scores, &error))
         goto end;
-    text = json ? scores_json(summary, cases, methods, scores) : NULL;
-    if (text && !output_files_write_one(json, (const guchar*)text,
-                                        strlen(text), &error)) {
-        g_free(text);
-        goto end;
-    }
-    g_free(text);
-    text = svg ? benchmark_plot_svg(cases, methods, scores) : NULL;
-    if (text && !output_files_write_one(svg, (const guchar*)text,
-                                        strlen(text), &error)) {
-        g_free(text);
-        goto end;
-    }
-    g_free(text);
     printf("%s: %u cases, %u methods\n", summary, g_strv_length(cases),
            g_strv_length(results));
     print_table(cases, methods, scores);

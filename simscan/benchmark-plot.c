@@ -13,7 +13,8 @@
 #define PLOT_WIDTH 480
 #define BAR_HEIGHT 7
 #define GROUP_GAP 6
-#define TOP 40
+#define LEGEND_PER_ROW 4
+#define LEGEND_ROW 12
 /* The axis: 10^LOG_MIN to 10^LOG_MAX px. */
 #define LOG_MIN -3
 #define LOG_MAX 2
@@ -31,7 +32,7 @@ axis_x(gdouble value)
 }
 
 static void
-draw_axis(GString *svg, gint height)
+draw_axis(GString *svg, gint top, gint height)
 {
     gint e;
 
@@ -39,7 +40,7 @@ draw_axis(GString *svg, gint height)
         gdouble x = axis_x(pow(10.0, e));
 
         g_string_append_printf(svg, "<line x1='%.1f' y1='%d' x2='%.1f' y2='%d' "
-                               "stroke='#ccc'/>\n", x, TOP - 5, x, height - 20);
+                               "stroke='#ccc'/>\n", x, top - 5, x, height - 20);
         g_string_append_printf(svg, "<text x='%.1f' y='%d' font-size='10' "
                                "text-anchor='middle'>%g</text>\n", x,
                                height - 6, pow(10.0, e));
@@ -48,19 +49,23 @@ draw_axis(GString *svg, gint height)
                            "RMS per case (px, log scale)</text>\n", LABEL_WIDTH);
 }
 
+/* Four methods to a row of the legend, above the plot. */
 static void
 draw_legend(GString *svg, gchar **methods)
 {
-    gint j;
+    gchar *name;
+    gint j, x, y;
 
     for (j = 0; methods[j]; j++) {
-        gint x = LABEL_WIDTH + 120*j;
-
-        g_string_append_printf(svg, "<rect x='%d' y='22' width='10' height='8' "
-                               "fill='%s'/><text x='%d' y='30' font-size='10'>"
-                               "%s</text>\n", x,
+        x = LABEL_WIDTH + 120*(j % LEGEND_PER_ROW);
+        y = 22 + LEGEND_ROW*(j/LEGEND_PER_ROW);
+        name = g_markup_escape_text(methods[j], -1);
+        g_string_append_printf(svg, "<rect x='%d' y='%d' width='10' height='8' "
+                               "fill='%s'/><text x='%d' y='%d' font-size='10'>"
+                               "%s</text>\n", x, y,
                                colours[j % G_N_ELEMENTS(colours)], x + 14,
-                               methods[j]);
+                               y + 8, name);
+        g_free(name);
     }
 }
 
@@ -68,7 +73,8 @@ gchar*
 benchmark_plot_svg(gchar **cases, gchar **methods, const BenchmarkScore *scores)
 {
     gint nc = g_strv_length(cases), nm = g_strv_length(methods), i, j, y;
-    gint height = TOP + nc*(nm*BAR_HEIGHT + GROUP_GAP) + 30;
+    gint top = 34 + LEGEND_ROW*((nm + LEGEND_PER_ROW - 1)/LEGEND_PER_ROW);
+    gint height = top + nc*(nm*BAR_HEIGHT + GROUP_GAP) + 30;
     GString *svg = g_string_new(NULL);
     const BenchmarkScore *s;
     gchar *name;
@@ -77,10 +83,10 @@ benchmark_plot_svg(gchar **cases, gchar **methods, const BenchmarkScore *scores)
                            "width='%d' height='%d' font-family='sans-serif'>\n",
                            LABEL_WIDTH + PLOT_WIDTH + 20, height);
     g_string_append(svg, "<rect width='100%' height='100%' fill='white'/>\n");
-    draw_axis(svg, height);
+    draw_axis(svg, top, height);
     draw_legend(svg, methods);
     for (i = 0; i < nc; i++) {
-        y = TOP + i*(nm*BAR_HEIGHT + GROUP_GAP);
+        y = top + i*(nm*BAR_HEIGHT + GROUP_GAP);
         name = g_markup_escape_text(cases[i], -1);
         g_string_append_printf(svg, "<text x='%d' y='%d' font-size='10' "
                                "text-anchor='end'>%s</text>\n", LABEL_WIDTH - 6,
@@ -94,10 +100,11 @@ benchmark_plot_svg(gchar **cases, gchar **methods, const BenchmarkScore *scores)
                                        LABEL_WIDTH + 2, y + (j + 1)*BAR_HEIGHT);
                 continue;
             }
+            /* At least a pixel: a perfect method is not a missing one. */
             g_string_append_printf(svg, "<rect x='%d' y='%d' width='%.1f' "
                                    "height='%d' fill='%s'/>\n", LABEL_WIDTH,
                                    y + j*BAR_HEIGHT,
-                                   axis_x(s->trajectory_rms_px) - LABEL_WIDTH,
+                                   MAX(axis_x(s->trajectory_rms_px) - LABEL_WIDTH, 1.0),
                                    BAR_HEIGHT - 1,
                                    colours[j % G_N_ELEMENTS(colours)]);
         }

@@ -27,6 +27,9 @@
 /* Scan lines a case may have (frames x rows): a case description from
  * elsewhere must not make the scorer allocate without bound. */
 #define MAX_LINES (1 << 22)
+/* A trajectory value beyond this is no drift a frame can show: refused
+ * (squares of 1e200 overflow the figures into infinities). */
+#define MAX_DRIFT_PX 1e6
 /* Stripes a corrected frame is judged in. */
 #define JUDGE_STRIPES 8
 /* Corrected channels are those titled so, when any is. */
@@ -68,10 +71,15 @@ json_get_int(JsonObject *o, const gchar *name, gint lo, gint hi, gint *v)
 {
     JsonNode *node = json_object_get_member(o, name);
 
+    gint64 value;
+
     if (!node || json_node_get_value_type(node) != G_TYPE_INT64)
         return FALSE;
-    *v = (gint)json_node_get_int(node);
-    return *v >= lo && *v <= hi;
+    value = json_node_get_int(node);
+    if (value < lo || value > hi)
+        return FALSE;
+    *v = (gint)value;
+    return TRUE;
 }
 
 static gboolean
@@ -173,6 +181,7 @@ static void
 truth_case_free(TruthCase *tc)
 {
     g_free(tc->disturbed);
+    tc->disturbed = NULL;
     trajectory_table_free(&tc->truth);
 }
 
@@ -185,13 +194,16 @@ read_truth(const gchar *dir, TruthCase *tc, GError **error)
     memset(tc, 0, sizeof(TruthCase));
     ok = read_case_json(path, tc, error);
     g_free(path);
-    if (!ok)
+    if (!ok) {
+        truth_case_free(tc);
         return FALSE;
+    }
     path = g_build_filename(dir, "truth.csv", NULL);
     if ((failure = read_trajectory(path, tc->n_frames, tc->yres, &tc->truth))) {
         g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL, "%s: %s", path,
                     failure);
         g_free(failure);
+        truth_case_free(tc);
         ok = FALSE;
     }
     g_free(path);
@@ -225,6 +237,11 @@ score_trajectory(const TruthCase *tc, const gchar *path, BenchmarkScore *score)
             if (!tr.have[i]) {
                 failure = g_strdup_printf(_("frame %d row %d is missing"), k,
                                           r);
+                break;
+            }
+            if (!(fabs(tr.dx[i]) <= MAX_DRIFT_PX && fabs(tr.dy[i]) <= MAX_DRIFT_PX)) {
+                failure = g_strdup_printf(_("frame %d row %d: beyond %g px"),
+                                          k, r, MAX_DRIFT_PX);
                 break;
             }
             e = hypot(tr.dx[i] - truth->dx[i], tr.dy[i] - truth->dy[i]);
@@ -319,29 +336,54 @@ score_frame(const TruthCase *tc, const gdouble *frame, const gdouble *truth,
     }
 }
 
+/* The drift-free frame of the case (channel 0 of truth.gwy, xres x yres),
+ * or NULL with error set: the truth, not the method, is at fault. */
+static gdouble*
+load_truth_frame(const TruthCase *tc, const gchar *truth_dir, GError **error)
+{
+    gchar *path = g_build_filename(truth_dir, "truth.gwy", NULL);
+    GwyContainer *data = simscan_load_file(path, error);
+    GwyDataField *field = NULL;
+    gdouble *truth = NULL;
+
+    if (data
+        && (!gwy_container_gis_object(data, gwy_app_get_data_key_for_id(0),
+                                      (GObject**)&field)
+            || !GWY_IS_DATA_FIELD(field)
+            || gwy_data_field_get_xres(field) != tc->xres
+            || gwy_data_field_get_yres(field) != tc->yres))
+        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL,
+                    _("%s: no drift-free frame of %dx%d in channel 0"), path,
+                    tc->xres, tc->yres);
+    else if (data)
+        truth = frame_with_mask(data, 0);
+    if (data)
+        g_object_unref(data);
+    g_free(path);
+    return truth;
+}
+
 static gchar*
-score_frames(const TruthCase *tc, const gchar *truth_dir, const gchar *path,
+score_frames(const TruthCase *tc, const gdouble *truth, const gchar *path,
              BenchmarkScore *score)
 {
-    GwyContainer *data = NULL, *tdata;
-    gchar *failure = NULL, *tpath;
-    gdouble *frame, *truth, sum = 0.0;
+    GwyContainer *data;
+    gchar *failure = NULL;
+    gdouble *frame, sum = 0.0;
     GError *err = NULL;
     GArray *ids = NULL;
     gint k, count = 0, id;
 
-    tpath = g_build_filename(truth_dir, "truth.gwy", NULL);
-    tdata = simscan_load_file(tpath, &err);
-    g_free(tpath);
-    if (tdata && (data = simscan_load_file(path, &err)))
-        ids = corrected_channels(data);
-    if (err)
+    if (!(data = simscan_load_file(path, &err))) {
         failure = g_strdup_printf("corrected.gwy: %s", err->message);
-    else if ((gint)ids->len != tc->n_frames)
+        g_clear_error(&err);
+        return failure;
+    }
+    ids = corrected_channels(data);
+    if ((gint)ids->len != tc->n_frames)
         failure = g_strdup_printf(_("corrected.gwy holds %u frames, the case "
                                     "%d"), ids->len, tc->n_frames);
     score->frame_worst_px = 0.0;
-    truth = failure ? NULL : frame_with_mask(tdata, 0);
     for (k = 0; k < tc->n_frames && !failure; k++) {
         GwyDataField *field;
 
@@ -360,17 +402,12 @@ score_frames(const TruthCase *tc, const gchar *truth_dir, const gchar *path,
             continue;
         frame = frame_with_mask(data, id);
         score_frame(tc, frame, truth, &sum, &count, score);
+        score->stripes_judged += JUDGE_STRIPES;
         g_free(frame);
     }
     score->frame_rms_px = count ? sqrt(sum/count) : NAN;
-    g_free(truth);
-    g_clear_error(&err);
-    if (ids)
-        g_array_free(ids, TRUE);
-    if (data)
-        g_object_unref(data);
-    if (tdata)
-        g_object_unref(tdata);
+    g_array_free(ids, TRUE);
+    g_object_unref(data);
     return failure;
 }
 
@@ -426,9 +463,12 @@ read_flags(const gchar *dir, gint n_frames, gboolean *flagged, gboolean *given)
         for (j = 0; a && j < json_array_get_length(a) && !failure; j++) {
             o = json_array_get_object_element(a, j);
             if (!o || !json_get_int(o, "index", 0, n_frames - 1, &k)
-                || !json_object_has_member(o, "flagged"))
+                || !json_object_has_member(o, "flagged")
+                || json_node_get_value_type(json_object_get_member(o, "flagged"))
+                   != G_TYPE_BOOLEAN)
                 failure = g_strdup_printf(_("result.json frame %u: no index "
-                                            "0 to %d or no flagged"), j,
+                                            "0 to %d or no flagged true or "
+                                            "false"), j,
                                           n_frames - 1);
             else
                 flagged[k] = json_object_get_boolean_member(o, "flagged");
@@ -465,6 +505,8 @@ benchmark_score_case(const gchar *truth_case_dir, const gchar *result_case_dir,
                      BenchmarkScore *score, GError **error)
 {
     TruthCase tc;
+    gdouble *truth = NULL;
+    gboolean ok = TRUE;
     gchar *path;
 
     memset(score, 0, sizeof(BenchmarkScore));
@@ -477,13 +519,18 @@ benchmark_score_case(const gchar *truth_case_dir, const gchar *result_case_dir,
     score->failure = score_trajectory(&tc, path, score);
     g_free(path);
     path = g_build_filename(result_case_dir, "corrected.gwy", NULL);
-    if (!score->failure && g_file_test(path, G_FILE_TEST_EXISTS))
-        score->failure = score_frames(&tc, truth_case_dir, path, score);
+    if (!score->failure && g_file_test(path, G_FILE_TEST_EXISTS)) {
+        if ((truth = load_truth_frame(&tc, truth_case_dir, error)))
+            score->failure = score_frames(&tc, truth, path, score);
+        else
+            ok = FALSE;
+    }
     g_free(path);
-    if (!score->failure)
+    if (ok && !score->failure)
         score->failure = score_flags(&tc, result_case_dir, score);
+    g_free(truth);
     truth_case_free(&tc);
-    return TRUE;
+    return ok;
 }
 
 void

@@ -23,6 +23,7 @@ typedef struct {
     gdouble frame_worst_px;
     gint stripes_lost;           /* stripes of corrected frames that do not
                                     register against the truth at all */
+    gint stripes_judged;         /* of how many */
     gint flags_missed;           /* disturbed frames not flagged; -1: no
                                     flags given */
     gint flags_false;            /* trusted frames flagged; -1 likewise */

@@ -90,6 +90,14 @@ cp "$tmp/a/06-creep/truth.csv" "$bad/06-creep/trajectory.csv"
 printf 'not a gwy file' > "$bad/06-creep/corrected.gwy"
 cp "$tmp/a/07-random-walk/truth.csv" "$bad/07-random-walk/trajectory.csv"
 printf '0\n99\n' > "$bad/07-random-walk/flagged.txt"
+awk -F, 'BEGIN { OFS = "," } NR == 12 { $4 = "1e200" } { print }' \
+    "$tmp/a/09-raw-channel/truth.csv" > "$bad/09-raw-channel/trajectory.csv"
+cp "$tmp/a/10-missing-pixels/truth.csv" "$bad/10-missing-pixels/trajectory.csv"
+printf '{"frames":[{"index":4294967296,"flagged":true}]}' \
+    > "$bad/10-missing-pixels/result.json"
+cp "$tmp/a/11-disturbed-frame/truth.csv" "$bad/11-disturbed-frame/trajectory.csv"
+printf '{"frames":[{"index":1,"flagged":"yes"}]}' \
+    > "$bad/11-disturbed-frame/result.json"
 
 check
 "$simscan" score --truth "$tmp/a" --json "$tmp/scores.json" "$tmp/r/truth" \
@@ -120,6 +128,9 @@ expect_failure 05-acceleration "given twice"
 expect_failure 06-creep "corrected.gwy"
 expect_failure 07-random-walk "flagged.txt line 2"
 expect_failure 08-large-offset "trajectory.csv absent"
+expect_failure 09-raw-channel "beyond"
+expect_failure 10-missing-pixels "result.json frame 0"
+expect_failure 11-disturbed-frame "no flagged true or false"
 
 # The series correction's own result on one case: its corrected frames are
 # scored against the drift-free truth, well under a pixel.
@@ -138,6 +149,29 @@ awk -v v="$v" 'BEGIN { exit !(v != "" && v != "null" && v < 0.3) }' \
 check
 v=$(score_of "$tmp/series.json" flags_false 01-constant series)
 [ "$v" = "0.0" ] || [ "$v" = "0" ] || fail "series on 01-constant: $v clean frames flagged"
+
+# A truth whose drift-free frame is not the case's size is the truth's
+# fault: one line, exit 1 (the method's corrected frames are never read
+# against it).
+cp -r "$tmp/a" "$tmp/bt"
+cp "$tmp/a/14-movie/truth.gwy" "$tmp/bt/01-constant/truth.gwy"
+check
+if "$simscan" score --truth "$tmp/bt" "$tmp/r/series" >"$tmp/out" 2>"$tmp/err"; then
+    fail "a truth.gwy of the wrong size: exit 0"
+fi
+grep -q "no drift-free frame of 128x128" "$tmp/err" \
+    || fail "a truth.gwy of the wrong size: $(cat "$tmp/err")"
+# JSON and plot are written both or neither.
+mkdir "$tmp/plot.svg"
+check
+if "$simscan" score --truth "$tmp/a" --json "$tmp/both.json" --svg "$tmp/plot.svg" \
+        "$tmp/r/truth" >"$tmp/out" 2>"$tmp/err"; then
+    fail "--svg onto a folder: exit 0"
+fi
+[ ! -e "$tmp/both.json" ] || fail "--svg failed but the JSON was written"
+check
+"$simscan" score --truth "$tmp/a" --svg "$tmp/p.svg" "$tmp/r/truth" "$tmp/r/offset" \
+    >/dev/null 2>&1 && grep -q "</svg>" "$tmp/p.svg" || fail "no SVG written"
 
 # Bad command lines: one line, non-zero, nothing written.
 mkdir "$tmp/full" && echo keep > "$tmp/full/x"
@@ -162,8 +196,11 @@ mkdir -p "$tmp/huge/c1"
 printf '{"benchmark_version":"1","seed":1,"size":"small","cases":["c1"]}' > "$tmp/huge/benchmark.json"
 printf '{"frames":100000,"xres":64,"yres":65536,"line_time_s":1,"pixel_m":[1e-9,1e-9],"p0_px":[0,0],"drift":{},"disturbed_frames":[]}' \
     > "$tmp/huge/c1/case.json"
+mkdir -p "$tmp/other/truth"
 for args in "--truth $tmp/r/truth $tmp/r/truth" "--truth $tmp/a" "$tmp/r/truth" \
-            "--truth $tmp/evil $tmp/r/truth" "--truth $tmp/huge $tmp/r/truth"; do
+            "--truth $tmp/evil $tmp/r/truth" "--truth $tmp/huge $tmp/r/truth" \
+            "--truth $tmp/a $tmp/a/benchmark.json" "--truth $tmp/a $tmp/no-such" \
+            "--truth $tmp/a $tmp/r/truth $tmp/other/truth"; do
     check
     # shellcheck disable=SC2086
     if "$simscan" score $args >"$tmp/out" 2>"$tmp/err"; then
