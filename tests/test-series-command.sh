@@ -69,13 +69,17 @@ check
 [ "$(grep -c '^[0-9]' "$tmp/t.csv")" -eq 384 ] \
     || fail "CSV has $(grep -c '^[0-9]' "$tmp/t.csv") lines, not 3 x 128"
 # The drift at the last line of the last frame, against the drawn one:
-# p(t) - p(0) = v t, in px of 19.53 nm, within 0.15 px.
+# p(t) - p(0) = v t, in px of 19.53 nm, within 0.25 px.  Three frames of
+# sparse 2.5 px particles read it to about 0.04 px per axis (12 seeds:
+# -0.07 to 0.09 px); 0.15 px was three of those and failed one seed in
+# 150 by noise alone (seed 6644743: 0.153 px in y, the same with the
+# code of session start).
 check
 awk -F, -v vx="$vx" -v vy="$vy" '
     $1 == 2 && $2 == 127 {
         px = 2500/128; ex = vx*$3/px; ey = vy*$3/px
         dx = $4 - ex; dy = $5 - ey
-        if (dx*dx + dy*dy > 0.15*0.15) {
+        if (dx*dx + dy*dy > 0.25*0.25) {
             printf "last line drift %s, %s px, drawn %.3f, %.3f px\n", $4, $5, ex, ey
             exit 1
         }
