@@ -79,18 +79,66 @@ for name in $cases; do
 done
 series_done=$(now)
 
+# The paper's per-stripe mode as a recorded series allows it: no local
+# scans exist, so each frame's 8 stripes are registered against frame 0
+# (`gwy-localscan --reference`, paper mode: whole pixels), frame 0 taken as
+# drift-free.  Stripes without a value take the nearest stripe's.
+LOCALSCAN_MODULE=${LOCALSCAN_MODULE:-$builddir/modules/.libs/localscan.so}
+export LOCALSCAN_MODULE
+stripes=8
+for name in $cases; do
+    out=$outdir/results/stripes/$name
+    mkdir -p "$out"
+    json=$outdir/cases/$name/case.json
+    yres=$(sed -n 's/^ *"yres" : \([0-9]*\).*/\1/p' "$json")
+    lt=$(sed -n 's/^ *"line_time_s" : \([-0-9.e]*\).*/\1/p' "$json")
+    echo "frame,row,t_s,dx_px,dy_px" > "$out/trajectory.csv"
+    k=0
+    for frame in "$outdir/cases/$name"/frame-*.gwy; do
+        if [ $k -eq 0 ]; then
+            printf 'stripe,dx,dy\n' > "$out/table.csv"
+            s=0
+            while [ $s -lt $stripes ]; do echo "$s,0,0" >> "$out/table.csv"; s=$((s + 1)); done
+        elif ! "$localscan" -m paper --reference "$outdir/cases/$name/frame-000.gwy" \
+                --stripes $stripes --write-drift "$out/table.csv" -o "$out/frame.gwy" \
+                "$frame" 2>> "$out/stderr.txt"; then
+            echo "$name: frame $k: per-stripe registration failed: $(tail -1 "$out/stderr.txt")"
+            rm -f "$out/trajectory.csv"
+            break
+        fi
+        awk -F, -v k=$k -v yres="$yres" -v lt="$lt" -v n=$stripes '
+            /^#/ || /^stripe/ { next }
+            { have[$1] = ($2 != ""); dx[$1] = $2; dy[$1] = $3 }
+            END {
+                for (s = 0; s < n; s++) {
+                    best = -1
+                    for (d = 0; d < n && best < 0; d++) {
+                        if (s - d >= 0 && have[s - d]) best = s - d
+                        else if (s + d < n && have[s + d]) best = s + d
+                    }
+                    if (best < 0) exit 1
+                    for (r = int(s*yres/n); r < int((s + 1)*yres/n); r++)
+                        printf "%d,%d,%.6f,%s,%s\n", k, r, (k*yres + r + 0.25)*lt, dx[best], dy[best]
+                }
+            }' "$out/table.csv" >> "$out/trajectory.csv" || { rm -f "$out/trajectory.csv"; break; }
+        k=$((k + 1))
+    done
+    rm -f "$out/frame.gwy" "$out/table.csv"
+done
+stripes_done=$(now)
+
 "$baselines" "$outdir/cases" "$outdir/results"
 baselines_done=$(now)
 
 "$simscan" score --truth "$outdir/cases" --json "$outdir/scores.json" \
     --svg "$outdir/benchmark.svg" \
     "$outdir/results/series" "$outdir/results/rigid" \
-    "$outdir/results/gwyddion-drift" > "$outdir/scores.txt"
+    "$outdir/results/gwyddion-drift" "$outdir/results/stripes" > "$outdir/scores.txt"
 scored=$(now)
 cat "$outdir/scores.txt"
 echo
 total=$(awk -v a="$(elapsed "$start" "$generated")" -v b="$(elapsed "$baselines_done" "$scored")" 'BEGIN { printf "%.1f", a + b }')
-times="generate $(elapsed "$start" "$generated") s, series $(elapsed "$generated" "$series_done") s, baselines $(elapsed "$series_done" "$baselines_done") s, score $(elapsed "$baselines_done" "$scored") s; generate + score $total s"
+times="generate $(elapsed "$start" "$generated") s, series $(elapsed "$generated" "$series_done") s, stripes $(elapsed "$series_done" "$stripes_done") s, baselines $(elapsed "$stripes_done" "$baselines_done") s, score $(elapsed "$baselines_done" "$scored") s; generate + score $total s"
 echo "$times"
 
 if [ "$update_docs" = yes ]; then
