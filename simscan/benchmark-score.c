@@ -30,6 +30,9 @@
 /* A trajectory value beyond this is no drift a frame can show: refused
  * (squares of 1e200 overflow the figures into infinities). */
 #define MAX_DRIFT_PX 1e6
+/* A stripe of a corrected frame is judged when this fraction of its
+ * pixels hold data. */
+#define MIN_STRIPE_COVERAGE 0.6
 /* Stripes a corrected frame is judged in. */
 #define JUDGE_STRIPES 8
 /* Corrected channels are those titled so, when any is. */
@@ -314,6 +317,22 @@ frame_with_mask(GwyContainer *data, gint id)
     return d;
 }
 
+/* The fraction of stripe i's pixels that hold data. */
+static gdouble
+stripe_coverage(const TruthCase *tc, const gdouble *frame, gint i)
+{
+    gint first = i*tc->yres/JUDGE_STRIPES, end = (i + 1)*tc->yres/JUDGE_STRIPES;
+    gsize k, n = (gsize)(end - first)*tc->xres, valid = 0;
+    const gdouble *d = frame + (gsize)first*tc->xres;
+
+    for (k = 0; k < n; k++)
+        valid += !isnan(d[k]);
+    return n ? (gdouble)valid/n : 0.0;
+}
+
+/* Stripes mostly without data (content drifted out of the frame) are not
+ * judged: what is left of them registers ambiguously (a stripe 69 %
+ * masked read 2.4 px off at a score of 0.93, benchmark seed 780307). */
 static void
 score_frame(const TruthCase *tc, const gdouble *frame, const gdouble *truth,
             gdouble *sum, gint *count, BenchmarkScore *score)
@@ -325,6 +344,9 @@ score_frame(const TruthCase *tc, const gdouble *frame, const gdouble *truth,
                                  JUDGE_STRIPES, NULL, tc->aspect, NULL,
                                  dx, dy, s, NULL);
     for (i = 0; i < JUDGE_STRIPES; i++) {
+        if (stripe_coverage(tc, frame, i) < MIN_STRIPE_COVERAGE)
+            continue;
+        score->stripes_judged++;
         if (!(s[i] > 0.0)) {
             score->stripes_lost++;
             continue;
@@ -402,7 +424,6 @@ score_frames(const TruthCase *tc, const gdouble *truth, const gchar *path,
             continue;
         frame = frame_with_mask(data, id);
         score_frame(tc, frame, truth, &sum, &count, score);
-        score->stripes_judged += JUDGE_STRIPES;
         g_free(frame);
     }
     score->frame_rms_px = count ? sqrt(sum/count) : NAN;
