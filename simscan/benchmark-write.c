@@ -139,14 +139,6 @@ punch_missing(GwyDataField *field, GRand *rng)
     gwy_data_field_invalidate(field);
 }
 
-static gchar*
-meta_number(gdouble value)
-{
-    gchar buf[G_ASCII_DTOSTR_BUF_SIZE];
-
-    return g_strdup(g_ascii_dtostr(buf, sizeof(buf), value));
-}
-
 /* A frame as Gwyddion files carry one: the channel, its title and the
  * timing in the metadata keys scan-timing-meta.h reads. */
 static GByteArray*
@@ -159,13 +151,8 @@ frame_file_bytes(GwyDataField *field, const gchar *title,
     gwy_container_set_object_by_name(data, "/0/data", field);
     gwy_container_set_const_string_by_name(data, "/0/data/title",
                                            (const guchar*)title);
-    gwy_container_set_string_by_name(meta, SIMSCAN_META_LINE_TIME,
-                                     (guchar*)meta_number(sp->line_time));
-    gwy_container_set_const_string_by_name(meta, SIMSCAN_META_SLOW_SCAN,
-                                           (const guchar*)((sp->direction == SCAN_DIRECTION_UP)
-                                                           ? "up" : "down"));
-    gwy_container_set_string_by_name(meta, SIMSCAN_META_FRAME_START,
-                                     (guchar*)meta_number(sp->frame_start));
+    simscan_output_timing_meta(meta, sp->line_time, sp->direction,
+                               sp->frame_start);
     gwy_container_set_object_by_name(data, "/0/meta", meta);
     bytes = simscan_output_gwy_bytes(data);
     g_object_unref(meta);

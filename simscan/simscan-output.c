@@ -44,17 +44,24 @@ model_name(const SimscanScene *scene)
     return scene->shift_dx ? "figure6" : drift_model_type_name(scene->drift.type);
 }
 
+void
+simscan_output_timing_meta(GwyContainer *meta, gdouble line_time,
+                           ScanDirection direction, gdouble frame_start)
+{
+    set_meta_number(meta, SIMSCAN_META_LINE_TIME, line_time);
+    gwy_container_set_const_string_by_name(meta, SIMSCAN_META_SLOW_SCAN,
+        (const guchar*)(direction == SCAN_DIRECTION_UP ? "up" : "down"));
+    set_meta_number(meta, SIMSCAN_META_FRAME_START, frame_start);
+}
+
 static GwyContainer*
 make_meta(const SimscanScene *scene, const SimscanMeasurement *m)
 {
     const SimscanConfig *config = scene->config;
     GwyContainer *meta = gwy_container_new();
 
-    set_meta_number(meta, SIMSCAN_META_LINE_TIME, scene->scan.line_time);
-    gwy_container_set_const_string_by_name(meta, SIMSCAN_META_SLOW_SCAN,
-        (const guchar*)(scene->scan.direction == SCAN_DIRECTION_UP
-                        ? "up" : "down"));
-    set_meta_number(meta, SIMSCAN_META_FRAME_START, scene->scan.frame_start);
+    simscan_output_timing_meta(meta, scene->scan.line_time,
+                               scene->scan.direction, scene->scan.frame_start);
     set_meta_number(meta, "Seed", config->seed);
     gwy_container_set_const_string_by_name(meta, "Drift model",
                                            (const guchar*)model_name(scene));

@@ -30,6 +30,12 @@ G_BEGIN_DECLS
 /* The container written to the .gwy file (new reference). */
 GwyContainer*  simscan_output_container  (const SimscanScene *scene,
                                           const SimscanMeasurement *m);
+/* A frame's scan timing into its metadata container, in the keys above
+ * (which scan-timing-meta.h reads), numbers as the shortest exact text. */
+void           simscan_output_timing_meta(GwyContainer *meta,
+                                          gdouble line_time,
+                                          ScanDirection direction,
+                                          gdouble frame_start);
 /* data as the bytes of a .gwy file (Gwyddion's native format). */
 GByteArray*    simscan_output_gwy_bytes  (GwyContainer *data);
 /* The particle list of a simulator file (SIMSCAN_META_PARTICLES of
