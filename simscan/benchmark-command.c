@@ -326,18 +326,19 @@ score_all(const gchar *truth, gchar **results, gchar **cases,
           BenchmarkScore *scores, GError **error)
 {
     gint nm = g_strv_length(results), i, j;
-    gchar *tdir, *rdir;
+    gchar **rdirs = g_new0(gchar*, nm + 1), *tdir;
     gboolean ok = TRUE;
 
     for (i = 0; cases[i] && ok; i++) {
         tdir = g_build_filename(truth, cases[i], NULL);
-        for (j = 0; j < nm && ok; j++) {
-            rdir = g_build_filename(results[j], cases[i], NULL);
-            ok = benchmark_score_case(tdir, rdir, scores + i*nm + j, error);
-            g_free(rdir);
+        for (j = 0; j < nm; j++) {
+            g_free(rdirs[j]);
+            rdirs[j] = g_build_filename(results[j], cases[i], NULL);
         }
+        ok = benchmark_score_case(tdir, rdirs, nm, scores + i*nm, error);
         g_free(tdir);
     }
+    g_strfreev(rdirs);
     return ok;
 }
 

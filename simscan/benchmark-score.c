@@ -521,12 +521,13 @@ score_flags(const TruthCase *tc, const gchar *dir, BenchmarkScore *score)
     return failure;
 }
 
-gboolean
-benchmark_score_case(const gchar *truth_case_dir, const gchar *result_case_dir,
-                     BenchmarkScore *score, GError **error)
+/* One method's result folder against a truth read already; the drift-free
+ * frame is loaded when the first corrected frames ask for it. */
+static gboolean
+score_result(const TruthCase *tc, const gchar *truth_case_dir,
+             const gchar *result_case_dir, gdouble **truth,
+             BenchmarkScore *score, GError **error)
 {
-    TruthCase tc;
-    gdouble *truth = NULL;
     gboolean ok = TRUE;
     gchar *path;
 
@@ -534,21 +535,38 @@ benchmark_score_case(const gchar *truth_case_dir, const gchar *result_case_dir,
     score->trajectory_rms_px = score->trajectory_worst_px = NAN;
     score->frame_rms_px = score->frame_worst_px = NAN;
     score->flags_missed = score->flags_false = -1;
-    if (!read_truth(truth_case_dir, &tc, error))
-        return FALSE;
     path = g_build_filename(result_case_dir, "trajectory.csv", NULL);
-    score->failure = score_trajectory(&tc, path, score);
+    score->failure = score_trajectory(tc, path, score);
     g_free(path);
     path = g_build_filename(result_case_dir, "corrected.gwy", NULL);
     if (!score->failure && g_file_test(path, G_FILE_TEST_EXISTS)) {
-        if ((truth = load_truth_frame(&tc, truth_case_dir, error)))
-            score->failure = score_frames(&tc, truth, path, score);
+        if (*truth || (*truth = load_truth_frame(tc, truth_case_dir, error)))
+            score->failure = score_frames(tc, *truth, path, score);
         else
             ok = FALSE;
     }
     g_free(path);
     if (ok && !score->failure)
-        score->failure = score_flags(&tc, result_case_dir, score);
+        score->failure = score_flags(tc, result_case_dir, score);
+    return ok;
+}
+
+gboolean
+benchmark_score_case(const gchar *truth_case_dir, gchar **result_case_dirs,
+                     gint n, BenchmarkScore *scores, GError **error)
+{
+    TruthCase tc;
+    gdouble *truth = NULL;
+    gboolean ok;
+    gint j;
+
+    for (j = 0; j < n; j++)
+        memset(scores + j, 0, sizeof(BenchmarkScore));
+    if (!read_truth(truth_case_dir, &tc, error))
+        return FALSE;
+    for (j = 0, ok = TRUE; j < n && ok; j++)
+        ok = score_result(&tc, truth_case_dir, result_case_dirs[j], &truth,
+                          scores + j, error);
     g_free(truth);
     truth_case_free(&tc);
     return ok;

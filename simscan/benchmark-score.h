@@ -30,14 +30,16 @@ typedef struct {
     gint disturbed;              /* disturbed frames in the case */
 } BenchmarkScore;
 
-/* Scores the result folder of one case (trajectory.csv, optionally
- * corrected.gwy and flagged.txt or result.json; docs/benchmark.md) against
- * the case's truth folder.  A result that cannot be scored is a failure in
- * score (FALSE is returned only when the truth itself cannot be read,
- * with error set). */
+/* Scores the result folders of one case (one per method: trajectory.csv,
+ * optionally corrected.gwy and flagged.txt or result.json;
+ * docs/benchmark.md) against the case's truth folder, read once for all
+ * of them, into scores[0 .. n-1].  A result that cannot be scored is a
+ * failure in its score (FALSE is returned only when the truth itself
+ * cannot be read, with error set). */
 gboolean  benchmark_score_case   (const gchar *truth_case_dir,
-                                  const gchar *result_case_dir,
-                                  BenchmarkScore *score,
+                                  gchar **result_case_dirs,
+                                  gint n,
+                                  BenchmarkScore *scores,
                                   GError **error);
 void      benchmark_score_clear  (BenchmarkScore *score);
 
