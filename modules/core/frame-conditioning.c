@@ -69,6 +69,10 @@
 #define MIN_BLURRED_WEIGHT 1e-6
 /* Clip at this many robust standard deviations (1.4826 MAD). */
 #define CLIP_SIGMAS 4.0
+/* The clip needs the spread of the values, not its last digit: the median
+ * of |v| over a sample of about this many pixels at most (a full-frame
+ * median was a fifth of the band-pass on 4096 x 4096). */
+#define CLIP_SAMPLE 65536
 /* The plane along x and the bow: a quadratic, fitted to column medians
  * over about this many lines. */
 #define COLUMN_TREND_DEGREE 2
@@ -297,58 +301,160 @@ blur_axis(gdouble *data, gint len, gint count, gint stride, gint step, gdouble s
     g_free(tmp);
 }
 
-/* dst (cols x rows) = src (rows x cols) transposed, in cache-sized tiles. */
+/* Box sums of half-width h down the columns, zero outside, in place: a
+ * window sliding down whole rows, so that every step is a pass along
+ * memory (column by column, each value was a cache miss on large frames).
+ * The rows that leave the window are kept in ring (h + 1 rows) from before
+ * they were overwritten. */
 static void
-transpose(const gdouble *src, gint rows, gint cols, gdouble *dst)
+box_columns(gdouble *data, gint xres, gint yres, gint h, gdouble *acc, gdouble *ring)
 {
-    enum { TILE = 32 };
-    gint r0, c0, r, c;
+    gsize line = xres*sizeof(gdouble);
+    gint r, c;
 
-    for (r0 = 0; r0 < rows; r0 += TILE) {
-        for (c0 = 0; c0 < cols; c0 += TILE) {
-            for (r = r0; r < MIN(rows, r0 + TILE); r++) {
-                for (c = c0; c < MIN(cols, c0 + TILE); c++)
-                    dst[(gsize)c*rows + r] = src[(gsize)r*cols + c];
-            }
+    memset(acc, 0, line);
+    for (r = 0; r <= MIN(h, yres - 1); r++) {
+        const gdouble *row = data + (gsize)r*xres;
+
+        for (c = 0; c < xres; c++)
+            acc[c] += row[c];
+    }
+    for (r = 0; r < yres; r++) {
+        gdouble *row = data + (gsize)r*xres;
+
+        memcpy(ring + (gsize)(r % (h + 1))*xres, row, line);
+        memcpy(row, acc, line);
+        if (r + h + 1 < yres) {
+            const gdouble *entering = data + (gsize)(r + h + 1)*xres;
+
+            for (c = 0; c < xres; c++)
+                acc[c] += entering[c];
+        }
+        if (r - h >= 0) {
+            const gdouble *leaving = ring + (gsize)((r - h) % (h + 1))*xres;
+
+            for (c = 0; c < xres; c++)
+                acc[c] -= leaving[c];
         }
     }
 }
 
-/* Columns are blurred as rows of the transposed frame: the same sums in
- * the same order, without a cache miss per value on large frames (the
- * strided column pass was a fifth of a 1024 x 1024 registration). */
+/* Gaussian-kernel sums down the columns, zero outside, in place, row by
+ * row; ring keeps the h + 1 rows up to the current one from before they
+ * were overwritten, out holds a row. */
+static void
+kernel_columns(gdouble *data, gint xres, gint yres, const gdouble *kernel, gint h, gdouble *ring,
+               gdouble *out)
+{
+    gsize line = xres*sizeof(gdouble);
+    gint r, k, c;
+
+    for (r = 0; r < yres; r++) {
+        gdouble *row = data + (gsize)r*xres;
+
+        memcpy(ring + (gsize)(r % (h + 1))*xres, row, line);
+        memset(out, 0, line);
+        for (k = MAX(-h, -r); k <= MIN(h, yres - 1 - r); k++) {
+            const gdouble *in = (k <= 0) ? ring + (gsize)((r + k) % (h + 1))*xres : row + (gsize)k*xres;
+            gdouble w = kernel[k + h];
+
+            for (c = 0; c < xres; c++)
+                out[c] += w*in[c];
+        }
+        memcpy(row, out, line);
+    }
+}
+
+/* The blur along y of blur_axis(), done down the columns. */
+static void
+blur_columns(gdouble *data, gint xres, gint yres, gdouble sigma)
+{
+    gdouble *kernel, *ring, *row;
+    gint h, pass;
+
+    if (!blur_reaches(sigma, yres))
+        return;
+    row = g_new(gdouble, xres);
+    if (sigma >= BOX_FROM_SIGMA) {
+        h = box_half_width(sigma);
+        ring = g_new(gdouble, (gsize)(h + 1)*xres);
+        for (pass = 0; pass < 3; pass++)
+            box_columns(data, xres, yres, h, row, ring);
+    }
+    else {
+        kernel = gaussian_kernel(sigma, &h);
+        ring = g_new(gdouble, (gsize)(h + 1)*xres);
+        kernel_columns(data, xres, yres, kernel, h, ring, row);
+        g_free(kernel);
+    }
+    g_free(ring);
+    g_free(row);
+}
+
 static void
 blur(gdouble *data, gint xres, gint yres, gdouble sigma_x, gdouble sigma_y)
 {
-    gdouble *columns;
-
     blur_axis(data, xres, yres, 1, xres, sigma_x);
-    if (!blur_reaches(sigma_y, yres))
-        return;
-    columns = g_new(gdouble, (gsize)xres*yres);
-    transpose(data, yres, xres, columns);
-    blur_axis(columns, yres, xres, 1, yres, sigma_y);
-    transpose(columns, xres, yres, data);
-    g_free(columns);
+    blur_columns(data, xres, yres, sigma_y);
 }
 
-/* The normalised blur of the valid values: where no valid pixel is within
- * reach, 0. */
-static gdouble*
-normalised_blur(const gdouble *data, const gdouble *weight, gint xres, gint yres,
+/* Whether every pixel is valid (weight 1). */
+static gboolean
+all_valid(const gdouble *weight, gsize n)
+{
+    gsize k;
+
+    for (k = 0; k < n; k++) {
+        if (weight[k] != 1.0)
+            return FALSE;
+    }
+    return TRUE;
+}
+
+/* The blur of a frame of ones is the product of the blurs of a row and of
+ * a column of ones (the blur is separable): where every pixel is valid,
+ * the normalisation costs two lines instead of a second blurred frame. */
+static void
+divide_by_blurred_ones(gdouble *values, gint xres, gint yres, gdouble sigma_x, gdouble sigma_y)
+{
+    gdouble *wx = g_new(gdouble, xres), *wy = g_new(gdouble, yres);
+    gint r, c;
+
+    for (c = 0; c < xres; c++)
+        wx[c] = 1.0;
+    for (r = 0; r < yres; r++)
+        wy[r] = 1.0;
+    blur_axis(wx, xres, 1, 1, xres, sigma_x);
+    blur_axis(wy, yres, 1, 1, yres, sigma_y);
+    for (r = 0; r < yres; r++) {
+        gdouble *row = values + (gsize)r*xres;
+
+        for (c = 0; c < xres; c++)
+            row[c] /= wx[c]*wy[r];
+    }
+    g_free(wx);
+    g_free(wy);
+}
+
+/* The normalised blur of the valid values, in values (data times weight
+ * on entry): where no valid pixel is within reach, 0. */
+static void
+normalised_blur(gdouble *values, const gdouble *weight, gint xres, gint yres,
                 gdouble sigma_x, gdouble sigma_y)
 {
     gsize k, n = (gsize)xres*yres;
-    gdouble *values = g_new(gdouble, n), *weights = g_memdup2(weight, n*sizeof(gdouble));
+    gdouble *weights;
 
-    for (k = 0; k < n; k++)
-        values[k] = data[k]*weight[k];
     blur(values, xres, yres, sigma_x, sigma_y);
+    if (all_valid(weight, n)) {
+        divide_by_blurred_ones(values, xres, yres, sigma_x, sigma_y);
+        return;
+    }
+    weights = g_memdup2(weight, n*sizeof(gdouble));
     blur(weights, xres, yres, sigma_x, sigma_y);
     for (k = 0; k < n; k++)
         values[k] = (weights[k] > MIN_BLURRED_WEIGHT) ? values[k]/weights[k] : 0.0;
     g_free(weights);
-    return values;
 }
 
 /* The wide blur's sigma along x (px; along y it is this over the aspect). */
@@ -403,20 +509,25 @@ conditioned_frame_noise_scale(const ConditionedFrame *frame, gdouble pixel_aspec
     return CLAMP(sigma, BAND_NARROW_PX, MAX(BAND_NARROW_PX, NARROW_MAX_FRACTION*wide));
 }
 
+/* The narrow blur becomes the levelled frame, the narrow minus the wide
+ * the band-passed one; the wide blur runs in the frame's own data, so
+ * that a large frame costs one more copy of itself, not three. */
 static void
 band_pass(ConditionedFrame *frame, gdouble pixel_aspect, gdouble narrow)
 {
     gsize k, n = (gsize)frame->xres*frame->yres;
     gdouble wide = wide_sigma(frame, pixel_aspect);
-    gdouble *fine = normalised_blur(frame->data, frame->weight, frame->xres, frame->yres, narrow, narrow);
-    gdouble *coarse = normalised_blur(frame->data, frame->weight, frame->xres, frame->yres,
-                                      wide, wide/pixel_aspect);
+    gdouble *fine = g_new(gdouble, n), *coarse = frame->data;
 
+    for (k = 0; k < n; k++)
+        coarse[k] *= frame->weight[k];
+    memcpy(fine, coarse, n*sizeof(gdouble));
+    normalised_blur(fine, frame->weight, frame->xres, frame->yres, narrow, narrow);
+    normalised_blur(coarse, frame->weight, frame->xres, frame->yres, wide, wide/pixel_aspect);
     for (k = 0; k < n; k++) {
         frame->data[k] = (fine[k] - coarse[k])*frame->weight[k];
         fine[k] *= frame->weight[k];
     }
-    g_free(coarse);
     g_free(frame->levelled);
     frame->levelled = fine;
 }
@@ -428,41 +539,71 @@ median_of_three(gdouble a, gdouble b, gdouble c)
 }
 
 /* Each valid pixel becomes the median of itself and its valid neighbours
- * above and below (of two, the mean). */
+ * above and below (of two, the mean); in place, with the line above and
+ * the current one kept as they were. */
 static void
 remove_strokes(ConditionedFrame *frame)
 {
     gint xres = frame->xres, yres = frame->yres, r, c;
-    gdouble *out = g_new(gdouble, (gsize)xres*yres);
+    gdouble *above = g_new(gdouble, xres), *current = g_new(gdouble, xres), *t;
 
     for (r = 0; r < yres; r++) {
-        for (c = 0; c < xres; c++) {
-            gsize k = (gsize)r*xres + c;
-            gboolean up = (r > 0 && frame->weight[k - xres] > 0.0);
-            gboolean down = (r + 1 < yres && frame->weight[k + xres] > 0.0);
-            gdouble v = frame->data[k];
+        gdouble *row = frame->data + (gsize)r*xres;
+        const gdouble *below = row + xres, *w = frame->weight + (gsize)r*xres;
 
-            if (!(frame->weight[k] > 0.0))
-                out[k] = 0.0;
+        memcpy(current, row, xres*sizeof(gdouble));
+        for (c = 0; c < xres; c++) {
+            gboolean up = (r > 0 && w[c - xres] > 0.0);
+            gboolean down = (r + 1 < yres && w[c + xres] > 0.0);
+            gdouble v = current[c];
+
+            if (!(w[c] > 0.0))
+                row[c] = 0.0;
             else if (up && down)
-                out[k] = median_of_three(frame->data[k - xres], v, frame->data[k + xres]);
+                row[c] = median_of_three(above[c], v, below[c]);
             else if (up || down)
-                out[k] = 0.5*(v + frame->data[up ? k - xres : k + xres]);
-            else
-                out[k] = v;
+                row[c] = 0.5*(v + (up ? above[c] : below[c]));
         }
+        t = above;
+        above = current;
+        current = t;
     }
-    g_free(frame->data);
-    frame->data = out;
+    g_free(above);
+    g_free(current);
+}
+
+static gsize
+greatest_common_divisor(gsize a, gsize b)
+{
+    while (b) {
+        gsize t = a % b;
+
+        a = b;
+        b = t;
+    }
+    return a;
+}
+
+/* A step through n pixels in lines of xres that takes about count of them
+ * and, prime to xres, visits every column alike (a step dividing the line
+ * would sample a few columns only). */
+static gsize
+sample_step(gsize n, gint xres, gsize count)
+{
+    gsize step = MAX(1, n/count);
+
+    while (step > 1 && greatest_common_divisor(step, xres) != 1)
+        step++;
+    return step;
 }
 
 static void
 clip_outliers(gdouble *data, const ConditionedFrame *frame)
 {
-    gsize k, n = (gsize)frame->xres*frame->yres, m = 0;
-    gdouble *buf = g_new(gdouble, n), limit;
+    gsize k, n = (gsize)frame->xres*frame->yres, m = 0, step = sample_step(n, frame->xres, CLIP_SAMPLE);
+    gdouble *buf = g_new(gdouble, n/step + 1), limit;
 
-    for (k = 0; k < n; k++) {
+    for (k = 0; k < n; k += step) {
         if (frame->weight[k] > 0.0)
             buf[m++] = fabs(data[k]);
     }

@@ -10,6 +10,7 @@
 #include <libgwyddion/gwymacros.h>
 #include <libgwyddion/gwymath.h>
 #include "stripe-registration.h"
+#include "parallel-run.h"
 #include "stripe-correlation.h"
 #include "stripe-geometry.h"
 #include "stripe-subpixel.h"
@@ -537,6 +538,39 @@ choose_consistent_shifts(Level *level, const Peak *own, gdouble min_score, Strip
     g_free(reliable);
 }
 
+/* The peak of stripe s searched within (ry, rx) of its predicted shift (0
+ * where predicted is NULL), polished where the level has a sub-pixel
+ * match. */
+static void
+measure_stripe_peak(Level *level, gint s, const gdouble *pdy, const gdouble *pdx, gint ry, gint rx,
+                    gint known, Peak *peak)
+{
+    gint cy = pdy ? nearest_int(pdy[s]) : 0, cx = pdx ? nearest_int(pdx[s]) : 0;
+
+    level_compute_map(level, s, cy, cx, ry, rx);
+    find_peak(level, s, cy, cx, ry, rx, known, peak);
+    polish_peak(level, s, POLISH_REACH, peak);
+}
+
+/* The stripes' shifts from their own peaks; matched says whether they
+ * were polished by a sub-pixel match (the fine level). */
+static void
+set_own_shifts(const Peak *own, gint n, gboolean matched, gint ry, gint rx, gdouble min_score,
+               StripeShift *shifts)
+{
+    gint s;
+
+    for (s = 0; s < n; s++) {
+        set_shift(shifts + s, own + s, matched ? peak_score(own + s) : coarse_peak_score(own + s), FALSE,
+                  min_score, matched);
+        /* A match as uncertain as this has not located the stripe
+         * within its window: a chance peak of the texture, typically
+         * (the window's own peak has no rival when it is smooth). */
+        if (matched && shifts[s].sigma > LOCATED_FRACTION*MIN(rx, ry))
+            shifts[s].accepted = FALSE;
+    }
+}
+
 /* Each stripe of the level searched within (ry, rx) of its predicted shift
  * (0 where predicted is NULL); polished with reach px where the level has
  * a sub-pixel match. */
@@ -545,28 +579,14 @@ measure_level(Level *level, const gdouble *pdy, const gdouble *pdx, gint ry, gin
               gboolean consistency, gdouble min_score, StripeShift *shifts)
 {
     Peak *own = g_new(Peak, MAX(level->n, 1));
-    gint s, cy, cx;
+    gint s;
 
-    for (s = 0; s < level->n; s++) {
-        cy = pdy ? nearest_int(pdy[s]) : 0;
-        cx = pdx ? nearest_int(pdx[s]) : 0;
-        level_compute_map(level, s, cy, cx, ry, rx);
-        find_peak(level, s, cy, cx, ry, rx, known, own + s);
-        polish_peak(level, s, POLISH_REACH, own + s);
-    }
+    for (s = 0; s < level->n; s++)
+        measure_stripe_peak(level, s, pdy, pdx, ry, rx, known, own + s);
     if (consistency)
         choose_consistent_shifts(level, own, min_score, shifts);
-    else {
-        for (s = 0; s < level->n; s++) {
-            set_shift(shifts + s, own + s, level_peak_score(level, own + s), FALSE, min_score,
-                      level->subpixel != NULL);
-            /* A match as uncertain as this has not located the stripe
-             * within its window: a chance peak of the texture, typically
-             * (the window's own peak has no rival when it is smooth). */
-            if (level->subpixel && shifts[s].sigma > LOCATED_FRACTION*MIN(rx, ry))
-                shifts[s].accepted = FALSE;
-        }
-    }
+    else
+        set_own_shifts(own, level->n, level->subpixel != NULL, ry, rx, min_score, shifts);
     g_free(own);
 }
 
@@ -790,18 +810,45 @@ levelled_view(const ConditionedFrame *frame)
  * shifts needs, paints the smoothed texture around a featureless region
  * into it, with structure both frames share, so that a featureless stripe
  * matched on it (scores up to 0.6 in the tests). */
+/* Stripes of the fine level shared among threads, each with a level of
+ * its own (a level's correlation and match hold scratch space). */
+typedef struct {
+    const ConditionedFrame *image, *reference;   /* levelled views */
+    const ConditionedFrame *sub_image, *sub_reference;
+    gint n, radius, workers;
+    const gdouble *pdy, *pdx;
+    Peak *own;
+} FineStripes;
+
+static void
+measure_fine_share(gpointer user_data, gint worker)
+{
+    FineStripes *fs = user_data;
+    Level level;
+    gint s;
+
+    level_init(&level, fs->image, fs->reference, fs->sub_image, fs->sub_reference, fs->n,
+               fs->radius, fs->radius);
+    for (s = worker; s < fs->n; s += fs->workers)
+        measure_stripe_peak(&level, s, fs->pdy, fs->pdx, fs->radius, fs->radius, 0, fs->own + s);
+    level_free(&level);
+}
+
 static void
 measure_fine(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
              const gdouble *pdy, const gdouble *pdx, gint radius, gdouble min_score, gboolean polish,
-             StripeShift *shifts)
+             gboolean parallel, StripeShift *shifts)
 {
     ConditionedFrame image_view = levelled_view(image), reference_view = levelled_view(reference);
-    Level level;
+    FineStripes fs = {
+        &image_view, &reference_view, polish ? image : NULL, polish ? reference : NULL,
+        n, radius, parallel ? CLAMP((gint)g_get_num_processors(), 1, n) : 1, pdy, pdx,
+        g_new(Peak, MAX(n, 1)),
+    };
 
-    level_init(&level, &image_view, &reference_view, polish ? image : NULL, polish ? reference : NULL,
-               n, radius, radius);
-    measure_level(&level, pdy, pdx, radius, radius, 0, FALSE, min_score, shifts);
-    level_free(&level);
+    parallel_run(0, fs.workers, measure_fine_share, &fs);
+    set_own_shifts(fs.own, n, polish, radius, radius, min_score, shifts);
+    g_free(fs.own);
 }
 
 static gboolean
@@ -855,7 +902,7 @@ stripe_registration_measure_conditioned(const ConditionedFrame *image, const Con
     }
     else {
         radius = MIN(fine_radius(factor), MIN(image->xres, image->yres)/2);
-        measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, TRUE, shifts);
+        measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, TRUE, TRUE, shifts);
         for (s = 0; s < n; s++)
             shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres, pdy[s], pdx[s]);
     }
@@ -885,7 +932,8 @@ measure_around(const ConditionedFrame *image, const ConditionedFrame *reference,
         }
     }
     radius = (gint)CLAMP(ceil(radius_px), 1, MIN(image->xres, image->yres)/2);
-    measure_fine(image, reference, n, predicted_dy, predicted_dx, radius, min_score, polish, shifts);
+    measure_fine(image, reference, n, predicted_dy, predicted_dx, radius, min_score, polish, FALSE,
+                 shifts);
     for (s = 0; s < n; s++) {
         shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres,
                                                      predicted_dy[s], predicted_dx[s]);
@@ -905,11 +953,36 @@ stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
                           TRUE, shifts, error);
 }
 
+/* The two frames of a pair, conditioned at once on two cores: each
+ * frame's steps are its own, only the band-pass's narrow blur is shared. */
+typedef struct {
+    const gdouble *data[2];
+    ConditionedFrame *frame[2];
+    gint xres, yres;
+    gdouble aspect, narrow;
+} PairConditioning;
+
+static void
+level_one_of_pair(gpointer user_data, gint i)
+{
+    PairConditioning *pc = user_data;
+
+    pc->frame[i] = frame_condition_level(pc->data[i], NULL, pc->xres, pc->yres);
+}
+
+static void
+band_pass_one_of_pair(gpointer user_data, gint i)
+{
+    PairConditioning *pc = user_data;
+
+    conditioned_frame_band_pass(pc->frame[i], pc->aspect, pc->narrow);
+}
+
 static gboolean
 condition_pair(const gdouble *image, const gdouble *reference, gint xres, gint yres, gdouble aspect,
                ConditionedFrame **cimage, ConditionedFrame **creference, GError **error)
 {
-    gdouble narrow;
+    PairConditioning pc = { { image, reference }, { NULL, NULL }, xres, yres, aspect, 0.0 };
 
     *cimage = *creference = NULL;
     if (xres < 4 || yres < 4) {
@@ -918,23 +991,22 @@ condition_pair(const gdouble *image, const gdouble *reference, gint xres, gint y
                     xres, yres);
         return FALSE;
     }
-    if (!(*cimage = frame_condition_level(image, NULL, xres, yres))) {
+    parallel_run(0, 2, level_one_of_pair, &pc);
+    if (!pc.frame[0] || !pc.frame[1]) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
-                    _("The image has no valid pixel (all are NaN or infinite)."));
-        return FALSE;
-    }
-    if (!(*creference = frame_condition_level(reference, NULL, xres, yres))) {
-        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE,
-                    _("The reference has no valid pixel (all are NaN or infinite)."));
-        conditioned_frame_free(*cimage);
-        *cimage = NULL;
+                    pc.frame[0]
+                    ? _("The reference has no valid pixel (all are NaN or infinite).")
+                    : _("The image has no valid pixel (all are NaN or infinite)."));
+        conditioned_frame_free(pc.frame[0]);
+        conditioned_frame_free(pc.frame[1]);
         return FALSE;
     }
     /* One band for both frames: the noisier one decides. */
-    narrow = MAX(conditioned_frame_noise_scale(*cimage, aspect),
-                 conditioned_frame_noise_scale(*creference, aspect));
-    conditioned_frame_band_pass(*cimage, aspect, narrow);
-    conditioned_frame_band_pass(*creference, aspect, narrow);
+    pc.narrow = MAX(conditioned_frame_noise_scale(pc.frame[0], aspect),
+                    conditioned_frame_noise_scale(pc.frame[1], aspect));
+    parallel_run(0, 2, band_pass_one_of_pair, &pc);
+    *cimage = pc.frame[0];
+    *creference = pc.frame[1];
     return TRUE;
 }
 
