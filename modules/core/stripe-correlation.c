@@ -21,9 +21,10 @@
  * Only the cross term needs an FFT: the stripe against the slab of
  * reference rows and columns that the window of shifts can reach, wherever
  * the window lies (a frame offset by a third of its size costs what an
- * unshifted one does).  The other sums are rectangle sums: the reference's
- * values and squares from summed-area tables made once per frame, the
- * stripe's from tables made per stripe.
+ * unshifted one does).  The other sums are rectangle sums from summed-area
+ * tables made per stripe: the stripe's, and the reference's over the same
+ * slab (tables of the whole reference cost more fresh memory than all the
+ * slabs' work on large frames, and every thread needed its own).
  *
  * Missing pixels (weight 0) have value 0 in the conditioned frames.  In the
  * stripe they are left out of every sum; in the reference they add nothing
@@ -38,8 +39,10 @@ struct _StripeCorrelation {
     gint max_ry;
     gint max_rx;
     gdouble min_overlap;
-    gdouble *ref_sum;       /* (yres+1) x (xres+1) summed-area tables */
-    gdouble *ref_sq_sum;
+    gint max_slab;          /* rows of the largest slab */
+    gdouble *ref_sum;       /* (max_slab+1) x (xres+1) summed-area tables of */
+    gdouble *ref_sq_sum;    /* the current slab's reference rows */
+    gint slab_first;        /* the first reference row in them */
     gdouble *tmpl_sum;      /* (max_height+1) x (xres+1) */
     gdouble *tmpl_sq_sum;
     gdouble *tmpl_count;
@@ -94,10 +97,9 @@ stripe_correlation_new(const ConditionedFrame *image, const ConditionedFrame *re
     sc->max_ry = max_ry;
     sc->max_rx = max_rx;
     sc->min_overlap = min_overlap;
-    sc->ref_sum = g_new(gdouble, (gsize)(yres + 1)*(xres + 1));
-    sc->ref_sq_sum = g_new(gdouble, (gsize)(yres + 1)*(xres + 1));
-    summed_area_table(reference->data, xres, yres, FALSE, sc->ref_sum);
-    summed_area_table(reference->data, xres, yres, TRUE, sc->ref_sq_sum);
+    sc->max_slab = MIN(max_height + 2*max_ry, yres);
+    sc->ref_sum = g_new(gdouble, (gsize)(sc->max_slab + 1)*(xres + 1));
+    sc->ref_sq_sum = g_new(gdouble, (gsize)(sc->max_slab + 1)*(xres + 1));
     sc->tmpl_sum = g_new(gdouble, (gsize)(max_height + 1)*(xres + 1));
     sc->tmpl_sq_sum = g_new(gdouble, (gsize)(max_height + 1)*(xres + 1));
     sc->tmpl_count = g_new(gdouble, (gsize)(max_height + 1)*(xres + 1));
@@ -171,6 +173,20 @@ prepare_slab(StripeCorrelation *sc, gint first, gint end, const StripeCorrelatio
     }
 }
 
+/* The reference's summed-area tables over the rows the window reaches
+ * (within the frame). */
+static void
+prepare_slab_sums(StripeCorrelation *sc, gint first, gint end, const StripeCorrelationMap *map)
+{
+    const ConditionedFrame *ref = sc->reference;
+    gint r0 = MAX(0, first - map->cy - map->ry), r1 = MIN(ref->yres, end - map->cy + map->ry);
+
+    sc->slab_first = r0;
+    r1 = MAX(r1, r0);
+    summed_area_table(ref->data + (gsize)r0*ref->xres, ref->xres, r1 - r0, FALSE, sc->ref_sum);
+    summed_area_table(ref->data + (gsize)r0*ref->xres, ref->xres, r1 - r0, TRUE, sc->ref_sq_sum);
+}
+
 gdouble
 stripe_correlation_map_at(const StripeCorrelationMap *map, gint dy, gint dx)
 {
@@ -192,6 +208,7 @@ stripe_correlation_map(StripeCorrelation *sc, gint first, gint end, StripeCorrel
     fft_correlation_clear(sc->fc);
     prepare_template(sc, first, end);
     prepare_slab(sc, first, end, map);
+    prepare_slab_sums(sc, first, end, map);
     cross = fft_correlation_run(sc->fc);
     total = rectangle_sum(sc->tmpl_count, tw, 0, h, 0, xres);
     min_weight = MAX(sc->min_overlap*total, 1.0);
@@ -215,8 +232,10 @@ stripe_correlation_map(StripeCorrelation *sc, gint first, gint end, StripeCorrel
                 continue;
             st = rectangle_sum(sc->tmpl_sum, tw, ilo, ihi, lo, hi);
             stt = rectangle_sum(sc->tmpl_sq_sum, tw, ilo, ihi, lo, hi);
-            sr = rectangle_sum(sc->ref_sum, tw, first + ilo - dy, first + ihi - dy, lo - dx, hi - dx);
-            srr = rectangle_sum(sc->ref_sq_sum, tw, first + ilo - dy, first + ihi - dy, lo - dx, hi - dx);
+            sr = rectangle_sum(sc->ref_sum, tw, first + ilo - dy - sc->slab_first,
+                               first + ihi - dy - sc->slab_first, lo - dx, hi - dx);
+            srr = rectangle_sum(sc->ref_sq_sum, tw, first + ilo - dy - sc->slab_first,
+                                first + ihi - dy - sc->slab_first, lo - dx, hi - dx);
             str = cross[(gsize)(2*map->ry - iy)*cols + (2*map->rx - ix)];
             vt = stt - st*st/w;
             vr = srr - sr*sr/w;
