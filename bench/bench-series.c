@@ -170,10 +170,13 @@ true_relative(gdouble t, gdouble *x, gdouble *y)
     *y -= y0;
 }
 
-/* RMS over every line of the series of |estimate - truth| for the
- * series correction's trajectory. */
+/* A trajectory's drift (px) at time t, within frame k. */
+typedef void (*TrajectoryEval)(gconstpointer trajectory, gint k, gdouble t,
+                               gdouble *x, gdouble *y);
+
+/* RMS over every line of the series of |estimate - truth|. */
 static gdouble
-ours_rms(const SeriesCorrection *correction, const FrameSeries *series)
+trajectory_rms(TrajectoryEval eval, gconstpointer trajectory, const FrameSeries *series)
 {
     gdouble sum = 0.0;
     gint k, r;
@@ -183,7 +186,7 @@ ours_rms(const SeriesCorrection *correction, const FrameSeries *series)
             gdouble t = scan_timing_rows_time(&series->frames[k].timing, r, r + 1);
             gdouble ex, ey, tx, ty;
 
-            series_correction_eval(correction, t, &ex, &ey);
+            eval(trajectory, k, t, &ex, &ey);
             true_relative(t, &tx, &ty);
             sum += (ex - tx)*(ex - tx) + (ey - ty)*(ey - ty);
         }
@@ -191,28 +194,45 @@ ours_rms(const SeriesCorrection *correction, const FrameSeries *series)
     return sqrt(sum/((gdouble)series->n_frames*RES));
 }
 
-/* The same for the rigid shifts, one per frame.  offset (px) is added to
- * every shift: 0 judges it against p(t) - p(0) like ours; the mean error
- * judges it against the best moment a rigid correction could stand for. */
+static void
+ours_eval(gconstpointer trajectory, G_GNUC_UNUSED gint k, gdouble t, gdouble *x, gdouble *y)
+{
+    series_correction_eval(trajectory, t, x, y);
+}
+
+static gdouble
+ours_rms(const SeriesCorrection *correction, const FrameSeries *series)
+{
+    return trajectory_rms(ours_eval, correction, series);
+}
+
+/* Rigid shifts, one per frame, with an offset added to every one. */
+typedef struct {
+    const gdouble *dx;
+    const gdouble *dy;
+    gdouble offx;
+    gdouble offy;
+} RigidTrajectory;
+
+static void
+rigid_eval(gconstpointer trajectory, gint k, G_GNUC_UNUSED gdouble t, gdouble *x, gdouble *y)
+{
+    const RigidTrajectory *rigid = trajectory;
+
+    *x = rigid->dx[k] + rigid->offx;
+    *y = rigid->dy[k] + rigid->offy;
+}
+
+/* The same for the rigid shifts.  offset (px) is added to every shift: 0
+ * judges it against p(t) - p(0) like ours; the mean error judges it against
+ * the best moment a rigid correction could stand for. */
 static gdouble
 rigid_rms(const gdouble *dx, const gdouble *dy, const FrameSeries *series,
           gdouble offx, gdouble offy)
 {
-    gdouble sum = 0.0;
-    gint k, r;
+    RigidTrajectory rigid = { dx, dy, offx, offy };
 
-    for (k = 0; k < series->n_frames; k++) {
-        for (r = 0; r < RES; r++) {
-            gdouble t = scan_timing_rows_time(&series->frames[k].timing, r, r + 1);
-            gdouble tx, ty, ex, ey;
-
-            true_relative(t, &tx, &ty);
-            ex = dx[k] + offx - tx;
-            ey = dy[k] + offy - ty;
-            sum += ex*ex + ey*ey;
-        }
-    }
-    return sqrt(sum/((gdouble)series->n_frames*RES));
+    return trajectory_rms(rigid_eval, &rigid, series);
 }
 
 static void

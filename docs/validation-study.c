@@ -445,6 +445,37 @@ plotted_values(const DriftMeasurement *m, const DriftFit *none,
     return TRUE;
 }
 
+/* A used measurement as plotted_values() gives it, with the later block's
+ * scan time it is drawn at. */
+typedef struct {
+    gdouble t;
+    gdouble md[2], pd[2], ed[2];
+} PlotPoint;
+
+/* The used measurements of the series' report, in its order; both passes
+ * over them (the panels' ranges, then the dots) see the same points. */
+static PlotPoint*
+plot_points(const SeriesResult *res, gint *n)
+{
+    const FitReport *rep = &res->report;
+    const DriftFit *none = rep->fits, *ext = rep->fits + res->extended;
+    gdouble xstep = frame_series_dx(res->series), ystep = frame_series_dy(res->series);
+    PlotPoint *points = g_new(PlotPoint, MAX(rep->n_meas, 1));
+    gint i;
+
+    *n = 0;
+    for (i = 0; i < rep->n_meas; i++) {
+        const DriftMeasurement *m = rep->meas + i;
+        PlotPoint *q = points + *n;
+
+        if (plotted_values(m, none, ext, xstep, ystep, q->md, q->pd, q->ed)) {
+            q->t = m->t_a;
+            (*n)++;
+        }
+    }
+    return points;
+}
+
 /* Measured and predicted displacement (x and y) over the later scan time,
  * and the residuals of both models. */
 static void
@@ -453,16 +484,15 @@ plot_displacements(const SeriesResult *res, const gchar *path,
 {
     static const gdouble black[3] = { 0, 0, 0 }, red[3] = { 0.85, 0.1, 0.1 },
                          blue[3] = { 0.1, 0.3, 0.9 };
-    const FitReport *rep = &res->report;
-    const DriftFit *none = rep->fits, *ext = rep->fits + res->extended;
-    gdouble xstep = frame_series_dx(res->series), ystep = frame_series_dy(res->series);
+    const DriftFit *ext = res->report.fits + res->extended;
     cairo_surface_t *sf = cairo_image_surface_create(CAIRO_FORMAT_RGB24,
                                                      PLOT_W, PLOT_H);
     cairo_t *cr = cairo_create(sf);
     Panel p[4];
     gdouble vstep[4], tstep[4], x;
     gchar *model;
-    gint i, ax, k;
+    PlotPoint *points;
+    gint i, ax, k, n;
 
     cairo_set_source_rgb(cr, 1, 1, 1);
     cairo_paint(cr);
@@ -477,18 +507,17 @@ plot_displacements(const SeriesResult *res, const gchar *path,
         p[k].vmin = G_MAXDOUBLE;
         p[k].vmax = -G_MAXDOUBLE;
     }
-    for (i = 0; i < rep->n_meas; i++) {
-        const DriftMeasurement *m = rep->meas + i;
-        gdouble pd[2], ed[2], md[2];
+    points = plot_points(res, &n);
+    for (i = 0; i < n; i++) {
+        const gdouble *md = points[i].md, *pd = points[i].pd, *ed = points[i].ed;
+        gdouble t = points[i].t;
 
-        if (!plotted_values(m, none, ext, xstep, ystep, md, pd, ed))
-            continue;
         for (ax = 0; ax < 2; ax++) {
             Panel *a = p + ax, *b = p + 2 + ax;
             gdouble r1 = md[ax] - 1e9*pd[ax], r2 = md[ax] - 1e9*ed[ax];
 
-            a->tmin = b->tmin = MIN(a->tmin, m->t_a);
-            a->tmax = b->tmax = MAX(a->tmax, m->t_a);
+            a->tmin = b->tmin = MIN(a->tmin, t);
+            a->tmax = b->tmax = MAX(a->tmax, t);
             a->vmin = MIN(a->vmin, MIN(md[ax], 1e9*MIN(pd[ax], ed[ax])));
             a->vmax = MAX(a->vmax, MAX(md[ax], 1e9*MAX(pd[ax], ed[ax])));
             b->vmin = MIN(b->vmin, MIN(r1, r2));
@@ -510,22 +539,21 @@ plot_displacements(const SeriesResult *res, const gchar *path,
     panel_frame(p + 3, tstep[3], vstep[3], "y residual, measured - model (nm)",
                 "scan time t_a of the later block (s)");
     cairo_set_line_width(cr, 1.2);
-    for (i = 0; i < rep->n_meas; i++) {
-        const DriftMeasurement *m = rep->meas + i;
-        gdouble pd[2], ed[2], md[2];
+    for (i = 0; i < n; i++) {
+        const gdouble *md = points[i].md, *pd = points[i].pd, *ed = points[i].ed;
+        gdouble t = points[i].t;
 
-        if (!plotted_values(m, none, ext, xstep, ystep, md, pd, ed))
-            continue;
         for (ax = 0; ax < 2; ax++) {
-            dot(cr, px_x(p + ax, m->t_a), px_y(p + ax, md[ax]), 2.5, black, TRUE);
-            dot(cr, px_x(p + ax, m->t_a), px_y(p + ax, 1e9*pd[ax]), 3.5, red, FALSE);
-            dot(cr, px_x(p + ax, m->t_a), px_y(p + ax, 1e9*ed[ax]), 3.5, blue, FALSE);
-            dot(cr, px_x(p + 2 + ax, m->t_a),
+            dot(cr, px_x(p + ax, t), px_y(p + ax, md[ax]), 2.5, black, TRUE);
+            dot(cr, px_x(p + ax, t), px_y(p + ax, 1e9*pd[ax]), 3.5, red, FALSE);
+            dot(cr, px_x(p + ax, t), px_y(p + ax, 1e9*ed[ax]), 3.5, blue, FALSE);
+            dot(cr, px_x(p + 2 + ax, t),
                 px_y(p + 2 + ax, md[ax] - 1e9*pd[ax]), 3.0, red, FALSE);
-            dot(cr, px_x(p + 2 + ax, m->t_a),
+            dot(cr, px_x(p + 2 + ax, t),
                 px_y(p + 2 + ax, md[ax] - 1e9*ed[ax]), 3.0, blue, FALSE);
         }
     }
+    g_free(points);
     cairo_set_font_size(cr, 16);
     cairo_set_source_rgb(cr, 0, 0, 0);
     show_text_at(cr, title, 80, 28, 0.0);

@@ -280,8 +280,7 @@ case_json(const BenchmarkCase *bc, const gdouble *p0_px)
     json_values_set_pair(b, "pixel_m", v);
     json_values_set_number(b, "line_time_s", bc->line_time);
     json_builder_set_member_name(b, "direction");
-    json_builder_add_string_value(b, bc->direction == SCAN_DIRECTION_UP
-                                  ? "up" : "down");
+    json_builder_add_string_value(b, scan_direction_name(bc->direction));
     json_builder_set_member_name(b, "frame_start_s");
     json_builder_begin_array(b);
     for (k = 0; k < bc->n_frames; k++)

@@ -50,7 +50,7 @@ simscan_output_timing_meta(GwyContainer *meta, gdouble line_time,
 {
     set_meta_number(meta, SIMSCAN_META_LINE_TIME, line_time);
     gwy_container_set_const_string_by_name(meta, SIMSCAN_META_SLOW_SCAN,
-        (const guchar*)(direction == SCAN_DIRECTION_UP ? "up" : "down"));
+        (const guchar*)scan_direction_name(direction));
     set_meta_number(meta, SIMSCAN_META_FRAME_START, frame_start);
 }
 

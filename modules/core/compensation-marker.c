@@ -25,12 +25,7 @@ compensation_marker_set(GwyContainer *data, gint id, const gchar *description,
 const gchar*
 compensation_marker_get(GwyContainer *data, gint id)
 {
-    GwyContainer *meta = localscan_channel_meta(data, id, FALSE);
-    const guchar *text = NULL;
-
-    if (meta && gwy_container_gis_string_by_name(meta, LOCALSCAN_META_COMPENSATED, &text))
-        return (const gchar*)text;
-    return NULL;
+    return localscan_channel_meta_string(data, id, LOCALSCAN_META_COMPENSATED);
 }
 
 gboolean

@@ -132,7 +132,6 @@ add_models(JsonBuilder *b, const FitReport *report)
 static void
 add_frames(JsonBuilder *b, const FrameSeries *series)
 {
-    gchar *label;
     gint i;
 
     json_builder_set_member_name(b, "frames");
@@ -142,24 +141,15 @@ add_frames(JsonBuilder *b, const FrameSeries *series)
 
         json_builder_begin_object(b);
         json_builder_set_member_name(b, "label");
-        label = g_utf8_make_valid(f->label, -1);
-        json_builder_add_string_value(b, label);
-        g_free(label);
-        json_values_set_number(b, "start_s", f->timing.frame_start);
-        json_values_set_number(b, "line_time_s", f->timing.line_time);
-        json_builder_set_member_name(b, "direction");
-        json_builder_add_string_value(b, f->timing.direction
-                                         == SCAN_DIRECTION_UP ? "up" : "down");
+        json_values_add_text(b, f->label);
+        json_values_set_timing(b, "start_s", &f->timing);
         json_builder_end_object(b);
     }
     json_builder_end_array(b);
     json_builder_set_member_name(b, "notes");
     json_builder_begin_array(b);
-    for (i = 0; i < (gint)series->notes->len; i++) {
-        label = g_utf8_make_valid(g_ptr_array_index(series->notes, i), -1);
-        json_builder_add_string_value(b, label);
-        g_free(label);
-    }
+    for (i = 0; i < (gint)series->notes->len; i++)
+        json_values_add_text(b, g_ptr_array_index(series->notes, i));
     json_builder_end_array(b);
 }
 

@@ -41,6 +41,26 @@ json_values_set_pair(JsonBuilder *builder, const gchar *name,
     json_values_add_pair(builder, v);
 }
 
+void
+json_values_add_text(JsonBuilder *builder, const gchar *text)
+{
+    gchar *valid = g_utf8_make_valid(text, -1);
+
+    json_builder_add_string_value(builder, valid);
+    g_free(valid);
+}
+
+void
+json_values_set_timing(JsonBuilder *builder, const gchar *start_name,
+                       const ScanTiming *timing)
+{
+    json_values_set_number(builder, start_name, timing->frame_start);
+    json_values_set_number(builder, "line_time_s", timing->line_time);
+    json_builder_set_member_name(builder, "direction");
+    json_builder_add_string_value(builder,
+                                  scan_direction_name(timing->direction));
+}
+
 gchar*
 json_values_finish(JsonBuilder *builder)
 {

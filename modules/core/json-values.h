@@ -9,6 +9,7 @@
 #define LOCALSCAN_JSON_VALUES_H
 
 #include <json-glib/json-glib.h>
+#include "scan-timing.h"
 
 G_BEGIN_DECLS
 
@@ -25,6 +26,15 @@ void    json_values_set_number (JsonBuilder *builder,
 void    json_values_set_pair   (JsonBuilder *builder,
                                 const gchar *name,
                                 const gdouble *v);
+/* text as a string made valid UTF-8: labels and notes come from files,
+ * whose bytes JSON cannot carry as they are. */
+void    json_values_add_text   (JsonBuilder *builder,
+                                const gchar *text);
+/* A frame's timing: its start under start_name, "line_time_s" and
+ * "direction". */
+void    json_values_set_timing (JsonBuilder *builder,
+                                const gchar *start_name,
+                                const ScanTiming *timing);
 /* The builder's document as pretty-printed text (g_free it); the builder
  * is released. */
 gchar*  json_values_finish     (JsonBuilder *builder);

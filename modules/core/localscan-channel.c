@@ -57,14 +57,20 @@ localscan_channel_meta(GwyContainer *data, gint id, gboolean create)
 }
 
 const gchar*
-localscan_channel_stored_table_text(GwyContainer *data, gint id)
+localscan_channel_meta_string(GwyContainer *data, gint id, const gchar *key)
 {
     GwyContainer *meta = localscan_channel_meta(data, id, FALSE);
     const guchar *text = NULL;
 
-    if (meta && gwy_container_gis_string_by_name(meta, DRIFT_TABLE_META_KEY, &text))
+    if (meta && gwy_container_gis_string_by_name(meta, key, &text))
         return (const gchar*)text;
     return NULL;
+}
+
+const gchar*
+localscan_channel_stored_table_text(GwyContainer *data, gint id)
+{
+    return localscan_channel_meta_string(data, id, DRIFT_TABLE_META_KEY);
 }
 
 DriftTable*

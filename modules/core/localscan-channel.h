@@ -238,6 +238,11 @@ gpointer     localscan_channel_item          (GwyContainer *data,
 GwyContainer* localscan_channel_meta         (GwyContainer *data,
                                               gint id,
                                               gboolean create);
+/* The string item key of the channel's metadata, or NULL when the channel
+ * has no metadata or no such string; owned by the container. */
+const gchar* localscan_channel_meta_string   (GwyContainer *data,
+                                              gint id,
+                                              const gchar *key);
 /* The channel's title ("/ID/data/title"), or NULL. */
 const gchar* localscan_channel_title         (GwyContainer *data,
                                               gint id);

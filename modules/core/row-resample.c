@@ -121,67 +121,58 @@ resample_row_with(GwyInterpolationType type, gboolean eliminate,
     }
 }
 
-/* One specialised loop per kernel, so the weights are computed inline;
- * the elimination is fused only for the kernels that need it (prev may be
- * NULL for none). */
+/* resample_row_with() for one kernel, with the elimination fused for the
+ * kernels that have a prefilter; returns whether it was.  Always inlined
+ * with type a constant, so the test folds away and each kernel keeps its
+ * own loop. */
+KERNEL_INLINE gboolean
+resample_row_as(GwyInterpolationType type, const gdouble *restrict src,
+                gint n, gdouble x_start, gdouble x_step,
+                const gdouble *restrict prev, gdouble q,
+                gdouble *restrict dest)
+{
+    if (prev && (type == GWY_INTERPOLATION_BSPLINE
+                 || type == GWY_INTERPOLATION_OMOMS)) {
+        resample_row_with(type, TRUE, src, n, x_start, x_step, prev, q, dest);
+        return TRUE;
+    }
+    resample_row_with(type, FALSE, src, n, x_start, x_step, NULL, 0.0, dest);
+    return FALSE;
+}
+
+/* Each case names its kernel as a constant (see resample_row_as()). */
+#define RESAMPLE_ROW_CASE(kernel) \
+    case kernel: \
+    fused = resample_row_as(kernel, src, n, x_start, x_step, prev, q, dest); \
+    break
+
+/* One specialised loop per kernel, so the weights are computed inline
+ * (prev may be NULL for no elimination). */
 static void VECTOR_CLONES
 resample_row(GwyInterpolationType type, const gdouble *restrict src, gint n,
              gdouble x_start, gdouble x_step,
              const gdouble *restrict prev, gdouble q, gdouble *restrict dest)
 {
+    gboolean fused = FALSE;
+
     switch (type) {
-        case GWY_INTERPOLATION_ROUND:
-        resample_row_with(GWY_INTERPOLATION_ROUND, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_LINEAR:
-        resample_row_with(GWY_INTERPOLATION_LINEAR, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_KEY:
-        resample_row_with(GWY_INTERPOLATION_KEY, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_SCHAUM:
-        resample_row_with(GWY_INTERPOLATION_SCHAUM, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_NNA:
-        resample_row_with(GWY_INTERPOLATION_NNA, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_BSPLINE:
-        if (prev) {
-            resample_row_with(GWY_INTERPOLATION_BSPLINE, TRUE, src, n,
-                              x_start, x_step, prev, q, dest);
-            return;
-        }
-        resample_row_with(GWY_INTERPOLATION_BSPLINE, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
-
-        case GWY_INTERPOLATION_OMOMS:
-        if (prev) {
-            resample_row_with(GWY_INTERPOLATION_OMOMS, TRUE, src, n,
-                              x_start, x_step, prev, q, dest);
-            return;
-        }
-        resample_row_with(GWY_INTERPOLATION_OMOMS, FALSE, src, n,
-                          x_start, x_step, NULL, 0.0, dest);
-        break;
+        RESAMPLE_ROW_CASE(GWY_INTERPOLATION_ROUND);
+        RESAMPLE_ROW_CASE(GWY_INTERPOLATION_LINEAR);
+        RESAMPLE_ROW_CASE(GWY_INTERPOLATION_KEY);
+        RESAMPLE_ROW_CASE(GWY_INTERPOLATION_SCHAUM);
+        RESAMPLE_ROW_CASE(GWY_INTERPOLATION_NNA);
+        RESAMPLE_ROW_CASE(GWY_INTERPOLATION_BSPLINE);
+        RESAMPLE_ROW_CASE(GWY_INTERPOLATION_OMOMS);
 
         default:
         g_assert_not_reached();
         break;
     }
-    if (prev)
+    if (prev && !fused)
         spline_eliminate_row(dest, prev, q, n);
 }
+
+#undef RESAMPLE_ROW_CASE
 
 /* dest = src shifted by a whole number of columns, edge values beyond. */
 static void

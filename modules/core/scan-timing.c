@@ -6,6 +6,12 @@
 #include "config.h"
 #include "scan-timing.h"
 
+const gchar*
+scan_direction_name(ScanDirection direction)
+{
+    return direction == SCAN_DIRECTION_UP ? "up" : "down";
+}
+
 void
 scan_timing_init(ScanTiming *timing, gint xres, gint yres,
                  gdouble frame_start, gdouble line_time,

@@ -24,6 +24,9 @@ typedef struct {
     ScanDirection direction;
 } ScanTiming;
 
+/* "down" or "up", as the files and reports the tools write name it. */
+const gchar* scan_direction_name(ScanDirection direction);
+
 void     scan_timing_init        (ScanTiming *timing, gint xres, gint yres,
                                   gdouble frame_start, gdouble line_time,
                                   ScanDirection direction);

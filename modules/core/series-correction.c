@@ -1547,16 +1547,6 @@ series_correction_trajectory_csv(const SeriesCorrection *correction,
     return g_string_free(text, FALSE);
 }
 
-/* Text from files (titles, file names) need not be UTF-8; JSON must. */
-static void
-add_text(JsonBuilder *b, const gchar *text)
-{
-    gchar *valid = g_utf8_make_valid(text, -1);
-
-    json_builder_add_string_value(b, valid);
-    g_free(valid);
-}
-
 /* Which trajectory corrected the frames: the chosen model, or the flexible
  * one where no model explains the drift. */
 static void
@@ -1595,19 +1585,13 @@ add_frame_verdicts(JsonBuilder *b, const SeriesCorrection *correction,
         json_builder_set_member_name(b, "index");
         json_builder_add_int_value(b, k);
         json_builder_set_member_name(b, "title");
-        add_text(b, series->frames[k].label);
-        json_values_set_number(b, "t_start_s",
-                               series->frames[k].timing.frame_start);
-        json_values_set_number(b, "line_time_s",
-                               series->frames[k].timing.line_time);
-        json_builder_set_member_name(b, "direction");
-        json_builder_add_string_value(b, series->frames[k].timing.direction
-                                         == SCAN_DIRECTION_UP ? "up" : "down");
+        json_values_add_text(b, series->frames[k].label);
+        json_values_set_timing(b, "t_start_s", &series->frames[k].timing);
         json_builder_set_member_name(b, "flagged");
         json_builder_add_boolean_value(b, v->flagged);
         json_builder_set_member_name(b, "reason");
         if (v->reason)
-            add_text(b, v->reason);
+            json_values_add_text(b, v->reason);
         else
             json_builder_add_null_value(b);
         json_values_set_number(b, "residual_px", v->residual_px);
@@ -1631,7 +1615,7 @@ series_correction_to_json(const SeriesCorrection *correction,
     json_builder_set_member_name(b, "warnings");
     json_builder_begin_array(b);
     for (i = 0; i < correction->warnings->len; i++)
-        add_text(b, g_ptr_array_index(correction->warnings, i));
+        json_values_add_text(b, g_ptr_array_index(correction->warnings, i));
     json_builder_end_array(b);
     json_builder_end_object(b);
     return json_values_finish(b);

@@ -1104,18 +1104,27 @@ band_passed(const StripeRegistrationFrame *frame, gdouble narrow, ConditionedFra
     return *made = band_pass_copy(frame, narrow);
 }
 
-/* The pair's conditioned frames: the frames' own, or made for the pair
- * (*made_*, to be freed). */
-static void
-pair_frames(const StripeRegistrationFrame *image, const StripeRegistrationFrame *reference,
-            const ConditionedFrame **cimage, const ConditionedFrame **creference,
-            ConditionedFrame **made_image, ConditionedFrame **made_reference)
+/* measure_around() for two registration frames, each band-passed with the
+ * pair's band (its own copy where that is its band). */
+static gboolean
+measure_around_pair(const StripeRegistrationFrame *image,
+                    const StripeRegistrationFrame *reference, gint n,
+                    const gdouble *predicted_dx, const gdouble *predicted_dy, gdouble radius_px,
+                    gdouble min_score, gboolean polish, StripeShift *shifts, GError **error)
 {
     /* The same band as condition_pair() gives the two frames. */
     gdouble narrow = MAX(image->noise_scale, reference->noise_scale);
+    ConditionedFrame *made_image, *made_reference;
+    const ConditionedFrame *cimage, *creference;
+    gboolean ok;
 
-    *cimage = band_passed(image, narrow, made_image);
-    *creference = band_passed(reference, narrow, made_reference);
+    cimage = band_passed(image, narrow, &made_image);
+    creference = band_passed(reference, narrow, &made_reference);
+    ok = measure_around(cimage, creference, n, predicted_dx, predicted_dy, radius_px, min_score,
+                        polish, shifts, error);
+    conditioned_frame_free(made_image);
+    conditioned_frame_free(made_reference);
+    return ok;
 }
 
 gboolean
@@ -1124,17 +1133,9 @@ stripe_registration_frame_shift(const StripeRegistrationFrame *image,
                                 gdouble predicted_dx, gdouble predicted_dy, gdouble radius_px,
                                 StripeShift *shift)
 {
-    ConditionedFrame *made_image, *made_reference;
-    const ConditionedFrame *cimage, *creference;
-    gboolean ok;
-
     g_return_val_if_fail(image && reference && shift, FALSE);
-    pair_frames(image, reference, &cimage, &creference, &made_image, &made_reference);
-    ok = measure_around(cimage, creference, 1, &predicted_dx, &predicted_dy, radius_px,
-                        STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, FALSE, shift, NULL);
-    conditioned_frame_free(made_image);
-    conditioned_frame_free(made_reference);
-    return ok;
+    return measure_around_pair(image, reference, 1, &predicted_dx, &predicted_dy, radius_px,
+                               STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, FALSE, shift, NULL);
 }
 
 gboolean
@@ -1144,18 +1145,9 @@ stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
                                           gdouble radius_px, gdouble min_score,
                                           StripeShift *shifts, GError **error)
 {
-    ConditionedFrame *made_image, *made_reference;
-    const ConditionedFrame *cimage, *creference;
-    gboolean ok;
-
-    g_return_val_if_fail(image && reference, FALSE);
-    pair_frames(image, reference, &cimage, &creference, &made_image, &made_reference);
-    ok = stripe_registration_measure_around_conditioned(cimage, creference, n, predicted_dx,
-                                                        predicted_dy, radius_px, min_score,
-                                                        shifts, error);
-    conditioned_frame_free(made_image);
-    conditioned_frame_free(made_reference);
-    return ok;
+    g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
+    return measure_around_pair(image, reference, n, predicted_dx, predicted_dy, radius_px,
+                               min_score, TRUE, shifts, error);
 }
 
 gboolean
