@@ -116,6 +116,66 @@ median_shift(const PairResult *r, gint n, gdouble *dx, gdouble *dy)
     return TRUE;
 }
 
+/* The shift of a pair at image row y, interpolated linearly between the
+ * centre rows of the measured stripes (the nearest one's beyond them). */
+static gboolean
+shift_at_row(const PairResult *r, gint n, gint yres, gdouble y, gdouble *dx, gdouble *dy)
+{
+    gint s, below = -1, above = -1;
+    gdouble yb, ya, t;
+
+    for (s = 0; s < n; s++) {
+        if (!r->measured[s])
+            continue;
+        if ((s + 0.5)*yres/n <= y)
+            below = s;
+        else if (above < 0)
+            above = s;
+    }
+    if (below < 0 && above < 0)
+        return FALSE;
+    if (below < 0 || above < 0) {
+        s = (below < 0) ? above : below;
+        *dx = r->dx[s];
+        *dy = r->dy[s];
+        return TRUE;
+    }
+    yb = (below + 0.5)*yres/n;
+    ya = (above + 0.5)*yres/n;
+    t = (y - yb)/(ya - yb);
+    *dx = (1.0 - t)*r->dx[below] + t*r->dx[above];
+    *dy = (1.0 - t)*r->dy[below] + t*r->dy[above];
+    return TRUE;
+}
+
+/* Closure stripe by stripe: the content of 16's stripe s was in 09 at its
+ * centre row minus the 09->16 shift, and in 06 a further 06->09 shift
+ * (at that row of 09) away, so 06->16 = 09->16 + 06->09 there.  The
+ * frames drift by up to 10 px between stripes, so the medians of the
+ * pairs' stripes do not close (they are taken over other stripes). */
+static void
+print_stripe_closure(const gchar *name, gint n, gint yres, const PairResult *r0609,
+                     const PairResult *r0916, const PairResult *r0616)
+{
+    gdouble misses[MAX_STRIPES], ax, ay;
+    gint s, m = 0;
+
+    printf("N=%d %s closure per stripe (06->16 - 09->16 - 06->09 at the content's row):", n, name);
+    for (s = 0; s < n; s++) {
+        if (!r0616->measured[s] || !r0916->measured[s]
+            || !shift_at_row(r0609, n, yres, (s + 0.5)*yres/n - r0916->dy[s], &ax, &ay))
+            continue;
+        ax = r0616->dx[s] - r0916->dx[s] - ax;
+        ay = r0616->dy[s] - r0916->dy[s] - ay;
+        printf(" %d(%.1f,%.1f)", s, ax, ay);
+        misses[m++] = hypot(ax, ay);
+    }
+    if (m)
+        printf("; median %.1f px\n", gwy_math_median(m, misses));
+    else
+        printf(" no stripe measured in both\n");
+}
+
 static void
 fastscan(const gchar *dir)
 {
@@ -178,6 +238,8 @@ fastscan(const gchar *dir)
                "stripe: %d pairs, %d within 3 combined sigma, median disagreement %.2f px\n",
                n, total_measured, total_in, 100.0*ratio, both, agree, m ? gwy_math_median(m, diffs) : 0.0);
         for (ch = 0; ch < FASTSCAN_CHANNELS; ch++) {
+            print_stripe_closure(channel_names[ch], n, gwy_data_field_get_yres(fields[0][ch]),
+                                 &results[0][ch], &results[1][ch], &results[2][ch]);
             if (have[0][ch] && have[1][ch] && have[2][ch]) {
                 printf("N=%d %s closure: 06->09 + 09->16 - 06->16 = (%.1f, %.1f) px (median shifts)\n", n,
                        channel_names[ch], mx[0][ch] + mx[1][ch] - mx[2][ch], my[0][ch] + my[1][ch] - my[2][ch]);
@@ -211,6 +273,31 @@ hsafm_movie(const gchar *dir, const gchar *file)
     g_free(path);
 }
 
+/* The AFM-IR film's channels of one stage position that are distinct
+ * recordings (the file holds duplicates too; ../shared/data/measured/
+ * MANIFEST.md): Height 9, 10, 11, 12 and 16, recorded at 15:16, 17:42,
+ * 17:51, 18:18 and 18:29. */
+static void
+afmir_film(const gchar *dir)
+{
+    static const gint pairs[5][2] = { { 9, 10 }, { 10, 11 }, { 11, 12 }, { 12, 16 }, { 9, 16 } };
+    gchar *path = g_build_filename(dir, "afmir-film", "PEA_BDA_film.axz", NULL);
+    GwyContainer *data = load_file(path);
+    PairResult result;
+    gint p;
+
+    printf("== AFM-IR PEA_BDA_film.axz, channels Height i -> Height j, 8 stripes\n");
+    for (p = 0; p < 5; p++) {
+        gchar *what = g_strdup_printf("Height %d->%d", pairs[p][0], pairs[p][1]);
+
+        register_pair(channel(data, pairs[p][1]), channel(data, pairs[p][0]), 8, &result);
+        print_pair(what, 8, &result);
+        g_free(what);
+    }
+    g_object_unref(data);
+    g_free(path);
+}
+
 int
 main(int argc, char *argv[])
 {
@@ -227,5 +314,6 @@ main(int argc, char *argv[])
     fastscan(dir);
     hsafm_movie(dir, "hsafm_sample0_frames50-140.gwy");
     hsafm_movie(dir, "hsafm_extra_frames14-62.gwy");
+    afmir_film(dir);
     return 0;
 }
