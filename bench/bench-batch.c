@@ -4,7 +4,9 @@
  *  data, and its peak memory against the channel's size, in paper and
  *  continuous mode; and the dialog's work per change of a setting (the
  *  preview on its reduced copy, modules/core/preview-field.c) against the
- *  same memcpy.  All measured in one run.
+ *  same memcpy; and the floor no such run can go below here: the tool's
+ *  start-up and the file traffic of reading the input and writing the
+ *  output.  All measured in one run.
  *  Run from the build folder (make bench): it runs ./tools/gwy-localscan
  *  with the module modules/.libs/localscan.so ($LOCALSCAN_MODULE wins) and
  *  HOME in a scratch folder.
@@ -68,16 +70,16 @@ time_memcpy(const gdouble *a, gdouble *b, gsize n)
 /* A rough surface and a slowly growing drift of fractional pixels, which
  * both modes accept (paper mode rounds the stored physical values). */
 static GwyContainer*
-make_input(void)
+make_input(gint res)
 {
-    GwyDataField *field = gwy_data_field_new(RES, RES, RES*1e-9, RES*1e-9, FALSE);
+    GwyDataField *field = gwy_data_field_new(res, res, res*1e-9, res*1e-9, FALSE);
     GwyContainer *data = gwy_container_new();
     DriftTable *table = drift_table_new(N_STRIPES, DRIFT_UNIT_NM);
     GRand *rng = g_rand_new_with_seed(1);
     gdouble *d = gwy_data_field_get_data(field);
     gint i, s;
 
-    for (i = 0; i < RES*RES; i++)
+    for (i = 0; i < res*res; i++)
         d[i] = g_rand_double(rng)*1e-9;
     gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
     gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(field), "m");
@@ -95,11 +97,13 @@ make_input(void)
     return data;
 }
 
-/* Wall time and peak resident memory (bytes) of one run of the tool. */
+/* Wall time, peak resident memory (bytes) and output size (bytes) of one
+ * run of the tool. */
 static gboolean
 run_tool(const gchar *mode, const gchar *input, const gchar *output, gdouble *seconds,
-         gsize *peak)
+         gsize *peak, gsize *output_bytes)
 {
+    GStatBuf st;
     gchar *argv[] = { TOOL, "-m", (gchar*)mode, "-o", (gchar*)output, (gchar*)input, NULL };
     struct rusage usage;
     gint64 start = g_get_monotonic_time();
@@ -114,19 +118,21 @@ run_tool(const gchar *mode, const gchar *input, const gchar *output, gdouble *se
         return FALSE;
     *seconds = (g_get_monotonic_time() - start)/1e6;
     *peak = (gsize)usage.ru_maxrss*1024;
+    *output_bytes = (g_stat(output, &st) == 0) ? (gsize)st.st_size : 0;
     g_unlink(output);
     return WIFEXITED(status) && WEXITSTATUS(status) == 0;
 }
 
 static gboolean
-bench_mode(const gchar *mode, const gchar *input, const gchar *output, gdouble memcpy_seconds)
+bench_mode(const gchar *mode, const gchar *input, const gchar *output, gdouble memcpy_seconds,
+           gsize *output_bytes)
 {
     gdouble seconds[RUN_REPETITIONS];
     gsize peak = 0, channel = (gsize)RES*RES*sizeof(gdouble), one;
     gint i;
 
     for (i = 0; i < RUN_REPETITIONS; i++) {
-        if (!run_tool(mode, input, output, seconds + i, &one)) {
+        if (!run_tool(mode, input, output, seconds + i, &one, output_bytes)) {
             fprintf(stderr, "bench-batch: %s -m %s failed\n", TOOL, mode);
             return FALSE;
         }
@@ -137,6 +143,72 @@ bench_mode(const gchar *mode, const gchar *input, const gchar *output, gdouble m
            mode, best_of(seconds, RUN_REPETITIONS), best_of(seconds, RUN_REPETITIONS)/memcpy_seconds,
            peak/1048576.0, (gdouble)peak/channel);
     return TRUE;
+}
+
+/* Reading the input file and writing output_bytes to a new file, as fast
+ * as the system does it (the file's own bytes, again and again, through
+ * 1 MiB writes): what any tool that reads this input and writes this
+ * output pays, whatever it computes. */
+static gdouble
+time_file_io(const gchar *input, gsize output_bytes, const gchar *scratch)
+{
+    gdouble seconds[RUN_REPETITIONS];
+    gint i;
+
+    for (i = 0; i < RUN_REPETITIONS; i++) {
+        gint64 start = g_get_monotonic_time();
+        gchar *contents = NULL;
+        gsize length = 0, written = 0, chunk;
+        FILE *fh;
+
+        if (!g_file_get_contents(input, &contents, &length, NULL) || !length
+            || !(fh = g_fopen(scratch, "wb")))
+            return 0.0;
+        while (written < output_bytes) {
+            chunk = MIN(MIN(output_bytes - written, (gsize)1 << 20), length);
+            if (fwrite(contents, 1, chunk, fh) != chunk)
+                break;
+            written += chunk;
+        }
+        fclose(fh);
+        seconds[i] = (g_get_monotonic_time() - start)/1e6;
+        g_unlink(scratch);
+        g_free(contents);
+    }
+    return best_of(seconds, RUN_REPETITIONS);
+}
+
+/* What the end-to-end target cannot go below on this machine: the tool's
+ * start-up (Gwyddion's module registry, loading and saving a 64 x 64
+ * image) and the file traffic of the 4096 x 4096 run. */
+static void
+bench_floor(const gchar *dir, const gchar *input, const gchar *output, gsize output_bytes,
+            gdouble memcpy_seconds)
+{
+    gchar *tiny = g_build_filename(dir, "tiny.gwy", NULL);
+    GwyContainer *data = make_input(64);
+    gdouble seconds[RUN_REPETITIONS], startup, io;
+    gsize peak, bytes;
+    gint i;
+
+    if (!gwy_file_save(data, tiny, GWY_RUN_NONINTERACTIVE, NULL)) {
+        fprintf(stderr, "bench-batch: cannot write %s\n", tiny);
+        g_object_unref(data);
+        g_free(tiny);
+        return;
+    }
+    for (i = 0; i < RUN_REPETITIONS; i++) {
+        if (!run_tool("paper", tiny, output, seconds + i, &peak, &bytes))
+            seconds[i] = G_MAXDOUBLE;
+    }
+    startup = best_of(seconds, RUN_REPETITIONS);
+    io = time_file_io(input, output_bytes, output);
+    printf("floor of any such run here: start-up (64 x 64 run) %.3f s + reading the input and writing "
+           "the %.0f MiB output %.3f s = %.3f s = %.1f x memcpy\n", startup, output_bytes/1048576.0, io,
+           startup + io, (startup + io)/memcpy_seconds);
+    g_unlink(tiny);
+    g_object_unref(data);
+    g_free(tiny);
 }
 
 /* A change of the stripe count with a reference: the dialog registers the
@@ -213,6 +285,7 @@ main(void)
 {
     gsize n = (gsize)RES*RES;
     gdouble *a = g_new(gdouble, n), *b = g_new(gdouble, n), memcpy_seconds;
+    gsize output_bytes = 0;
     gchar *dir, *input, *output, *home;
     GwyContainer *data;
     GError *error = NULL;
@@ -230,7 +303,7 @@ main(void)
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     input = g_build_filename(dir, "in.gwy", NULL);
     output = g_build_filename(dir, "out.gwy", NULL);
-    data = make_input();
+    data = make_input(RES);
     ok = gwy_file_save(data, input, GWY_RUN_NONINTERACTIVE, &error);
     if (ok) {
         memset(a, 1, n*sizeof(gdouble));
@@ -238,8 +311,10 @@ main(void)
         memcpy_seconds = time_memcpy(a, b, n);
         printf("memcpy of the %d x %d channel (%.0f MiB): best %.4f s\n",
                RES, RES, n*sizeof(gdouble)/1048576.0, memcpy_seconds);
-        ok = (bench_mode("paper", input, output, memcpy_seconds)
-              && bench_mode("continuous", input, output, memcpy_seconds));
+        ok = (bench_mode("paper", input, output, memcpy_seconds, &output_bytes)
+              && bench_mode("continuous", input, output, memcpy_seconds, &output_bytes));
+        if (ok)
+            bench_floor(dir, input, output, output_bytes, memcpy_seconds);
         bench_preview(data, memcpy_seconds);
     }
     else
