@@ -45,6 +45,7 @@ frame_pair_spec_init(FramePairSpec *spec)
     spec->particle_density = 1.0/1200.0;
     spec->roughness = 0.15;
     spec->lattice = 0.0;
+    spec->grating = 0.0;
     spec->lattice_period = 12.0;
     spec->flat_from = spec->flat_to = 0;
     spec->drift = TRUE;
@@ -121,6 +122,12 @@ surface_sample_row(const Surface *surface, gdouble y, gdouble shift_x, gdouble *
 
         for (c = 0; c < xres; c++)
             out[c] += spec->lattice*(cos(q*(c - shift_x)) + cy);
+    }
+    if (spec->grating != 0.0) {
+        gdouble q = 2.0*G_PI/spec->lattice_period;
+
+        for (c = 0; c < xres; c++)
+            out[c] += spec->grating*cos(q*(c - shift_x));
     }
     for (k = 0; k < surface->nparticles; k++) {
         const Particle *p = surface->particles + k;

@@ -19,6 +19,8 @@ typedef struct {
     gdouble roughness;        /* rms of the correlated roughness */
     gdouble lattice;          /* amplitude of a periodic lattice, 0 for none */
     gdouble lattice_period;   /* px */
+    gdouble grating;          /* amplitude of lines along y (varying along
+                                 x only, lattice_period apart), 0: none */
     gint flat_from;           /* rows [flat_from, flat_to) of the surface are */
     gint flat_to;             /* flat (only noise); flat_to <= flat_from: none */
     gboolean drift;           /* random smooth drift; FALSE: linear drift */

@@ -277,6 +277,53 @@ START_TEST(test_periodic_texture_lowers_score)
 }
 END_TEST
 
+/* Lines along y with a faint roughness, searched within a third of their
+ * period (a user's --search), so that no alias of the lines is in reach:
+ * the correlation is a ridge along dy, whose maxima have no dip between
+ * them and so are no rivals of each other; what locates a stripe along the
+ * lines is the roughness alone.  Whatever is given must be within its
+ * stated uncertainty (3 sigma, or 1 px).  The grating's period, the
+ * roughness and the drift are drawn from the seed. */
+START_TEST(test_grating_honest)
+{
+    FramePairSpec spec;
+    FramePair *pair;
+    StripeShift shifts[16];
+    StripeRegistrationOptions options;
+    gdouble tx[16], ty[16], e, worst = 0.0;
+    GRand *rng = g_rand_new_with_seed(test_seed ^ 0x9a7u);
+    GError *error = NULL;
+    gint s, accepted = 0;
+
+    frame_pair_spec_init(&spec);
+    spec.particle_density = 0.0;
+    spec.roughness = g_rand_double_range(rng, 0.002, 0.2);
+    spec.grating = 1.0;
+    spec.lattice_period = g_rand_double_range(rng, 36.0, 72.0);
+    spec.drift_scale = 0.3;
+    pair = frame_pair_generate(&spec, test_seed);
+    stripe_registration_options_init(&options);
+    options.search_x = options.search_y = spec.lattice_period/3.0;
+    ck_assert_msg(stripe_registration_measure(pair->image, pair->reference, pair->xres, pair->yres, 16,
+                                              &options, shifts, &error),
+                  "registration failed: %s", error ? error->message : "?");
+    frame_pair_stripe_truth(pair, 16, tx, ty);
+    for (s = 0; s < 16; s++) {
+        if (!shifts[s].accepted)
+            continue;
+        accepted++;
+        e = hypot(shifts[s].dx - tx[s], shifts[s].dy - ty[s]);
+        worst = MAX(worst, e);
+        ck_assert_msg(e <= MAX(1.0, 3.0*shifts[s].sigma),
+                      "grating stripe %d off by %g px, sigma %g (seed %u)", s, e, shifts[s].sigma, test_seed);
+    }
+    printf("grating (period %.1f px, roughness %.3f): %d stripes accepted, worst %.3f px, all within "
+           "their uncertainty\n", spec.lattice_period, spec.roughness, accepted, worst);
+    frame_pair_free(pair);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* A shift of about half a stripe in y puts half the first or the last
  * stripe off the reference: its peak lies on the edge of the shifts the
  * search considers (half the rows on the reference), and is found there. */
@@ -673,6 +720,7 @@ registration_suite(void)
     tcase_add_test(tc, test_stripe_half_off_reference);
     tcase_add_test(tc, test_featureless_stripe_rejected);
     tcase_add_test(tc, test_periodic_texture_lowers_score);
+    tcase_add_test(tc, test_grating_honest);
     tcase_add_test(tc, test_search_around_prediction);
     tcase_add_test(tc, test_table);
     tcase_add_test(tc, test_table_for_fields);

@@ -47,10 +47,6 @@
 
 /* Competing peaks closer than this (px, in both axes) are the main peak's. */
 #define RIVAL_EXCLUSION 3
-/* A competing maximum is a peak of its own only where the map dips
- * between it and the main peak by at least this fraction of its height
- * above the map's median; otherwise it is a shoulder of the main peak. */
-#define RIVAL_VALLEY 0.1
 /* Half-size of the window searched around the neighbours' prediction (px). */
 #define CONSISTENCY_RADIUS 3
 /* Neighbours on each side whose median predicts a band; the far reach is
@@ -66,9 +62,6 @@
  * peak stands out of far more pixels than a stripe's, so a lower margin
  * over its rival is already decisive. */
 #define GLOBAL_MIN_SCORE 0.1
-/* A band searched blind confirms the whole frame's peak when its own peak
- * lies this close (coarse px) to it. */
-#define CONFIRM_REACH 3
 /* Bands this confident keep their own peak and predict their neighbours. */
 #define RELIABLE_SCORE 0.3
 /* How far (px) the match may move a peak that lies on the edge of the
@@ -355,47 +348,6 @@ polish_peak(Level *level, gint s, gint reach, Peak *peak)
     return peak->polished;
 }
 
-/* The median of the map's values within the rectangle. */
-static gdouble
-map_median(const StripeCorrelationMap *map, gint ylo, gint yhi, gint xlo, gint xhi)
-{
-    gdouble *values = g_new(gdouble, (gsize)(yhi - ylo + 1)*(xhi - xlo + 1)), v, median = 0.0;
-    gint i, j, m = 0;
-
-    for (i = ylo; i <= yhi; i++) {
-        for (j = xlo; j <= xhi; j++) {
-            if ((v = stripe_correlation_map_at(map, i, j)) > STRIPE_CORRELATION_NONE)
-                values[m++] = v;
-        }
-    }
-    if (m)
-        median = gwy_math_median(m, values);
-    g_free(values);
-    return median;
-}
-
-/* Whether the map dips between the maximum (ky, kx) and the main peak
- * (py, px) by RIVAL_VALLEY of the maximum's height above base, along the
- * straight line between them.  The true saddle is at least as high as that
- * line's lowest point, so a maximum on the main peak's shoulder may still
- * pass as separate (a rival too many), never the other way round.
- * Distortion between two frames scanned while drifting stretches a
- * stripe's peak into a ridge whose shoulders carry maxima of their own a
- * few px from it (FastScan: 0.306 beside 0.344, no dip between). */
-static gboolean
-separate_peak(const StripeCorrelationMap *map, gint ky, gint kx, gint py, gint px, gdouble base)
-{
-    gdouble v = stripe_correlation_map_at(map, ky, kx), lowest = v, u;
-    gint steps = MAX(ABS(ky - py), ABS(kx - px)), t;
-
-    for (t = 1; t < steps; t++) {
-        u = stripe_correlation_map_at(map, ky + (gint)floor((py - ky)*(gdouble)t/steps + 0.5),
-                                      kx + (gint)floor((px - kx)*(gdouble)t/steps + 0.5));
-        lowest = MIN(lowest, u);
-    }
-    return lowest < v - RIVAL_VALLEY*MAX(v - base, 0.0);
-}
-
 /* How far the sub-pixel match may move a stripe from its map peak: the
  * map of frames blurred against pixel noise is as broad as the blur, and
  * its peak as uncertain (FastScan, blurred by 10 px: matches 3.4 px from
@@ -420,7 +372,7 @@ find_peak(Level *level, gint s, gint cy, gint cx, gint ry, gint rx, gint known, 
     const StripeCorrelationMap *map = level->maps + s;
     gint ylo = MAX(cy - ry, map->cy - map->ry), yhi = MIN(cy + ry, map->cy + map->ry);
     gint xlo = MAX(cx - rx, map->cx - map->rx), xhi = MIN(cx + rx, map->cx + map->rx);
-    gdouble best = STRIPE_CORRELATION_NONE, rival = 0.0, oy, ox, v, base;
+    gdouble best = STRIPE_CORRELATION_NONE, rival = 0.0, oy, ox, v;
     gint i, j;
 
     gwy_clear(peak, 1);
@@ -450,13 +402,11 @@ find_peak(Level *level, gint s, gint cy, gint cx, gint ry, gint rx, gint known, 
         xlo = MAX(xlo, cx - known);
         xhi = MIN(xhi, cx + known);
     }
-    base = map_median(map, ylo, yhi, xlo, xhi);
     for (i = ylo; i <= yhi; i++) {
         for (j = xlo; j <= xhi; j++) {
             if (ABS(i - peak->ky) < RIVAL_EXCLUSION && ABS(j - peak->kx) < RIVAL_EXCLUSION)
                 continue;
-            if ((v = stripe_correlation_map_at(map, i, j)) > rival && is_local_maximum(map, i, j)
-                && separate_peak(map, i, j, peak->ky, peak->kx, base))
+            if ((v = stripe_correlation_map_at(map, i, j)) > rival && is_local_maximum(map, i, j))
                 rival = v;
         }
     }
@@ -785,26 +735,6 @@ measure_bands(const ConditionedFrame *small_image, const ConditionedFrame *small
     g_free(cdx);
 }
 
-/* How many bands, searched blind, found their own best peak within
- * CONFIRM_REACH coarse px of the whole frame's (gy, gx).  A whole frame
- * whose peak barely stands out of its rivals (a frame whose content
- * changed, or that drifted while scanned, so that its parts peak apart) is
- * still located when parts of it, searched on their own over the whole
- * range, peak where it does: two of eight bands doing so by chance on a
- * 150 x 100 px coarse search is a chance of about 1 in 2500. */
-static gint
-bands_confirming(const StripeShift *bands, gint nb, gdouble gy, gdouble gx)
-{
-    gint b, count = 0;
-
-    for (b = 0; b < nb; b++) {
-        if (!bands[b].resolved && bands[b].peak > 0.0
-            && fabs(bands[b].dy - gy) <= CONFIRM_REACH && fabs(bands[b].dx - gx) <= CONFIRM_REACH)
-            count++;
-    }
-    return count;
-}
-
 /* Stages 1 and 2 at reduced resolution: the predicted shift (full-resolution
  * px) of each of n stripes.  FALSE when the coarse stage found nothing. */
 static gboolean
@@ -815,7 +745,7 @@ predict_coarsely(const ConditionedFrame *image, const ConditionedFrame *referenc
     ConditionedFrame *small_image, *small_reference;
     StripeShift whole, *bands;
     Level level;
-    gint f, nb, ry, rx, reach_y, reach_x, s, confirming = 0, yres = image->yres;
+    gint f, nb, ry, rx, reach_y, reach_x, s, yres = image->yres;
     gdouble y;
     StripeRegistrationOptions coarse = *options;
     gboolean found = TRUE, global_ok;
@@ -838,14 +768,10 @@ predict_coarsely(const ConditionedFrame *image, const ConditionedFrame *referenc
 
     nb = CLAMP(small_image->yres/BAND_ROWS, 1, n);
     bands = g_new(StripeShift, nb);
-    if (!global_ok) {
+    if (!global_ok)
         measure_bands(small_image, small_reference, nb, 0.0, 0.0, ry, rx, options->min_score, bands);
-        confirming = bands_confirming(bands, nb, whole.dy, whole.dx);
-        global_ok = (whole.score > 0.0 && confirming >= MIN(2, nb));
-    }
     g_debug("registration: coarse factor %d, whole frame (%.2f, %.2f) coarse px, peak %.3f, "
-            "rival %.3f, score %.3f, %d bands searched blind confirm it", f, whole.dx, whole.dy,
-            whole.peak, whole.rival, whole.score, confirming);
+            "rival %.3f, score %.3f", f, whole.dx, whole.dy, whole.peak, whole.rival, whole.score);
     if (global_ok) {
         measure_bands(small_image, small_reference, nb, whole.dy, whole.dx, reach_y, reach_x,
                       options->min_score, bands);
