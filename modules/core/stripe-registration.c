@@ -816,13 +816,6 @@ levelled_view(const ConditionedFrame *frame)
     return view;
 }
 
-/* Every stripe at full resolution within radius of its predicted shift.
- * Its map comes from the levelled frames: within a small window the
- * correlation's own mean removal over each shift's overlap takes what
- * stays of slow variations, and the wide cut, which a search over large
- * shifts needs, paints the smoothed texture around a featureless region
- * into it, with structure both frames share, so that a featureless stripe
- * matched on it (scores up to 0.6 in the tests). */
 /* Stripes of the fine level shared among threads, each with a level of
  * its own (a level's correlation and match hold scratch space). */
 typedef struct {
@@ -847,6 +840,15 @@ measure_fine_share(gpointer user_data, gint worker)
     level_free(&level);
 }
 
+/* Every stripe at full resolution within radius of its predicted shift.
+ * Its map comes from the levelled frames: within a small window the
+ * correlation's own mean removal over each shift's overlap takes what
+ * stays of slow variations, and the wide cut, which a search over large
+ * shifts needs, paints the smoothed texture around a featureless region
+ * into it, with structure both frames share, so that a featureless stripe
+ * matched on it (scores up to 0.6 in the tests).  With parallel, the
+ * stripes are shared among the processor's cores (a single pair; a series
+ * runs its pairs in parallel already). */
 static void
 measure_fine(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
              const gdouble *pdy, const gdouble *pdx, gint radius, gdouble min_score, gboolean polish,
