@@ -23,14 +23,20 @@ uniform(GRand *rng, gdouble lo, gdouble hi)
     return g_rand_double_range(rng, lo, hi);
 }
 
+/* An x, y pair drawn in [-size, size), x first. */
+static void
+uniform_pair(GRand *rng, gdouble size, gdouble *pair)
+{
+    pair[0] = uniform(rng, -size, size);
+    pair[1] = uniform(rng, -size, size);
+}
+
 /* Common part p0 + v t with random nm-scale p0 and nm/s-scale v. */
 static void
 random_linear_part(DriftModel *model, GRand *rng)
 {
-    model->p0[0] = uniform(rng, -50e-9, 50e-9);
-    model->p0[1] = uniform(rng, -50e-9, 50e-9);
-    model->v[0] = uniform(rng, -0.5e-9, 0.5e-9);
-    model->v[1] = uniform(rng, -0.5e-9, 0.5e-9);
+    uniform_pair(rng, 50e-9, model->p0);
+    uniform_pair(rng, 0.5e-9, model->v);
 }
 
 /* The size of the terms that make up p(t), for a relative tolerance. */
@@ -74,8 +80,7 @@ static void
 random_settling_model(DriftModel *m, GRand *rng)
 {
     random_base_model(m, DRIFT_MODEL_SETTLING, rng);
-    m->u[0] = uniform(rng, -3e-9, 3e-9);
-    m->u[1] = uniform(rng, -3e-9, 3e-9);
+    uniform_pair(rng, 3e-9, m->u);
     m->tau = uniform(rng, 10.0, 300.0);
 }
 
@@ -83,8 +88,7 @@ static void
 random_oscillation_model(DriftModel *m, GRand *rng)
 {
     random_base_model(m, DRIFT_MODEL_OSCILLATION, rng);
-    m->a[0] = uniform(rng, -5e-9, 5e-9);
-    m->a[1] = uniform(rng, -5e-9, 5e-9);
+    uniform_pair(rng, 5e-9, m->a);
     m->period = uniform(rng, 5.0, 200.0);
     m->phase = uniform(rng, -G_PI, G_PI);
 }
@@ -93,8 +97,7 @@ static void
 random_jump_model(DriftModel *m, GRand *rng)
 {
     random_base_model(m, DRIFT_MODEL_JUMP, rng);
-    m->step[0] = uniform(rng, -20e-9, 20e-9);
-    m->step[1] = uniform(rng, -20e-9, 20e-9);
+    uniform_pair(rng, 20e-9, m->step);
     m->t_jump = uniform(rng, 100.0, 800.0);
 }
 
@@ -103,8 +106,7 @@ static void
 random_creep_model(DriftModel *m, GRand *rng)
 {
     random_none_model(m, rng);
-    m->creep[0] = uniform(rng, -20e-9, 20e-9);
-    m->creep[1] = uniform(rng, -20e-9, 20e-9);
+    uniform_pair(rng, 20e-9, m->creep);
     m->creep_tau = uniform(rng, 2.0, 30.0);
     m->creep_period = uniform(rng, 40.0, 200.0);
 }
