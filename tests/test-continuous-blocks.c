@@ -16,46 +16,9 @@
 #include <libprocess/interpolation.h>
 #include "continuous-compensate.h"
 #include "test-common.h"
+#include "continuous-fixtures.h"
 
 static guint32 test_seed;
-
-static const GwyInterpolationType all_kernels[] = {
-    GWY_INTERPOLATION_ROUND, GWY_INTERPOLATION_LINEAR, GWY_INTERPOLATION_KEY,
-    GWY_INTERPOLATION_BSPLINE, GWY_INTERPOLATION_OMOMS, GWY_INTERPOLATION_NNA,
-    GWY_INTERPOLATION_SCHAUM,
-};
-
-static GRand*
-test_rand(guint32 salt)
-{
-    return g_rand_new_with_seed(test_seed ^ (salt*2654435761u));
-}
-
-static gdouble*
-random_image(gint xres, gint yres, GRand *rng)
-{
-    gdouble *a = g_new(gdouble, xres*yres);
-    gint k;
-
-    for (k = 0; k < xres*yres; k++)
-        a[k] = g_rand_double_range(rng, -5.0, 10.0);
-    return a;
-}
-
-/* The same drift (px) in every one of n stripes. */
-static DriftTable*
-constant_table(gint n, gdouble dx, gdouble dy)
-{
-    DriftTable *table = drift_table_new(n, DRIFT_UNIT_PX);
-    gint s;
-
-    for (s = 0; s < n; s++) {
-        table->rows[s].has_drift = TRUE;
-        table->rows[s].dx = dx;
-        table->rows[s].dy = dy;
-    }
-    return table;
-}
 
 /* A fractional shift of either sign, at least 0.1 px from whole, in
  * 1/1024 px: then c + shift is exact for any column, in Gwyddion's
@@ -101,14 +64,14 @@ gwyddion_line(const gdouble *data, gint n, gsize stride, gdouble shift,
  * Gwyddion's interpolation of the column, prefilter included, to 1e-12. */
 START_TEST(test_tall_shift_matches_gwyddion)
 {
-    GRand *rng = test_rand(10);
+    GRand *rng = test_rand_salted(test_seed, 10);
     gint xres = 23, yres = 397, size = xres*yres, r, c, checked = 0;
-    gdouble *a = random_image(xres, yres, rng);
+    gdouble *a = random_image(xres, yres, -5.0, 10.0, rng);
     gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
     gdouble *expected = g_new(gdouble, yres);
     gdouble shift = random_fractional_shift(rng);
     GwyInterpolationType type = all_kernels[_i];
-    DriftTable *table = constant_table(9, 0.0, shift);
+    DriftTable *table = constant_table(9, 0.0, shift, NULL);
 
     ck_assert(continuous_compensate_table(a, xres, yres, table, 1.0, 1.0,
                                           NULL, type, -1.0, result, mask,
@@ -136,14 +99,14 @@ END_TEST
  * remainder): every row is Gwyddion's interpolation of the row. */
 START_TEST(test_wide_shift_matches_gwyddion)
 {
-    GRand *rng = test_rand(20);
+    GRand *rng = test_rand_salted(test_seed, 20);
     gint xres = 1031, yres = 9, size = xres*yres, r, c;
-    gdouble *a = random_image(xres, yres, rng);
+    gdouble *a = random_image(xres, yres, -5.0, 10.0, rng);
     gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
     gdouble *expected = g_new(gdouble, xres);
     gdouble shift = random_fractional_shift(rng);
     GwyInterpolationType type = all_kernels[_i];
-    DriftTable *table = constant_table(3, shift, 0.0);
+    DriftTable *table = constant_table(3, shift, 0.0, NULL);
 
     ck_assert(continuous_compensate_table(a, xres, yres, table, 1.0, 1.0,
                                           NULL, type, -1.0, result, mask,
