@@ -217,6 +217,25 @@ run_dialog_on(GwyContainer *data, gint id, DialogProbe *probe)
         g_source_remove(timeout);
 }
 
+/* A probe that waits for ready_text, photographs the dialog to
+ * screenshot and answers with response. */
+static void
+probe_init(DialogProbe *probe, const gchar *ready_text, const gchar *screenshot, gint response)
+{
+    gwy_clear(probe, 1);
+    probe->ready_text = ready_text;
+    probe->screenshot = screenshot;
+    probe->response = response;
+}
+
+/* What the probe collected from every dialog. */
+static void
+probe_clear(DialogProbe *probe)
+{
+    g_string_free(probe->texts, TRUE);
+    g_free(probe->title);
+}
+
 static void
 run_dialog(GwyContainer *data, DialogProbe *probe)
 {
@@ -265,10 +284,7 @@ START_TEST(test_dialog_ok_makes_channel)
     source = gwy_container_get_object(data, gwy_app_get_data_key_for_id(0));
     n_filled = count_filled(table, source, want, want_mask);
     ready = g_strdup_printf("%d stripes, %d filled pixels.", N_STRIPES, n_filled);
-    gwy_clear(&probe, 1);
-    probe.ready_text = ready;
-    probe.screenshot = SCREENSHOT;
-    probe.response = GTK_RESPONSE_OK;
+    probe_init(&probe, ready, SCREENSHOT, GTK_RESPONSE_OK);
     run_dialog(data, &probe);
 
     ck_assert_msg(probe.dialog, "no dialog appeared in %d ms", MAX_TICKS*TICK_MS);
@@ -290,8 +306,7 @@ START_TEST(test_dialog_ok_makes_channel)
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
     drift_table_free(table);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
     g_free(ready);
     g_free(want);
     g_free(want_mask);
@@ -325,10 +340,7 @@ START_TEST(test_dialog_in_german)
     bindtextdomain(GETTEXT_PACKAGE, TEST_LOCALEDIR);
     set_batch_like_settings();
     data = make_data(&table);
-    gwy_clear(&probe, 1);
-    probe.ready_text = "Streifen";
-    probe.screenshot = SCREENSHOT_DE;
-    probe.response = GTK_RESPONSE_CANCEL;
+    probe_init(&probe, "Streifen", SCREENSHOT_DE, GTK_RESPONSE_CANCEL);
     run_dialog(data, &probe);
 
     ck_assert_msg(probe.dialog, "no dialog appeared");
@@ -346,8 +358,7 @@ START_TEST(test_dialog_in_german)
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
     drift_table_free(table);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
 }
 END_TEST
 
@@ -399,15 +410,11 @@ START_TEST(test_no_double_correction)
     init_application();
     set_batch_like_settings();
     data = make_data(&table);
-    gwy_clear(&probe, 1);
-    probe.ready_text = "filled pixels.";
-    probe.screenshot = SCREENSHOT;
-    probe.response = GTK_RESPONSE_OK;
+    probe_init(&probe, "filled pixels.", SCREENSHOT, GTK_RESPONSE_OK);
     run_dialog(data, &probe);
     ck_assert_msg(probe.ready, "the first dialog never got ready:\n%s", probe.texts->str);
     ck_assert_int_eq(gui_count_channels(data), 2);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
 
     /* Repeat last on the new channel 1. */
     gwy_app_data_browser_select_data_field(data, 1);
@@ -417,10 +424,7 @@ START_TEST(test_no_double_correction)
     ck_assert_int_eq(n, 2);
 
     /* The dialog on the result asks; Cancel leaves it at that. */
-    gwy_clear(&probe, 1);
-    probe.ready_text = "already local-scan compensated";
-    probe.screenshot = SCREENSHOT_AGAIN;
-    probe.response = GTK_RESPONSE_CANCEL;
+    probe_init(&probe, "already local-scan compensated", SCREENSHOT_AGAIN, GTK_RESPONSE_CANCEL);
     run_dialog_on(data, 1, &probe);
     ck_assert_msg(probe.ready, "no question on the compensated channel; shown:\n%s", probe.texts->str);
     ck_assert_msg(probe.saved, "no screenshot");
@@ -430,8 +434,7 @@ START_TEST(test_no_double_correction)
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
     drift_table_free(table);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
 }
 END_TEST
 
@@ -475,10 +478,7 @@ START_TEST(test_reference_chooser)
     gwy_app_data_browser_add(c);
     gwy_app_data_browser_add(a);
 
-    gwy_clear(&probe, 1);
-    probe.ready_text = "Registered";
-    probe.screenshot = SCREENSHOT_REFERENCE;
-    probe.response = GTK_RESPONSE_CANCEL;
+    probe_init(&probe, "Registered", SCREENSHOT_REFERENCE, GTK_RESPONSE_CANCEL);
     probe.keep_reference = TRUE;
     run_dialog_on(a, 0, &probe);
     ck_assert_msg(probe.dialog, "no dialog");
@@ -506,8 +506,7 @@ START_TEST(test_reference_chooser)
     g_object_unref(a);
     g_object_unref(b);
     g_object_unref(c);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
 }
 END_TEST
 
@@ -592,8 +591,7 @@ START_TEST(test_cancel_large_image)
     g_object_unref(field);
     g_string_free(wait.texts, TRUE);
     g_string_free(missing, TRUE);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
 }
 END_TEST
 

@@ -641,42 +641,46 @@ three_channels_clear(ThreeChannels *tc)
     g_free(tc->input);
 }
 
-START_TEST(test_stored_table_first_channel)
+/* Compensates the three channels' file with options (then -o OUT IN) from a
+ * generator seeded with rng_seed; the result must be channel which's,
+ * compensated by its own stored table, its other metadata carried. */
+static void
+run_three_channels(guint32 rng_seed, gint which, const gchar *const *options)
 {
-    GRand *rng = g_rand_new_with_seed(seed);
+    GRand *rng = g_rand_new_with_seed(rng_seed);
+    GPtrArray *args = g_ptr_array_new();
     ThreeChannels tc;
     Expected exp;
     gchar *output;
+    guint i;
 
     three_channels_init(&tc, rng);
     output = out_path("out.gwy");
-    expected_init(&exp, tc.fields[1], three_titles[1], tc.tables[1]);
-    exp.source_id = three_ids[1];
-    run_and_check(tc.data, tc.input, (const gchar *const[]){ "-o", output, tc.input, NULL }, &exp);
+    for (i = 0; options[i]; i++)
+        g_ptr_array_add(args, (gpointer)options[i]);
+    g_ptr_array_add(args, "-o");
+    g_ptr_array_add(args, output);
+    g_ptr_array_add(args, tc.input);
+    g_ptr_array_add(args, NULL);
+    expected_init(&exp, tc.fields[which], three_titles[which], tc.tables[which]);
+    exp.source_id = three_ids[which];
+    run_and_check(tc.data, tc.input, (const gchar *const*)args->pdata, &exp);
     expected_clear(&exp);
+    g_ptr_array_free(args, TRUE);
     g_free(output);
     three_channels_clear(&tc);
     g_rand_free(rng);
+}
+
+START_TEST(test_stored_table_first_channel)
+{
+    run_three_channels(seed, 1, (const gchar *const[]){ NULL });
 }
 END_TEST
 
 START_TEST(test_channel_option)
 {
-    GRand *rng = g_rand_new_with_seed(seed + 1);
-    ThreeChannels tc;
-    Expected exp;
-    gchar *output;
-
-    three_channels_init(&tc, rng);
-    output = out_path("out.gwy");
-    expected_init(&exp, tc.fields[2], three_titles[2], tc.tables[2]);
-    exp.source_id = three_ids[2];
-    run_and_check(tc.data, tc.input,
-                  (const gchar *const[]){ "-c", "6", "-m", "paper", "-o", output, tc.input, NULL }, &exp);
-    expected_clear(&exp);
-    g_free(output);
-    three_channels_clear(&tc);
-    g_rand_free(rng);
+    run_three_channels(seed + 1, 2, (const gchar *const[]){ "-c", "6", "-m", "paper", NULL });
 }
 END_TEST
 
