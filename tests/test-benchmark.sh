@@ -9,24 +9,10 @@
 # (listed in benchmark.json); this test needs none of them.
 # Copyright (C) 2026 The gwy-localscan authors.
 # SPDX-License-Identifier: GPL-2.0-or-later
-set -u
+. "$(dirname "$0")/shell-test-common.sh"
 simscan=${SIMSCAN:-./simscan/simscan}
 tool=${GWY_LOCALSCAN:-./tools/gwy-localscan}
-for v in tool simscan; do
-    eval "p=\$$v"
-    case $p in /*) ;; *) eval "$v=\$(pwd)/\$p" ;; esac
-done
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-checks=0
-fail() {
-    echo "FAIL: $*"
-    failures=$((failures + 1))
-}
-check() {
-    checks=$((checks + 1))
-}
+make_absolute tool simscan
 # The member $2 of case $3 of method $4 in the scores JSON $1.
 score_of() {
     awk -v member="\"$2\"" -v name="\"$3\"" -v method="\"$4\"" '
@@ -36,9 +22,7 @@ score_of() {
     ' "$1"
 }
 
-seed=${LOCALSCAN_TEST_SEED:-$(od -An -N4 -tu4 /dev/urandom | tr -d ' ')}
-seed=$((seed % 1000000))
-echo "test-benchmark: seed $seed (LOCALSCAN_TEST_SEED overrides)"
+draw_seed 1000000
 # Measured samples left out: the test is the same with and without them.
 export LOCALSCAN_MEASURED_DIR="$tmp/no-measured-data"
 
@@ -209,6 +193,4 @@ for args in "--truth $tmp/r/truth $tmp/r/truth" "--truth $tmp/a" "$tmp/r/truth" 
     [ "$(wc -l < "$tmp/err")" -eq 1 ] || fail "score $args: not one line: $(cat "$tmp/err")"
 done
 
-echo "test-benchmark: $checks checks, $failures failures"
-[ $failures -eq 0 ] || exit 1
-exit 0
+finish

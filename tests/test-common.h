@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <glib.h>
+#include <glib/gstdio.h>
 #include <check.h>
 
 /* automake's exit status of a test that could not run. */
@@ -32,6 +33,15 @@ test_seed_from_env(const gchar *program)
     printf("%s: seed %u (set LOCALSCAN_TEST_SEED to repeat)\n", program, seed);
     fflush(stdout);
     return seed;
+}
+
+/* A generator of its own for each part of a program, from the program's
+ * seed and the part's salt (multiplied by Knuth's golden-ratio constant so
+ * that neighbouring salts give unrelated seeds). */
+static inline GRand*
+test_rand_salted(guint32 seed, guint32 salt)
+{
+    return g_rand_new_with_seed(seed ^ (salt*2654435761u));
 }
 
 /* A suite of one test case, which is returned in tc. */
@@ -89,6 +99,29 @@ test_measured_file(const gchar *program, const gchar *relpath,
     test_skip_part(program, "%s: measured data absent (%s)", what, path);
     g_free(path);
     return NULL;
+}
+
+/* Removes path with everything below it, folders made unreadable or
+ * unwritable by a test included. */
+static inline void
+test_remove_tree(const gchar *path)
+{
+    const gchar *name;
+    gchar *child;
+    GDir *dir;
+
+    if ((dir = g_dir_open(path, 0, NULL))) {
+        while ((name = g_dir_read_name(dir))) {
+            child = g_build_filename(path, name, NULL);
+            test_remove_tree(child);
+            g_free(child);
+        }
+        g_dir_close(dir);
+        g_chmod(path, 0700);
+        g_rmdir(path);
+    }
+    else
+        g_unlink(path);
 }
 
 /* Runs the suite (forking each test unless fork is FALSE); failure when a

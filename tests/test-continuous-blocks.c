@@ -16,46 +16,9 @@
 #include <libprocess/interpolation.h>
 #include "continuous-compensate.h"
 #include "test-common.h"
+#include "continuous-fixtures.h"
 
 static guint32 test_seed;
-
-static const GwyInterpolationType all_kernels[] = {
-    GWY_INTERPOLATION_ROUND, GWY_INTERPOLATION_LINEAR, GWY_INTERPOLATION_KEY,
-    GWY_INTERPOLATION_BSPLINE, GWY_INTERPOLATION_OMOMS, GWY_INTERPOLATION_NNA,
-    GWY_INTERPOLATION_SCHAUM,
-};
-
-static GRand*
-test_rand(guint32 salt)
-{
-    return g_rand_new_with_seed(test_seed ^ (salt*2654435761u));
-}
-
-static gdouble*
-random_image(gint xres, gint yres, GRand *rng)
-{
-    gdouble *a = g_new(gdouble, xres*yres);
-    gint k;
-
-    for (k = 0; k < xres*yres; k++)
-        a[k] = g_rand_double_range(rng, -5.0, 10.0);
-    return a;
-}
-
-/* The same drift (px) in every one of n stripes. */
-static DriftTable*
-constant_table(gint n, gdouble dx, gdouble dy)
-{
-    DriftTable *table = drift_table_new(n, DRIFT_UNIT_PX);
-    gint s;
-
-    for (s = 0; s < n; s++) {
-        table->rows[s].has_drift = TRUE;
-        table->rows[s].dx = dx;
-        table->rows[s].dy = dy;
-    }
-    return table;
-}
 
 /* A fractional shift of either sign, at least 0.1 px from whole, in
  * 1/1024 px: then c + shift is exact for any column, in Gwyddion's
@@ -96,72 +59,58 @@ gwyddion_line(const gdouble *data, gint n, gsize stride, gdouble shift,
     g_free(coeffs);
 }
 
-/* A constant fractional y shift of an image several y blocks tall (and of
- * odd width, so every other row is not 16-byte aligned): every column is
- * Gwyddion's interpolation of the column, prefilter included, to 1e-12. */
-START_TEST(test_tall_shift_matches_gwyddion)
+/* A constant fractional shift along x (along_x) or y of a random xres x
+ * yres image in n stripes: every line along that axis, row or column, is
+ * Gwyddion's interpolation of the line, prefilter included, to 1e-12 from
+ * 4 px off its ends in. */
+static void
+check_shift_matches_gwyddion(guint32 salt, gint xres, gint yres, gint n,
+                             gboolean along_x, GwyInterpolationType type)
 {
-    GRand *rng = test_rand(10);
-    gint xres = 23, yres = 397, size = xres*yres, r, c, checked = 0;
-    gdouble *a = random_image(xres, yres, rng);
+    GRand *rng = test_rand_salted(test_seed, salt);
+    gint size = xres*yres, len = along_x ? xres : yres, n_lines = size/len;
+    gint stride = along_x ? 1 : xres, l, i, r, c, checked = 0;
+    gdouble *a = random_image(xres, yres, -5.0, 10.0, rng);
     gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
-    gdouble *expected = g_new(gdouble, yres);
+    gdouble *expected = g_new(gdouble, len);
     gdouble shift = random_fractional_shift(rng);
-    GwyInterpolationType type = all_kernels[_i];
-    DriftTable *table = constant_table(9, 0.0, shift);
+    DriftTable *table = constant_table(n, along_x ? shift : 0.0, along_x ? 0.0 : shift, NULL);
 
     ck_assert(continuous_compensate_table(a, xres, yres, table, 1.0, 1.0,
                                           NULL, type, -1.0, result, mask,
                                           NULL));
-    for (c = 0; c < xres; c++) {
-        gwyddion_line(a + c, yres, xres, shift, 4, yres - 5, type, expected);
-        for (r = 4; r < yres - 4; r++) {
-            ck_assert_msg(fabs(result[r*xres + c] - expected[r]) < 1e-12,
+    for (l = 0; l < n_lines; l++) {
+        gwyddion_line(a + l*(along_x ? xres : 1), len, stride, shift, 4, len - 5, type, expected);
+        for (i = 4; i < len - 4; i++) {
+            r = along_x ? l : i;
+            c = along_x ? i : l;
+            ck_assert_msg(fabs(result[r*xres + c] - expected[i]) < 1e-12,
                           "kernel %d, shift %g, (%d,%d): %.15g vs %.15g",
-                          type, shift, r, c, result[r*xres + c], expected[r]);
+                          type, shift, r, c, result[r*xres + c], expected[i]);
             checked++;
         }
     }
-    ck_assert_int_eq(checked, xres*(yres - 8));
+    ck_assert_int_eq(checked, n_lines*(len - 8));
     drift_table_free(table);
     g_free(expected);
     g_free(result);
     g_free(a);
     g_rand_free(rng);
 }
+
+/* An image several y blocks tall (and of odd width, so every other row is
+ * not 16-byte aligned), shifted in y. */
+START_TEST(test_tall_shift_matches_gwyddion)
+{
+    check_shift_matches_gwyddion(10, 23, 397, 9, FALSE, all_kernels[_i]);
+}
 END_TEST
 
-/* A constant fractional x shift of a wide image of nine rows (x prefilter
- * batches of eight rows overlap at the bottom; rows run in chunks with a
- * remainder): every row is Gwyddion's interpolation of the row. */
+/* A wide image of nine rows (x prefilter batches of eight rows overlap at
+ * the bottom; rows run in chunks with a remainder), shifted in x. */
 START_TEST(test_wide_shift_matches_gwyddion)
 {
-    GRand *rng = test_rand(20);
-    gint xres = 1031, yres = 9, size = xres*yres, r, c;
-    gdouble *a = random_image(xres, yres, rng);
-    gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
-    gdouble *expected = g_new(gdouble, xres);
-    gdouble shift = random_fractional_shift(rng);
-    GwyInterpolationType type = all_kernels[_i];
-    DriftTable *table = constant_table(3, shift, 0.0);
-
-    ck_assert(continuous_compensate_table(a, xres, yres, table, 1.0, 1.0,
-                                          NULL, type, -1.0, result, mask,
-                                          NULL));
-    for (r = 0; r < yres; r++) {
-        gwyddion_line(a + r*xres, xres, 1, shift, 4, xres - 5, type,
-                      expected);
-        for (c = 4; c < xres - 4; c++) {
-            ck_assert_msg(fabs(result[r*xres + c] - expected[c]) < 1e-12,
-                          "kernel %d, shift %g, (%d,%d): %.15g vs %.15g",
-                          type, shift, r, c, result[r*xres + c], expected[c]);
-        }
-    }
-    drift_table_free(table);
-    g_free(expected);
-    g_free(result);
-    g_free(a);
-    g_rand_free(rng);
+    check_shift_matches_gwyddion(20, 1031, 9, 3, TRUE, all_kernels[_i]);
 }
 END_TEST
 

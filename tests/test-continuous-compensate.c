@@ -10,6 +10,8 @@
 #include <string.h>
 #include <check.h>
 #include "test-common.h"
+#include "continuous-fixtures.h"
+#include "settling-motion.h"
 #include <glib.h>
 #include <libprocess/interpolation.h>
 #include "continuous-compensate.h"
@@ -20,44 +22,12 @@
 
 static guint32 test_seed;
 
-static const GwyInterpolationType all_kernels[] = {
-    GWY_INTERPOLATION_ROUND, GWY_INTERPOLATION_LINEAR, GWY_INTERPOLATION_KEY,
-    GWY_INTERPOLATION_BSPLINE, GWY_INTERPOLATION_OMOMS, GWY_INTERPOLATION_NNA,
-    GWY_INTERPOLATION_SCHAUM,
-};
-
-/* p(t) = p0 + v t + u tau (1 - exp(-t/tau)), px and s. */
-typedef struct {
-    gdouble p0[2];
-    gdouble v[2];
-    gdouble u[2];
-    gdouble tau;
-} Motion;
-
 /* Gaussian particles at true positions (px). */
 typedef struct {
     gint n;
     gdouble *x;
     gdouble *y;
 } Particles;
-
-static GRand*
-test_rand(guint32 salt)
-{
-    return g_rand_new_with_seed(test_seed ^ (salt*2654435761u));
-}
-
-static void
-motion_eval(const Motion *motion, gdouble t, gdouble *p)
-{
-    gint k;
-
-    for (k = 0; k < 2; k++) {
-        p[k] = motion->p0[k] + motion->v[k]*t;
-        if (motion->tau > 0.0)
-            p[k] += motion->u[k]*motion->tau*(1.0 - exp(-t/motion->tau));
-    }
-}
 
 /* A jittered grid of particles 24 px apart, well inside the image. */
 static void
@@ -256,7 +226,7 @@ static void
 measure_accuracy(const Motion *motion, ScanDirection direction, gint n,
                  const gboolean *blank, guint32 salt, Accuracy *acc)
 {
-    GRand *rng = test_rand(salt);
+    GRand *rng = test_rand_salted(test_seed, salt);
     gint xres = 192, yres = 160, margin, size = xres*yres, k;
     ScanTiming timing;
     Particles particles;
@@ -345,7 +315,7 @@ random_motion(Motion *motion, gboolean settling, GRand *rng)
  * 0.05 px of the truth (paper mode: whole pixels and sheared stripes). */
 START_TEST(test_accuracy_against_paper_mode)
 {
-    GRand *rng = test_rand(10 + _i);
+    GRand *rng = test_rand_salted(test_seed, 10 + _i);
     Motion motion;
     Accuracy acc;
 
@@ -382,7 +352,7 @@ END_TEST
  * stripes this test is about. */
 START_TEST(test_accuracy_blank_stripes)
 {
-    GRand *rng = test_rand(30 + _i);
+    GRand *rng = test_rand_salted(test_seed, 30 + _i);
     gboolean blank[10];
     Motion motion;
     Accuracy acc;
@@ -414,41 +384,11 @@ START_TEST(test_accuracy_blank_stripes)
 }
 END_TEST
 
-static DriftTable*
-constant_table(gint n, gdouble dx, gdouble dy, GRand *rng)
-{
-    DriftTable *table = drift_table_new(n, DRIFT_UNIT_PX);
-    gint s;
-
-    for (s = 0; s < n; s++) {
-        table->rows[s].has_drift = TRUE;
-        table->rows[s].dx = dx;
-        table->rows[s].dy = dy;
-        if (rng) {
-            drift_table_set_extra(table, s, "t_image", 2.0*s + 1.0);
-            drift_table_set_extra(table, s, "t_local",
-                                  200.0 + g_rand_double_range(rng, 0.0, 3.0));
-        }
-    }
-    return table;
-}
-
-static gdouble*
-random_image(gint xres, gint yres, GRand *rng)
-{
-    gdouble *a = g_new(gdouble, xres*yres);
-    gint k;
-
-    for (k = 0; k < xres*yres; k++)
-        a[k] = g_rand_double_range(rng, 0.0, 10.0);
-    return a;
-}
-
 START_TEST(test_zero_drift_exact)
 {
-    GRand *rng = test_rand(40);
+    GRand *rng = test_rand_salted(test_seed, 40);
     gint xres = 37, yres = 23, size = xres*yres, k;
-    gdouble *a = random_image(xres, yres, rng);
+    gdouble *a = random_image(xres, yres, 0.0, 10.0, rng);
     gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
     DriftTable *table = constant_table(5, 0.0, 0.0, rng);
     ScanTiming timing;
@@ -474,11 +414,11 @@ END_TEST
  * times): exactly paper mode's result, pixels and mask. */
 START_TEST(test_whole_pixel_equals_paper_mode)
 {
-    GRand *rng = test_rand(50 + _i);
+    GRand *rng = test_rand_salted(test_seed, 50 + _i);
     gint xres = 41, yres = 29, size = xres*yres, n = 7, s;
     gint dx = g_rand_int_range(rng, -6, 7), dy = g_rand_int_range(rng, -6, 7);
     gint idx[7], idy[7];
-    gdouble *a = random_image(xres, yres, rng);
+    gdouble *a = random_image(xres, yres, 0.0, 10.0, rng);
     gdouble *result = g_new(gdouble, 4*size), *mask = result + size;
     gdouble *paper = mask + size, *paper_mask = paper + size;
     gdouble fill = paper_image_mean(a, xres, yres);
@@ -528,9 +468,9 @@ gwyddion_interpolate(const gdouble *data, gint n, gdouble x,
  * of each row (column), including the B-spline/o-MOMS prefilter. */
 START_TEST(test_fractional_shift_matches_gwyddion)
 {
-    GRand *rng = test_rand(60);
+    GRand *rng = test_rand_salted(test_seed, 60);
     gint xres = 37, yres = 31, size = xres*yres, r, c, axis;
-    gdouble *a = random_image(xres, yres, rng);
+    gdouble *a = random_image(xres, yres, 0.0, 10.0, rng);
     gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
     gdouble *line = g_new(gdouble, MAX(xres, yres)), shift, expected;
     DriftTable *table;
@@ -578,9 +518,9 @@ END_TEST
  * x = c + Dx(t(row, x)), for every kernel. */
 START_TEST(test_sheared_rows_match_gwyddion)
 {
-    GRand *rng = test_rand(65);
+    GRand *rng = test_rand_salted(test_seed, 65);
     gint xres = 64, yres = 5, size = xres*yres, r, c, k, checked = 0;
-    gdouble *a = random_image(xres, yres, rng);
+    gdouble *a = random_image(xres, yres, 0.0, 10.0, rng);
     gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
     gdouble vx = g_rand_double_range(rng, 4.0, 8.0), x, dx, dy, expected;
     DriftMeasurement meas[3];
@@ -667,9 +607,9 @@ END_TEST
  * from the trajectory, except within 1e-3 px of the border. */
 START_TEST(test_mask_sheared)
 {
-    GRand *rng = test_rand(70);
+    GRand *rng = test_rand_salted(test_seed, 70);
     gint xres = 64, yres = 48, size = xres*yres, r, c, k, it, checked = 0;
-    gdouble *a = random_image(xres, yres, rng);
+    gdouble *a = random_image(xres, yres, 0.0, 10.0, rng);
     gdouble *result = g_new(gdouble, 2*size), *mask = result + size;
     DriftMeasurement meas[13];
     DriftTrajectory *trajectory;
@@ -738,7 +678,7 @@ END_TEST
 /* One stripe: the whole image moves by its (fractional) drift. */
 START_TEST(test_one_stripe)
 {
-    GRand *rng = test_rand(80);
+    GRand *rng = test_rand_salted(test_seed, 80);
     gint xres = 96, yres = 72, size = xres*yres;
     Particles particles;
     Motion still;
@@ -777,9 +717,9 @@ END_TEST
 /* Physical units: a nm table on 2 nm x 4 nm pixels is the px table. */
 START_TEST(test_physical_units)
 {
-    GRand *rng = test_rand(90);
+    GRand *rng = test_rand_salted(test_seed, 90);
     gint xres = 33, yres = 27, size = xres*yres, s;
-    gdouble *a = random_image(xres, yres, rng);
+    gdouble *a = random_image(xres, yres, 0.0, 10.0, rng);
     gdouble *r1 = g_new(gdouble, 2*size), *r2 = r1 + size;
     DriftTable *px = drift_table_new(3, DRIFT_UNIT_PX);
     DriftTable *nm = drift_table_new(3, DRIFT_UNIT_NM);

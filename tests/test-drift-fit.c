@@ -61,30 +61,42 @@ select_model(const DriftMeasurement *meas, gint n, DriftFit *fits)
     return fits + i;
 }
 
+/* The fit chosen for the model sampled with noise_nm from seed; its
+ * parameters in p. */
+static DriftFit
+fit_sampled_model(const DriftModel *model, gdouble noise_nm, guint32 seed,
+                  DriftFitParameters *p)
+{
+    DriftFit fits[8], fit;
+    DriftMeasurement *meas;
+    gint n;
+
+    meas = sample_model(model, noise_nm, seed, &n);
+    fit = *select_model(meas, n, fits);
+    drift_fit_parameters(&fit, p);
+    g_free(meas);
+    return fit;
+}
+
 START_TEST(test_constant_velocity)
 {
     DriftModel model;
-    DriftFit fits[8];
     DriftFitParameters p;
-    DriftMeasurement *meas;
-    const DriftFit *fit;
-    gint n, seed;
+    DriftFit fit;
+    gint seed;
 
     for (seed = 1; seed <= 20; seed++) {
         drift_model_init(&model, DRIFT_MODEL_NONE);
         model.v[0] = 0.08e-9;
         model.v[1] = -0.03e-9;
-        meas = sample_model(&model, 0.5, seed, &n);
-        fit = select_model(meas, n, fits);
-        drift_fit_parameters(fit, &p);
-        ck_assert_msg(fit->type == DRIFT_MODEL_NONE,
+        fit = fit_sampled_model(&model, 0.5, seed, &p);
+        ck_assert_msg(fit.type == DRIFT_MODEL_NONE,
                       "seed %d: constant drift taken for %s", seed,
-                      drift_model_type_name(fit->type));
+                      drift_model_type_name(fit.type));
         ck_assert_msg(fabs(p.velocity_nm_per_s[0] - 0.08) < 0.005
                       && fabs(p.velocity_nm_per_s[1] + 0.03) < 0.005,
                       "v = %g, %g nm/s", p.velocity_nm_per_s[0],
                       p.velocity_nm_per_s[1]);
-        g_free(meas);
     }
 }
 END_TEST
@@ -92,37 +104,28 @@ END_TEST
 START_TEST(test_settling)
 {
     DriftModel model;
-    DriftFit fits[8];
     DriftFitParameters p;
-    DriftMeasurement *meas;
-    const DriftFit *fit;
-    gint n;
+    DriftFit fit;
 
     drift_model_init(&model, DRIFT_MODEL_SETTLING);
     model.v[0] = 0.02e-9;
     model.u[0] = 0.5e-9;
     model.u[1] = -0.3e-9;
     model.tau = 60.0;
-    meas = sample_model(&model, 0.3, 3, &n);
-    fit = select_model(meas, n, fits);
-    drift_fit_parameters(fit, &p);
-    ck_assert_str_eq(drift_model_type_name(fit->type), "settling");
+    fit = fit_sampled_model(&model, 0.3, 3, &p);
+    ck_assert_str_eq(drift_model_type_name(fit.type), "settling");
     ck_assert_msg(fabs(p.tau_s/60.0 - 1.0) < 0.15, "tau %g s", p.tau_s);
     ck_assert_msg(fabs(p.u_nm_per_s[0] - 0.5) < 0.08
                   && fabs(p.u_nm_per_s[1] + 0.3) < 0.08,
                   "u = %g, %g", p.u_nm_per_s[0], p.u_nm_per_s[1]);
-    g_free(meas);
 }
 END_TEST
 
 START_TEST(test_oscillation)
 {
     DriftModel model;
-    DriftFit fits[8];
     DriftFitParameters p;
-    DriftMeasurement *meas;
-    const DriftFit *fit;
-    gint n;
+    DriftFit fit;
 
     drift_model_init(&model, DRIFT_MODEL_OSCILLATION);
     model.v[1] = 0.05e-9;
@@ -130,44 +133,35 @@ START_TEST(test_oscillation)
     model.a[1] = 1.5e-9;
     model.period = 37.0;
     model.phase = 0.7;
-    meas = sample_model(&model, 0.3, 5, &n);
-    fit = select_model(meas, n, fits);
-    drift_fit_parameters(fit, &p);
-    ck_assert_str_eq(drift_model_type_name(fit->type), "oscillation");
+    fit = fit_sampled_model(&model, 0.3, 5, &p);
+    ck_assert_str_eq(drift_model_type_name(fit.type), "oscillation");
     ck_assert_msg(fabs(p.period_s - 37.0) < 0.5, "period %g s", p.period_s);
     /* The sign of the amplitude goes with the phase (a, phi) ~ (-a, phi+pi). */
     ck_assert_msg(fabs(fabs(p.amplitude_nm[0]) - 3.0) < 0.3
                   && fabs(fabs(p.amplitude_nm[1]) - 1.5) < 0.3
                   && p.amplitude_nm[0]*p.amplitude_nm[1] > 0.0,
                   "a = %g, %g nm", p.amplitude_nm[0], p.amplitude_nm[1]);
-    g_free(meas);
 }
 END_TEST
 
 START_TEST(test_jump)
 {
     DriftModel model;
-    DriftFit fits[8];
     DriftFitParameters p;
-    DriftMeasurement *meas;
-    const DriftFit *fit;
-    gint n;
+    DriftFit fit;
 
     drift_model_init(&model, DRIFT_MODEL_JUMP);
     model.v[0] = -0.04e-9;
     model.step[0] = 4e-9;
     model.step[1] = -2e-9;
     model.t_jump = 142.0;
-    meas = sample_model(&model, 0.3, 9, &n);
-    fit = select_model(meas, n, fits);
-    drift_fit_parameters(fit, &p);
-    ck_assert_str_eq(drift_model_type_name(fit->type), "jump");
+    fit = fit_sampled_model(&model, 0.3, 9, &p);
+    ck_assert_str_eq(drift_model_type_name(fit.type), "jump");
     /* Blocks are 6.25 s apart: the step is placed between two of them. */
     ck_assert_msg(fabs(p.t_s - 142.0) < 6.25, "t_s %g s", p.t_s);
     ck_assert_msg(fabs(p.step_nm[0] - 4.0) < 0.3
                   && fabs(p.step_nm[1] + 2.0) < 0.3,
                   "step %g, %g nm", p.step_nm[0], p.step_nm[1]);
-    g_free(meas);
 }
 END_TEST
 

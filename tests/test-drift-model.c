@@ -23,14 +23,20 @@ uniform(GRand *rng, gdouble lo, gdouble hi)
     return g_rand_double_range(rng, lo, hi);
 }
 
+/* An x, y pair drawn in [-size, size), x first. */
+static void
+uniform_pair(GRand *rng, gdouble size, gdouble *pair)
+{
+    pair[0] = uniform(rng, -size, size);
+    pair[1] = uniform(rng, -size, size);
+}
+
 /* Common part p0 + v t with random nm-scale p0 and nm/s-scale v. */
 static void
 random_linear_part(DriftModel *model, GRand *rng)
 {
-    model->p0[0] = uniform(rng, -50e-9, 50e-9);
-    model->p0[1] = uniform(rng, -50e-9, 50e-9);
-    model->v[0] = uniform(rng, -0.5e-9, 0.5e-9);
-    model->v[1] = uniform(rng, -0.5e-9, 0.5e-9);
+    uniform_pair(rng, 50e-9, model->p0);
+    uniform_pair(rng, 0.5e-9, model->v);
 }
 
 /* The size of the terms that make up p(t), for a relative tolerance. */
@@ -55,90 +61,145 @@ assert_eval_equals(const DriftModel *model, gdouble t,
                   drift_model_type_name(model->type), t, px, py, ex, ey);
 }
 
-START_TEST(test_none_formula)
+/* A model of the type with a random common part; each type's own
+ * parameters are drawn after it. */
+static void
+random_base_model(DriftModel *m, DriftModelType type, GRand *rng)
 {
-    GRand *rng = g_rand_new_with_seed(test_seed);
+    drift_model_init(m, type);
+    random_linear_part(m, rng);
+}
+
+static void
+random_none_model(DriftModel *m, GRand *rng)
+{
+    random_base_model(m, DRIFT_MODEL_NONE, rng);
+}
+
+static void
+random_settling_model(DriftModel *m, GRand *rng)
+{
+    random_base_model(m, DRIFT_MODEL_SETTLING, rng);
+    uniform_pair(rng, 3e-9, m->u);
+    m->tau = uniform(rng, 10.0, 300.0);
+}
+
+static void
+random_oscillation_model(DriftModel *m, GRand *rng)
+{
+    random_base_model(m, DRIFT_MODEL_OSCILLATION, rng);
+    uniform_pair(rng, 5e-9, m->a);
+    m->period = uniform(rng, 5.0, 200.0);
+    m->phase = uniform(rng, -G_PI, G_PI);
+}
+
+static void
+random_jump_model(DriftModel *m, GRand *rng)
+{
+    random_base_model(m, DRIFT_MODEL_JUMP, rng);
+    uniform_pair(rng, 20e-9, m->step);
+    m->t_jump = uniform(rng, 100.0, 800.0);
+}
+
+/* Frame-start creep on top of a constant velocity. */
+static void
+random_creep_model(DriftModel *m, GRand *rng)
+{
+    random_none_model(m, rng);
+    uniform_pair(rng, 20e-9, m->creep);
+    m->creep_tau = uniform(rng, 2.0, 30.0);
+    m->creep_period = uniform(rng, 40.0, 200.0);
+}
+
+/* What each type adds to p0 + v t at t, by the formula of
+ * docs/conventions.md. */
+static void
+added_none(G_GNUC_UNUSED const DriftModel *m, G_GNUC_UNUSED gdouble t,
+           gdouble *dx, gdouble *dy)
+{
+    *dx = *dy = 0.0;
+}
+
+static void
+added_settling(const DriftModel *m, gdouble t, gdouble *dx, gdouble *dy)
+{
+    gdouble f = m->tau*(1.0 - exp(-t/m->tau));
+
+    *dx = m->u[0]*f;
+    *dy = m->u[1]*f;
+}
+
+static void
+added_oscillation(const DriftModel *m, gdouble t, gdouble *dx, gdouble *dy)
+{
+    gdouble s = sin(2.0*G_PI*t/m->period + m->phase);
+
+    *dx = m->a[0]*s;
+    *dy = m->a[1]*s;
+}
+
+static void
+added_jump(const DriftModel *m, gdouble t, gdouble *dx, gdouble *dy)
+{
+    *dx = (t >= m->t_jump)*m->step[0];
+    *dy = (t >= m->t_jump)*m->step[1];
+}
+
+/* The lag decays from each fly-back and restarts at the next. */
+static void
+added_creep(const DriftModel *m, gdouble t, gdouble *dx, gdouble *dy)
+{
+    gdouble f = exp(-(t - m->creep_period*floor(t/m->creep_period))
+                    /m->creep_tau);
+
+    *dx = m->creep[0]*f;
+    *dy = m->creep[1]*f;
+}
+
+typedef struct {
+    guint seed_offset;
+    void (*random_model)(DriftModel *m, GRand *rng);
+    void (*added)(const DriftModel *m, gdouble t, gdouble *dx, gdouble *dy);
+} FormulaCase;
+
+static const FormulaCase formula_cases[] = {
+    { 0, random_none_model, added_none },
+    { 1, random_settling_model, added_settling },
+    { 2, random_oscillation_model, added_oscillation },
+    { 3, random_jump_model, added_jump },
+    { 5, random_creep_model, added_creep },
+};
+
+/* p(t) of a random model at random times against its formula. */
+START_TEST(test_formula)
+{
+    const FormulaCase *fc = formula_cases + _i;
+    GRand *rng = g_rand_new_with_seed(test_seed + fc->seed_offset);
     DriftModel m;
-    gdouble t;
+    gdouble t, dx, dy;
     gint k;
 
-    drift_model_init(&m, DRIFT_MODEL_NONE);
-    random_linear_part(&m, rng);
+    fc->random_model(&m, rng);
     for (k = 0; k < N_TIMES; k++) {
         t = uniform(rng, 0.0, T_MAX);
-        assert_eval_equals(&m, t, m.p0[0] + m.v[0]*t, m.p0[1] + m.v[1]*t);
+        fc->added(&m, t, &dx, &dy);
+        assert_eval_equals(&m, t, m.p0[0] + m.v[0]*t + dx,
+                           m.p0[1] + m.v[1]*t + dy);
     }
     drift_model_clear(&m);
     g_rand_free(rng);
 }
 END_TEST
 
-START_TEST(test_settling_formula)
-{
-    GRand *rng = g_rand_new_with_seed(test_seed + 1);
-    DriftModel m;
-    gdouble t, f;
-    gint k;
-
-    drift_model_init(&m, DRIFT_MODEL_SETTLING);
-    random_linear_part(&m, rng);
-    m.u[0] = uniform(rng, -3e-9, 3e-9);
-    m.u[1] = uniform(rng, -3e-9, 3e-9);
-    m.tau = uniform(rng, 10.0, 300.0);
-    for (k = 0; k < N_TIMES; k++) {
-        t = uniform(rng, 0.0, T_MAX);
-        f = m.tau*(1.0 - exp(-t/m.tau));
-        assert_eval_equals(&m, t, m.p0[0] + m.v[0]*t + m.u[0]*f,
-                           m.p0[1] + m.v[1]*t + m.u[1]*f);
-    }
-    drift_model_clear(&m);
-    g_rand_free(rng);
-}
-END_TEST
-
-START_TEST(test_oscillation_formula)
-{
-    GRand *rng = g_rand_new_with_seed(test_seed + 2);
-    DriftModel m;
-    gdouble t, s;
-    gint k;
-
-    drift_model_init(&m, DRIFT_MODEL_OSCILLATION);
-    random_linear_part(&m, rng);
-    m.a[0] = uniform(rng, -5e-9, 5e-9);
-    m.a[1] = uniform(rng, -5e-9, 5e-9);
-    m.period = uniform(rng, 5.0, 200.0);
-    m.phase = uniform(rng, -G_PI, G_PI);
-    for (k = 0; k < N_TIMES; k++) {
-        t = uniform(rng, 0.0, T_MAX);
-        s = sin(2.0*G_PI*t/m.period + m.phase);
-        assert_eval_equals(&m, t, m.p0[0] + m.v[0]*t + m.a[0]*s,
-                           m.p0[1] + m.v[1]*t + m.a[1]*s);
-    }
-    drift_model_clear(&m);
-    g_rand_free(rng);
-}
-END_TEST
-
-START_TEST(test_jump_formula)
+/* The step belongs to t >= t_jump, exactly at the boundary (the model of
+ * the jump's formula case). */
+START_TEST(test_jump_boundary)
 {
     GRand *rng = g_rand_new_with_seed(test_seed + 3);
     DriftModel m;
     gdouble t, before;
-    gint k;
 
-    drift_model_init(&m, DRIFT_MODEL_JUMP);
-    random_linear_part(&m, rng);
-    m.step[0] = uniform(rng, -20e-9, 20e-9);
-    m.step[1] = uniform(rng, -20e-9, 20e-9);
-    m.t_jump = uniform(rng, 100.0, 800.0);
-    for (k = 0; k < N_TIMES; k++) {
-        t = uniform(rng, 0.0, T_MAX);
-        assert_eval_equals(&m, t,
-                           m.p0[0] + m.v[0]*t + (t >= m.t_jump)*m.step[0],
-                           m.p0[1] + m.v[1]*t + (t >= m.t_jump)*m.step[1]);
-    }
-    /* The step belongs to t >= t_jump, exactly at the boundary. */
+    random_jump_model(&m, rng);
     t = m.t_jump;
     assert_eval_equals(&m, t, m.p0[0] + m.v[0]*t + m.step[0],
                        m.p0[1] + m.v[1]*t + m.step[1]);
@@ -192,11 +253,7 @@ START_TEST(test_settling_velocity)
     gdouble t, vx, vy, ex, ey;
     gint k;
 
-    drift_model_init(&m, DRIFT_MODEL_SETTLING);
-    random_linear_part(&m, rng);
-    m.u[0] = uniform(rng, -3e-9, 3e-9);
-    m.u[1] = uniform(rng, -3e-9, 3e-9);
-    m.tau = uniform(rng, 10.0, 300.0);
+    random_settling_model(&m, rng);
     for (k = 0; k < N_TIMES; k++) {
         t = uniform(rng, 1.0, T_MAX);
         drift_model_velocity(&m, t, &vx, &vy);
@@ -222,12 +279,7 @@ START_TEST(test_oscillation_velocity)
     DriftModel m;
     gint k;
 
-    drift_model_init(&m, DRIFT_MODEL_OSCILLATION);
-    random_linear_part(&m, rng);
-    m.a[0] = uniform(rng, -5e-9, 5e-9);
-    m.a[1] = uniform(rng, -5e-9, 5e-9);
-    m.period = uniform(rng, 5.0, 200.0);
-    m.phase = uniform(rng, -G_PI, G_PI);
+    random_oscillation_model(&m, rng);
     for (k = 0; k < N_TIMES; k++)
         assert_velocity_matches_differences(&m, uniform(rng, 1.0, T_MAX));
     drift_model_clear(&m);
@@ -343,27 +395,19 @@ START_TEST(test_type_names)
 }
 END_TEST
 
-/* Frame-start creep on top of a constant velocity: the lag decays from
- * each fly-back, restarts at the next, and the velocity is its derivative
- * (a central difference away from the fly-backs). */
-START_TEST(test_frame_creep_formula)
+/* The creep's velocity is the derivative of p (a central difference away
+ * from the fly-backs; the model and times of the creep's formula case), and
+ * right after a fly-back the whole lag is back. */
+START_TEST(test_frame_creep_velocity)
 {
     GRand *rng = g_rand_new_with_seed(test_seed + 5);
     DriftModel m;
-    gdouble t, f, vx, vy, x1, y1, x2, y2, h = 1e-4;
+    gdouble t, vx, vy, x1, y1, x2, y2, h = 1e-4;
     gint k;
 
-    drift_model_init(&m, DRIFT_MODEL_NONE);
-    random_linear_part(&m, rng);
-    m.creep[0] = uniform(rng, -20e-9, 20e-9);
-    m.creep[1] = uniform(rng, -20e-9, 20e-9);
-    m.creep_tau = uniform(rng, 2.0, 30.0);
-    m.creep_period = uniform(rng, 40.0, 200.0);
+    random_creep_model(&m, rng);
     for (k = 0; k < N_TIMES; k++) {
         t = uniform(rng, 0.0, T_MAX);
-        f = exp(-(t - m.creep_period*floor(t/m.creep_period))/m.creep_tau);
-        assert_eval_equals(&m, t, m.p0[0] + m.v[0]*t + m.creep[0]*f,
-                           m.p0[1] + m.v[1]*t + m.creep[1]*f);
         if (fmod(t, m.creep_period) < 2.0*h
             || fmod(t, m.creep_period) > m.creep_period - 2.0*h)
             continue;
@@ -374,7 +418,6 @@ START_TEST(test_frame_creep_formula)
                       && fabs(vy - (y2 - y1)/(2.0*h)) < 1e-6*(fabs(vy) + 1e-9),
                       "creep velocity at t=%g: (%g, %g)", t, vx, vy);
     }
-    /* Right after a fly-back the whole lag is back. */
     t = 3.0*m.creep_period + 1e-6;
     drift_model_eval(&m, t, &x1, &y1);
     ck_assert_msg(fabs(x1 - m.p0[0] - t*m.v[0] - m.creep[0])
@@ -411,15 +454,13 @@ drift_model_suite(void)
     TCase *tc;
     Suite *s = test_suite_new("drift-model", "core", &tc);
 
-    tcase_add_test(tc, test_none_formula);
-    tcase_add_test(tc, test_settling_formula);
-    tcase_add_test(tc, test_oscillation_formula);
-    tcase_add_test(tc, test_jump_formula);
+    tcase_add_loop_test(tc, test_formula, 0, G_N_ELEMENTS(formula_cases));
+    tcase_add_test(tc, test_jump_boundary);
     tcase_add_test(tc, test_settling_velocity);
     tcase_add_test(tc, test_oscillation_velocity);
     tcase_add_test(tc, test_random_walk_reproducible);
     tcase_add_test(tc, test_random_walk_integral);
-    tcase_add_test(tc, test_frame_creep_formula);
+    tcase_add_test(tc, test_frame_creep_velocity);
     tcase_add_test(tc, test_type_names);
     tcase_add_test(tc, test_init_is_no_drift);
     return s;

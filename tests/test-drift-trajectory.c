@@ -10,6 +10,7 @@
 #include <string.h>
 #include <check.h>
 #include "test-common.h"
+#include "settling-motion.h"
 #include <glib.h>
 #include "continuous-compensate.h"
 #include "drift-trajectory.h"
@@ -19,33 +20,6 @@
 #define LINE_TIME (300.0/256.0)
 
 static guint32 test_seed;
-
-/* p(t) = p0 + v t + u tau (1 - exp(-t/tau)): constant velocity plus
- * settling (docs/conventions.md), px and s. */
-typedef struct {
-    gdouble p0[2];
-    gdouble v[2];
-    gdouble u[2];
-    gdouble tau;
-} Motion;
-
-static void
-motion_eval(const Motion *motion, gdouble t, gdouble *p)
-{
-    gint k;
-
-    for (k = 0; k < 2; k++) {
-        p[k] = motion->p0[k] + motion->v[k]*t;
-        if (motion->tau > 0.0)
-            p[k] += motion->u[k]*motion->tau*(1.0 - exp(-t/motion->tau));
-    }
-}
-
-static GRand*
-test_rand(guint32 salt)
-{
-    return g_rand_new_with_seed(test_seed ^ (salt*2654435761u));
-}
 
 /* The paper's local-scan procedure: stripe s imaged at its centre time and
  * scanned locally at frame end + gap + s*step. */
@@ -99,7 +73,7 @@ max_trajectory_error(const DriftTrajectory *trajectory, const Motion *motion,
 
 START_TEST(test_constant_velocity_exact)
 {
-    GRand *rng = test_rand(1);
+    GRand *rng = test_rand_salted(test_seed, 1);
     ScanTiming timing;
     DriftMeasurement meas[16];
     DriftTrajectory *trajectory;
@@ -133,7 +107,7 @@ END_TEST
  * erratic. */
 START_TEST(test_knots_interpolated)
 {
-    GRand *rng = test_rand(2);
+    GRand *rng = test_rand_salted(test_seed, 2);
     DriftMeasurement meas[9];
     DriftTrajectory *trajectory;
     gdouble dx, dy, t = 0.0;
@@ -165,7 +139,7 @@ END_TEST
  * result may be off by a few per cent of the range (a known price). */
 START_TEST(test_cubic_reproduced)
 {
-    GRand *rng = test_rand(3);
+    GRand *rng = test_rand_salted(test_seed, 3);
     DriftMeasurement meas[7];
     DriftTrajectory *trajectory;
     gdouble c[4], dx, dy, t, expected, t_local = 200.0, pl, range = 0.0;
@@ -264,7 +238,7 @@ trajectory_error(const DriftMeasurement *meas, const gdouble *v,
 
 START_TEST(test_noise_smoothed)
 {
-    GRand *rng = test_rand(20);
+    GRand *rng = test_rand_salted(test_seed, 20);
     DriftMeasurement meas[16];
     gdouble v[2], smooth, interpolated, worst_smooth, worst_interpolated;
     gdouble sum_smooth = 0.0, sum_interpolated = 0.0;
@@ -379,7 +353,7 @@ compare_doubles(gconstpointer pa, gconstpointer pb)
 
 START_TEST(test_outlier_stripes)
 {
-    GRand *rng = test_rand(30 + _i);
+    GRand *rng = test_rand_salted(test_seed, 30 + _i);
     DriftMeasurement meas[16], clean[16];
     DriftTrajectory *trajectory, *reference;
     Motion motion = { { 0, 0 }, { 0, 0 }, { 0, 0 }, 0.0 };
@@ -465,7 +439,7 @@ max_speed(const DriftTrajectory *trajectory)
  * more at the frame ends). */
 START_TEST(test_close_image_times)
 {
-    GRand *rng = test_rand(40);
+    GRand *rng = test_rand_salted(test_seed, 40);
     ScanTiming timing;
     DriftMeasurement meas[16];
     DriftTrajectory *trajectory, *interpolating;
@@ -621,7 +595,7 @@ END_TEST
  * slope reached. */
 START_TEST(test_end_continuation)
 {
-    GRand *rng = test_rand(4);
+    GRand *rng = test_rand_salted(test_seed, 4);
     DriftMeasurement meas[6];
     DriftTrajectory *trajectory;
     gdouble t_lin[2], d0[2], v0[2], d[2], v[2], dl[2], vl[2], a, eps = 1e-6;
@@ -698,7 +672,7 @@ max_linear_interpolation_error(const DriftMeasurement *meas, gint n,
  * reached 0.020 and 0.127 px in 2000 draws). */
 START_TEST(test_settling_accuracy)
 {
-    GRand *rng = test_rand(5);
+    GRand *rng = test_rand_salted(test_seed, 5);
     ScanTiming timing;
     DriftMeasurement meas[16];
     DriftTrajectory *trajectory, *interpolating;

@@ -23,6 +23,7 @@
 #include "localscan-params.h"
 #include "paper-compensate.h"
 #include "test-common.h"
+#include "gui-widgets.h"
 
 #define SCREENSHOT TEST_BUILDDIR "/tests/gui-dialog.png"
 #define SCREENSHOT_DE TEST_BUILDDIR "/tests/gui-dialog-de.png"
@@ -135,20 +136,6 @@ make_data(DriftTable **table)
  * Looking at the dialog
  ************************************************************************/
 
-static GtkWidget*
-find_dialog(void)
-{
-    GList *toplevels = gtk_window_list_toplevels(), *l;
-    GtkWidget *dialog = NULL;
-
-    for (l = toplevels; l; l = g_list_next(l)) {
-        if (GTK_IS_DIALOG(l->data) && gtk_widget_get_visible(GTK_WIDGET(l->data)))
-            dialog = GTK_WIDGET(l->data);
-    }
-    g_list_free(toplevels);
-    return dialog;
-}
-
 static void
 collect_texts(GtkWidget *widget, GString *texts)
 {
@@ -170,59 +157,9 @@ collect_texts(GtkWidget *widget, GString *texts)
 }
 
 static void
-flush_drawing(void)
-{
-    gint i;
-
-    for (i = 0; i < 50 && gtk_events_pending(); i++)
-        gtk_main_iteration_do(FALSE);
-    gdk_window_process_all_updates();
-    gdk_flush();
-}
-
-static gboolean
-save_screenshot(GtkWidget *dialog, const gchar *filename, gint *width, gint *height)
-{
-    GdkWindow *window = gtk_widget_get_window(dialog);
-    GdkPixbuf *pixbuf;
-    GError *error = NULL;
-    gboolean ok;
-
-    gdk_window_raise(window);
-    flush_drawing();
-    gdk_drawable_get_size(GDK_DRAWABLE(window), width, height);
-    pixbuf = gdk_pixbuf_get_from_drawable(NULL, GDK_DRAWABLE(window), NULL, 0, 0, 0, 0, *width, *height);
-    if (!pixbuf)
-        return FALSE;
-    ok = gdk_pixbuf_save(pixbuf, filename, "png", &error, NULL);
-    if (!ok)
-        fprintf(stderr, "cannot save %s: %s\n", filename, error->message);
-    g_clear_error(&error);
-    g_object_unref(pixbuf);
-    return ok;
-}
-
-static GtkWidget*
-find_named_widget(GtkWidget *widget, const gchar *name)
-{
-    GList *children, *l;
-    GtkWidget *found = NULL;
-
-    if (!g_strcmp0(gtk_widget_get_name(widget), name))
-        return widget;
-    if (!GTK_IS_CONTAINER(widget))
-        return NULL;
-    children = gtk_container_get_children(GTK_CONTAINER(widget));
-    for (l = children; l && !found; l = g_list_next(l))
-        found = find_named_widget(GTK_WIDGET(l->data), name);
-    g_list_free(children);
-    return found;
-}
-
-static void
 inspect_reference(GtkWidget *dialog, DialogProbe *probe)
 {
-    GtkWidget *chooser = find_named_widget(dialog, LOCALSCAN_REFERENCE_WIDGET_NAME);
+    GtkWidget *chooser = gui_find_named_widget(dialog, LOCALSCAN_REFERENCE_WIDGET_NAME);
     GtkTreeIter iter;
 
     if (!chooser || !GTK_IS_COMBO_BOX(chooser))
@@ -241,7 +178,7 @@ static gboolean
 probe_dialog(gpointer user_data)
 {
     DialogProbe *probe = (DialogProbe*)user_data;
-    GtkWidget *dialog = find_dialog(), *ok_button;
+    GtkWidget *dialog = gui_find_visible_dialog(GTK_TYPE_DIALOG), *ok_button;
 
     probe->ticks++;
     if (!dialog)
@@ -260,7 +197,7 @@ probe_dialog(gpointer user_data)
         inspect_reference(dialog, probe);
     if (probe->missing_tooltips)
         collect_missing_tooltips(dialog, probe->missing_tooltips);
-    probe->saved = save_screenshot(dialog, probe->screenshot, &probe->width, &probe->height);
+    probe->saved = gui_save_screenshot(dialog, probe->screenshot, &probe->width, &probe->height);
     gtk_dialog_response(GTK_DIALOG(dialog), probe->response);
     return FALSE;
 }
@@ -278,6 +215,25 @@ run_dialog_on(GwyContainer *data, gint id, DialogProbe *probe)
      * never got ready leaves it behind. */
     if (!probe->dialog)
         g_source_remove(timeout);
+}
+
+/* A probe that waits for ready_text, photographs the dialog to
+ * screenshot and answers with response. */
+static void
+probe_init(DialogProbe *probe, const gchar *ready_text, const gchar *screenshot, gint response)
+{
+    gwy_clear(probe, 1);
+    probe->ready_text = ready_text;
+    probe->screenshot = screenshot;
+    probe->response = response;
+}
+
+/* What the probe collected from every dialog. */
+static void
+probe_clear(DialogProbe *probe)
+{
+    g_string_free(probe->texts, TRUE);
+    g_free(probe->title);
 }
 
 static void
@@ -328,10 +284,7 @@ START_TEST(test_dialog_ok_makes_channel)
     source = gwy_container_get_object(data, gwy_app_get_data_key_for_id(0));
     n_filled = count_filled(table, source, want, want_mask);
     ready = g_strdup_printf("%d stripes, %d filled pixels.", N_STRIPES, n_filled);
-    gwy_clear(&probe, 1);
-    probe.ready_text = ready;
-    probe.screenshot = SCREENSHOT;
-    probe.response = GTK_RESPONSE_OK;
+    probe_init(&probe, ready, SCREENSHOT, GTK_RESPONSE_OK);
     run_dialog(data, &probe);
 
     ck_assert_msg(probe.dialog, "no dialog appeared in %d ms", MAX_TICKS*TICK_MS);
@@ -353,8 +306,7 @@ START_TEST(test_dialog_ok_makes_channel)
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
     drift_table_free(table);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
     g_free(ready);
     g_free(want);
     g_free(want_mask);
@@ -388,10 +340,7 @@ START_TEST(test_dialog_in_german)
     bindtextdomain(GETTEXT_PACKAGE, TEST_LOCALEDIR);
     set_batch_like_settings();
     data = make_data(&table);
-    gwy_clear(&probe, 1);
-    probe.ready_text = "Streifen";
-    probe.screenshot = SCREENSHOT_DE;
-    probe.response = GTK_RESPONSE_CANCEL;
+    probe_init(&probe, "Streifen", SCREENSHOT_DE, GTK_RESPONSE_CANCEL);
     run_dialog(data, &probe);
 
     ck_assert_msg(probe.dialog, "no dialog appeared");
@@ -409,21 +358,9 @@ START_TEST(test_dialog_in_german)
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
     drift_table_free(table);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
 }
 END_TEST
-
-static gint
-count_channels(GwyContainer *data)
-{
-    gint *ids = gwy_app_data_browser_get_data_ids(data), n = 0;
-
-    while (ids[n] >= 0)
-        n++;
-    g_free(ids);
-    return n;
-}
 
 /* Every widget a user sets something with says what it does. */
 static void
@@ -473,39 +410,31 @@ START_TEST(test_no_double_correction)
     init_application();
     set_batch_like_settings();
     data = make_data(&table);
-    gwy_clear(&probe, 1);
-    probe.ready_text = "filled pixels.";
-    probe.screenshot = SCREENSHOT;
-    probe.response = GTK_RESPONSE_OK;
+    probe_init(&probe, "filled pixels.", SCREENSHOT, GTK_RESPONSE_OK);
     run_dialog(data, &probe);
     ck_assert_msg(probe.ready, "the first dialog never got ready:\n%s", probe.texts->str);
-    ck_assert_int_eq(count_channels(data), 2);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    ck_assert_int_eq(gui_count_channels(data), 2);
+    probe_clear(&probe);
 
     /* Repeat last on the new channel 1. */
     gwy_app_data_browser_select_data_field(data, 1);
     gwy_process_func_run(LOCALSCAN_FUNCTION_NAME, data, GWY_RUN_IMMEDIATE);
-    n = count_channels(data);
+    n = gui_count_channels(data);
     printf("test-gui-dialog: Repeat last on the result: %d channels (2 before)\n", n);
     ck_assert_int_eq(n, 2);
 
     /* The dialog on the result asks; Cancel leaves it at that. */
-    gwy_clear(&probe, 1);
-    probe.ready_text = "already local-scan compensated";
-    probe.screenshot = SCREENSHOT_AGAIN;
-    probe.response = GTK_RESPONSE_CANCEL;
+    probe_init(&probe, "already local-scan compensated", SCREENSHOT_AGAIN, GTK_RESPONSE_CANCEL);
     run_dialog_on(data, 1, &probe);
     ck_assert_msg(probe.ready, "no question on the compensated channel; shown:\n%s", probe.texts->str);
     ck_assert_msg(probe.saved, "no screenshot");
     printf("test-gui-dialog: the question on the result (%s):\n%s", SCREENSHOT_AGAIN, probe.texts->str);
-    ck_assert_int_eq(count_channels(data), 2);
+    ck_assert_int_eq(gui_count_channels(data), 2);
 
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
     drift_table_free(table);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
 }
 END_TEST
 
@@ -549,10 +478,7 @@ START_TEST(test_reference_chooser)
     gwy_app_data_browser_add(c);
     gwy_app_data_browser_add(a);
 
-    gwy_clear(&probe, 1);
-    probe.ready_text = "Registered";
-    probe.screenshot = SCREENSHOT_REFERENCE;
-    probe.response = GTK_RESPONSE_CANCEL;
+    probe_init(&probe, "Registered", SCREENSHOT_REFERENCE, GTK_RESPONSE_CANCEL);
     probe.keep_reference = TRUE;
     run_dialog_on(a, 0, &probe);
     ck_assert_msg(probe.dialog, "no dialog");
@@ -580,8 +506,7 @@ START_TEST(test_reference_chooser)
     g_object_unref(a);
     g_object_unref(b);
     g_object_unref(c);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
 }
 END_TEST
 
@@ -600,7 +525,7 @@ static gboolean
 probe_wait_dialog(gpointer user_data)
 {
     WaitProbe *probe = (WaitProbe*)user_data;
-    GtkWidget *dialog = find_dialog();
+    GtkWidget *dialog = gui_find_visible_dialog(GTK_TYPE_DIALOG);
 
     if (!dialog || g_strcmp0(gtk_window_get_title(GTK_WINDOW(dialog)), "Please wait"))
         return TRUE;
@@ -609,7 +534,7 @@ probe_wait_dialog(gpointer user_data)
     collect_texts(dialog, probe->texts);
     if (!strstr(probe->texts->str, "Compensating"))
         return TRUE;
-    probe->saved = save_screenshot(dialog, SCREENSHOT_WAIT, &probe->width, &probe->height);
+    probe->saved = gui_save_screenshot(dialog, SCREENSHOT_WAIT, &probe->width, &probe->height);
     gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
     probe->cancelled = TRUE;
     return FALSE;
@@ -659,15 +584,14 @@ START_TEST(test_cancel_large_image)
                   wait.texts->str);
     printf("test-gui-dialog: the wait dialog (%s, %d x %d) said:\n%s", SCREENSHOT_WAIT,
            wait.width, wait.height, wait.texts->str);
-    ck_assert_int_eq(count_channels(data), 1);
+    ck_assert_int_eq(gui_count_channels(data), 1);
 
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
     g_object_unref(field);
     g_string_free(wait.texts, TRUE);
     g_string_free(missing, TRUE);
-    g_string_free(probe.texts, TRUE);
-    g_free(probe.title);
+    probe_clear(&probe);
 }
 END_TEST
 

@@ -53,6 +53,9 @@ typedef struct {
     gchar *err;
 } ToolRun;
 
+/* run_tool() or run_tool_tmpdir(). */
+typedef void (*ToolRunner)(ToolRun *run, const gchar *const *args);
+
 /* What a test expects of one compensated channel. */
 typedef struct {
     GwyDataField *source;
@@ -67,27 +70,6 @@ typedef struct {
 /************************************************************************
  * Scratch folders and files
  ************************************************************************/
-
-static void
-remove_tree(const gchar *path)
-{
-    const gchar *name;
-    gchar *child;
-    GDir *dir;
-
-    if ((dir = g_dir_open(path, 0, NULL))) {
-        while ((name = g_dir_read_name(dir))) {
-            child = g_build_filename(path, name, NULL);
-            remove_tree(child);
-            g_free(child);
-        }
-        g_dir_close(dir);
-        g_chmod(path, 0700);
-        g_rmdir(path);
-    }
-    else
-        g_unlink(path);
-}
 
 static void
 setup_scratch(void)
@@ -107,7 +89,7 @@ setup_scratch(void)
 static void
 teardown_scratch(void)
 {
-    remove_tree(scratch);
+    test_remove_tree(scratch);
     g_free(scratch);
     g_free(in_dir);
     g_free(out_dir);
@@ -560,31 +542,46 @@ check_compensated(GwyContainer *out, gint newid, const Expected *exp)
     g_free(want_mask);
 }
 
+/* Runs the tool through runner with args on input (already saved from
+ * data): it must succeed and leave the input as it was.  Returns output,
+ * loaded, with every channel of data preserved; the new channel's id in
+ * newid. */
+static GwyContainer*
+run_successfully(ToolRunner runner, const gchar *const *args, GwyContainer *data,
+                 const gchar *input, const gchar *output, gint *newid)
+{
+    gchar *sum_before = file_checksum(input), *sum_after;
+    GwyContainer *out;
+    ToolRun run;
+
+    runner(&run, args);
+    assert_success(&run);
+    sum_after = file_checksum(input);
+    ck_assert_str_eq(sum_before, sum_after);
+    out = load_gwy(output);
+    *newid = check_inputs_preserved(data, out);
+
+    tool_run_clear(&run);
+    g_free(sum_before);
+    g_free(sum_after);
+    return out;
+}
+
 /* Runs the tool on in.gwy (already saved from data) with args and checks
  * everything: success, input unchanged, channels preserved, result exact. */
 static void
 run_and_check(GwyContainer *data, const gchar *input, const gchar *const *args, const Expected *exp)
 {
-    gchar *sum_before = file_checksum(input), *sum_after, *output = out_path("out.gwy");
+    gchar *output = out_path("out.gwy");
     gchar *settings_file = g_build_filename(child_home, ".gwyddion", "settings", NULL);
     GwyContainer *out;
-    ToolRun run;
     gint newid;
 
-    run_tool(&run, args);
-    assert_success(&run);
-    sum_after = file_checksum(input);
-    ck_assert_str_eq(sum_before, sum_after);
-
-    out = load_gwy(output);
-    newid = check_inputs_preserved(data, out);
+    out = run_successfully(run_tool, args, data, input, output, &newid);
     check_compensated(out, newid, exp);
     ck_assert_msg(!g_file_test(settings_file, G_FILE_TEST_EXISTS), "gwy-localscan wrote a settings file");
 
     g_object_unref(out);
-    tool_run_clear(&run);
-    g_free(sum_before);
-    g_free(sum_after);
     g_free(output);
     g_free(settings_file);
 }
@@ -644,42 +641,46 @@ three_channels_clear(ThreeChannels *tc)
     g_free(tc->input);
 }
 
-START_TEST(test_stored_table_first_channel)
+/* Compensates the three channels' file with options (then -o OUT IN) from a
+ * generator seeded with rng_seed; the result must be channel which's,
+ * compensated by its own stored table, its other metadata carried. */
+static void
+run_three_channels(guint32 rng_seed, gint which, const gchar *const *options)
 {
-    GRand *rng = g_rand_new_with_seed(seed);
+    GRand *rng = g_rand_new_with_seed(rng_seed);
+    GPtrArray *args = g_ptr_array_new();
     ThreeChannels tc;
     Expected exp;
     gchar *output;
+    guint i;
 
     three_channels_init(&tc, rng);
     output = out_path("out.gwy");
-    expected_init(&exp, tc.fields[1], three_titles[1], tc.tables[1]);
-    exp.source_id = three_ids[1];
-    run_and_check(tc.data, tc.input, (const gchar *const[]){ "-o", output, tc.input, NULL }, &exp);
+    for (i = 0; options[i]; i++)
+        g_ptr_array_add(args, (gpointer)options[i]);
+    g_ptr_array_add(args, "-o");
+    g_ptr_array_add(args, output);
+    g_ptr_array_add(args, tc.input);
+    g_ptr_array_add(args, NULL);
+    expected_init(&exp, tc.fields[which], three_titles[which], tc.tables[which]);
+    exp.source_id = three_ids[which];
+    run_and_check(tc.data, tc.input, (const gchar *const*)args->pdata, &exp);
     expected_clear(&exp);
+    g_ptr_array_free(args, TRUE);
     g_free(output);
     three_channels_clear(&tc);
     g_rand_free(rng);
+}
+
+START_TEST(test_stored_table_first_channel)
+{
+    run_three_channels(seed, 1, (const gchar *const[]){ NULL });
 }
 END_TEST
 
 START_TEST(test_channel_option)
 {
-    GRand *rng = g_rand_new_with_seed(seed + 1);
-    ThreeChannels tc;
-    Expected exp;
-    gchar *output;
-
-    three_channels_init(&tc, rng);
-    output = out_path("out.gwy");
-    expected_init(&exp, tc.fields[2], three_titles[2], tc.tables[2]);
-    exp.source_id = three_ids[2];
-    run_and_check(tc.data, tc.input,
-                  (const gchar *const[]){ "-c", "6", "-m", "paper", "-o", output, tc.input, NULL }, &exp);
-    expected_clear(&exp);
-    g_free(output);
-    three_channels_clear(&tc);
-    g_rand_free(rng);
+    run_three_channels(seed + 1, 2, (const gchar *const[]){ "-c", "6", "-m", "paper", NULL });
 }
 END_TEST
 
@@ -1217,37 +1218,67 @@ substitute(const gchar *text, const gchar *input, const gchar *output, const gch
     return result;
 }
 
+/* The files an error case names as @IN, @OUT and @CSV. */
+typedef struct {
+    gchar *input;
+    gchar *output;
+    gchar *csv;
+} ErrorFiles;
+
+static void
+error_files_clear(ErrorFiles *files)
+{
+    g_free(files->input);
+    g_free(files->output);
+    g_free(files->csv);
+}
+
+/* Runs the tool through runner with args (NULL-terminated, @IN, @OUTDIR,
+ * @OUT and @CSV replaced); it must fail with status and message (replaced
+ * likewise) and leave the input as it was.  The run stays in run for any
+ * further check. */
+static void
+run_failing_case(ToolRun *run, ToolRunner runner, const gchar *what,
+                 const gchar *name, const gchar *const *args, gint status,
+                 const gchar *message, const ErrorFiles *files)
+{
+    GPtrArray *argv = g_ptr_array_new_with_free_func(g_free);
+    gchar *sum_before, *sum_after, *expected;
+    guint i;
+
+    for (i = 0; args[i]; i++)
+        g_ptr_array_add(argv, substitute(args[i], files->input, files->output, files->csv));
+    g_ptr_array_add(argv, NULL);
+    sum_before = file_checksum(files->input);
+
+    runner(run, (const gchar *const*)argv->pdata);
+    expected = substitute(message, files->input, files->output, files->csv);
+    printf("%s \"%s\": %s", what, name, run->err);
+    assert_failure(run, status, expected);
+    sum_after = file_checksum(files->input);
+    ck_assert_str_eq(sum_before, sum_after);
+
+    g_free(expected);
+    g_free(sum_before);
+    g_free(sum_after);
+    g_ptr_array_free(argv, TRUE);
+}
+
 START_TEST(test_error_exit)
 {
     const ErrorCase *ec = error_cases + _i;
-    gchar *input = simple_input(ec->stored), *csv = in_path("drift.csv"), *output = out_path("out.gwy");
-    gchar *sum_before, *sum_after, *message;
-    GPtrArray *args = g_ptr_array_new_with_free_func(g_free);
+    ErrorFiles files;
     ToolRun run;
-    guint i;
 
+    files.input = simple_input(ec->stored);
+    files.csv = in_path("drift.csv");
+    files.output = out_path("out.gwy");
     if (ec->csv)
-        write_text(csv, ec->csv);
-    for (i = 0; ec->args[i]; i++)
-        g_ptr_array_add(args, substitute(ec->args[i], input, output, csv));
-    g_ptr_array_add(args, NULL);
-    sum_before = file_checksum(input);
-
-    run_tool(&run, (const gchar *const*)args->pdata);
-    message = substitute(ec->message, input, output, csv);
-    printf("error case \"%s\": %s", ec->name, run.err);
-    assert_failure(&run, ec->status, message);
-    sum_after = file_checksum(input);
-    ck_assert_str_eq(sum_before, sum_after);
-
-    g_free(message);
-    g_free(sum_before);
-    g_free(sum_after);
+        write_text(files.csv, ec->csv);
+    run_failing_case(&run, run_tool, "error case", ec->name, ec->args,
+                     ec->status, ec->message, &files);
     tool_run_clear(&run);
-    g_ptr_array_free(args, TRUE);
-    g_free(input);
-    g_free(csv);
-    g_free(output);
+    error_files_clear(&files);
 }
 END_TEST
 
@@ -1556,7 +1587,7 @@ START_TEST(test_core_messages_translated)
     message = g_strdup_printf("gwy-localscan: %s, Drifttabelle von Kanal 0:3: ungültige Zahl 'x' für dx", input);
     assert_failure(&run, 1, message);
     tool_run_clear(&run);
-    remove_tree(localedir);
+    test_remove_tree(localedir);
     g_unlink(pofile);
     g_free(message);
     g_free(mofile);
@@ -1775,21 +1806,14 @@ run_reference_case(GwyContainer *data, const gchar *input, gint image_id, const 
                    const gchar *const *args, gboolean paper, gdouble min_improvement)
 {
     gchar *output = out_path("out.gwy"), *used = out_path("used.csv"), *written = NULL;
-    gchar *sum_before = file_checksum(input), *sum_after;
     GwyDataField *result, *mask;
     GwyContainer *out;
     DriftTable *table;
     Expected exp;
     gdouble before, after;
-    ToolRun run;
     gint newid;
 
-    run_tool_tmpdir(&run, args);
-    assert_success(&run);
-    sum_after = file_checksum(input);
-    ck_assert_str_eq(sum_before, sum_after);
-    out = load_gwy(output);
-    newid = check_inputs_preserved(data, out);
+    out = run_successfully(run_tool_tmpdir, args, data, input, output, &newid);
     table = check_measured_table(out, newid, rf, paper);
     ck_assert(g_file_get_contents(used, &written, NULL, NULL));
     ck_assert_str_eq(written, stored_table_text(out, newid));
@@ -1811,10 +1835,7 @@ run_reference_case(GwyContainer *data, const gchar *input, gint image_id, const 
 
     drift_table_free(table);
     g_object_unref(out);
-    tool_run_clear(&run);
     g_free(written);
-    g_free(sum_before);
-    g_free(sum_after);
     g_free(used);
     g_free(output);
 }
@@ -1984,34 +2005,18 @@ static const ReferenceErrorCase reference_error_cases[] = {
 START_TEST(test_reference_errors)
 {
     const ReferenceErrorCase *ec = reference_error_cases + _i;
-    gchar *input = reference_error_input(), *csv = in_path("drift.csv"), *output = out_path("out.gwy");
-    gchar *sum_before, *sum_after, *message;
-    GPtrArray *args = g_ptr_array_new_with_free_func(g_free);
+    ErrorFiles files;
     ToolRun run;
-    guint i;
 
-    write_text(csv, GOOD_TABLE);
-    for (i = 0; ec->args[i]; i++)
-        g_ptr_array_add(args, substitute(ec->args[i], input, output, csv));
-    g_ptr_array_add(args, NULL);
-    sum_before = file_checksum(input);
-
-    run_tool_tmpdir(&run, (const gchar *const*)args->pdata);
-    message = substitute(ec->message, input, output, csv);
-    printf("reference error case \"%s\": %s", ec->name, run.err);
-    assert_failure(&run, ec->status, message);
+    files.input = reference_error_input();
+    files.csv = in_path("drift.csv");
+    files.output = out_path("out.gwy");
+    write_text(files.csv, GOOD_TABLE);
+    run_failing_case(&run, run_tool_tmpdir, "reference error case", ec->name,
+                     ec->args, ec->status, ec->message, &files);
     ck_assert_str_eq(run.out, "");
-    sum_after = file_checksum(input);
-    ck_assert_str_eq(sum_before, sum_after);
-
-    g_free(message);
-    g_free(sum_before);
-    g_free(sum_after);
     tool_run_clear(&run);
-    g_ptr_array_free(args, TRUE);
-    g_free(input);
-    g_free(csv);
-    g_free(output);
+    error_files_clear(&files);
 }
 END_TEST
 

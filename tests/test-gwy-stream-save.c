@@ -38,28 +38,30 @@ random_field(GRand *rng, gint xres, gint yres, const gchar *zunit)
     return field;
 }
 
+/* A random field of the size and z unit stored in data under key. */
+static void
+set_random_field(GwyContainer *data, const gchar *key, GRand *rng,
+                 gint xres, gint yres, const gchar *unit)
+{
+    GwyDataField *field = random_field(rng, xres, yres, unit);
+
+    gwy_container_set_object_by_name(data, key, field);
+    g_object_unref(field);
+}
+
 static GwyContainer*
 make_container(GRand *rng)
 {
     GwyContainer *data = gwy_container_new(), *meta = gwy_container_new();
-    GwyDataField *field;
     GwyGraphModel *gmodel = gwy_graph_model_new();
     GwyGraphCurveModel *gcmodel = gwy_graph_curve_model_new();
     GwyStringList *log = gwy_string_list_new();
     gdouble x[3] = { 0, 1, 2 }, y[3] = { 3, -1, 4 };
 
-    field = random_field(rng, 130, 70, "m");
-    gwy_container_set_object_by_name(data, "/0/data", field);
-    g_object_unref(field);
-    field = random_field(rng, 130, 70, "");
-    gwy_container_set_object_by_name(data, "/0/mask", field);
-    g_object_unref(field);
-    field = random_field(rng, 9, 7, "V");
-    gwy_container_set_object_by_name(data, "/1/data", field);
-    g_object_unref(field);
-    field = random_field(rng, 64, 64, "deg");
-    gwy_container_set_object_by_name(data, "/2/data", field);
-    g_object_unref(field);
+    set_random_field(data, "/0/data", rng, 130, 70, "m");
+    set_random_field(data, "/0/mask", rng, 130, 70, "");
+    set_random_field(data, "/1/data", rng, 9, 7, "V");
+    set_random_field(data, "/2/data", rng, 64, 64, "deg");
     gwy_container_set_const_string_by_name(data, "/0/data/title", (const guchar*)"Height \342\200\224 a");
     gwy_container_set_const_string_by_name(data, "/0/base/palette", (const guchar*)"Gray");
     gwy_container_set_boolean_by_name(data, "/0/data/realsquare", TRUE);

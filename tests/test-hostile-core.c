@@ -306,8 +306,8 @@ END_TEST
 static Suite*
 hostile_core_suite(void)
 {
-    Suite *suite = suite_create("hostile-core");
-    TCase *tc = tcase_create("core");
+    TCase *tc;
+    Suite *suite = test_suite_new("hostile-core", "core", &tc);
 
     tcase_add_test(tc, test_stripe_fill_is_nearest_rule);
     tcase_add_test(tc, test_paper_missing_pixels);
@@ -316,7 +316,6 @@ hostile_core_suite(void)
     tcase_add_test(tc, test_excerpts);
     tcase_add_test(tc, test_screening_truncations);
     tcase_add_test(tc, test_sweep);
-    suite_add_tcase(suite, tc);
     return suite;
 }
 

@@ -88,26 +88,6 @@ checksum_of(const gchar *path)
     return sum;
 }
 
-static void
-remove_tree(const gchar *path)
-{
-    const gchar *name;
-    gchar *child;
-    GDir *dir;
-
-    if ((dir = g_dir_open(path, 0, NULL))) {
-        while ((name = g_dir_read_name(dir))) {
-            child = g_build_filename(path, name, NULL);
-            remove_tree(child);
-            g_free(child);
-        }
-        g_dir_close(dir);
-        g_rmdir(path);
-    }
-    else
-        g_unlink(path);
-}
-
 /* An image as Gwyddion serialises it: a container with one channel, of
  * the given physical size (any value: the struct is written directly) and
  * with one metadata item when meta_key is not NULL. */
@@ -903,7 +883,7 @@ START_TEST(test_generated_cases)
     }
     printf("test-hostile-input: %u of %d generated cases passed (seed %u)\n", passed, N_CASES, seed);
     g_rand_free(rng);
-    remove_tree(scratch);
+    test_remove_tree(scratch);
     g_free(home);
     g_free(scratch);
 }
@@ -1008,7 +988,7 @@ START_TEST(test_terminated_runs)
     }
     printf("test-hostile-input: 6 signalled runs clean (%d had finished first)\n", finished);
     g_rand_free(rng);
-    remove_tree(scratch);
+    test_remove_tree(scratch);
     g_free(home);
     g_free(scratch);
 }
@@ -1052,7 +1032,7 @@ START_TEST(test_killed_run_swept)
     g_free(live);
     case_free(hc);
     g_rand_free(rng);
-    remove_tree(scratch);
+    test_remove_tree(scratch);
     g_free(home);
     g_free(scratch);
 }
@@ -1061,14 +1041,13 @@ END_TEST
 static Suite*
 hostile_suite(void)
 {
-    Suite *suite = suite_create("hostile-input");
-    TCase *tc = tcase_create("core");
+    TCase *tc;
+    Suite *suite = test_suite_new("hostile-input", "core", &tc);
 
     tcase_set_timeout(tc, 60*N_CASES);
     tcase_add_test(tc, test_generated_cases);
     tcase_add_test(tc, test_terminated_runs);
     tcase_add_test(tc, test_killed_run_swept);
-    suite_add_tcase(suite, tc);
     return suite;
 }
 

@@ -70,20 +70,32 @@ px_to_m(GwyDataField *field, gdouble px)
     return (px + 0.5)*gwy_data_field_get_dx(field);
 }
 
+/* The default parameters and n ideal particles of their radius, to be
+ * placed by the test; returns the field of res x res px they sit in. */
+static GwyDataField*
+ideal_setup(gint res, gint n, LocalScanParams *params, IdealSample *sample)
+{
+    gint i;
+
+    local_scan_params_init(params);
+    memset(sample, 0, sizeof(IdealSample));
+    sample->n = n;
+    for (i = 0; i < n; i++)
+        sample->r[i] = params->radius;
+    return make_field(res);
+}
+
 /* An ideal particle whose displayed centre is off by up to half a pixel (the
  * image's own pixel grid) is found within 0.1 px with no noise. */
 START_TEST(test_ideal_centre)
 {
-    GwyDataField *field = make_field(128);
     LocalScanParams params;
-    IdealSample sample = { 0 };
+    IdealSample sample;
+    GwyDataField *field = ideal_setup(128, 1, &params, &sample);
     GRand *rng = g_rand_new_with_seed(test_seed);
     gdouble worst = 0.0;
     gint k;
 
-    local_scan_params_init(&params);
-    sample.n = 1;
-    sample.r[0] = params.radius;
     for (k = 0; k < 50; k++) {
         LocalScanParticle res;
         gdouble cx = g_rand_double_range(rng, 40.0, 88.0);
@@ -116,15 +128,12 @@ END_TEST
  * when it lies more than R off L0 only the up/down search can reach it. */
 START_TEST(test_displaced_found)
 {
-    GwyDataField *field = make_field(128);
     LocalScanParams params;
-    IdealSample sample = { 0 };
+    IdealSample sample;
+    GwyDataField *field = ideal_setup(128, 1, &params, &sample);
     GRand *rng = g_rand_new_with_seed(test_seed + 1);
     gint k, n_searched = 0, most_lines = 0;
 
-    local_scan_params_init(&params);
-    sample.n = 1;
-    sample.r[0] = params.radius;
     for (k = 0; k < 100; k++) {
         LocalScanParticle res;
         gdouble cx = g_rand_double_range(rng, 40.0, 88.0);
@@ -167,16 +176,13 @@ END_TEST
  * particle is first cut by the fifth line (two steps down). */
 START_TEST(test_neighbour_beyond_rmax_passed)
 {
-    GwyDataField *field = make_field(128);
     LocalScanParams params;
-    IdealSample sample = { 0 };
+    IdealSample sample;
+    GwyDataField *field = ideal_setup(128, 2, &params, &sample);
     GRand *rng = g_rand_new_with_seed(test_seed + 5);
     gdouble pxs = gwy_data_field_get_dx(field);
     gint k;
 
-    local_scan_params_init(&params);
-    sample.n = 2;
-    sample.r[0] = sample.r[1] = params.radius;
     for (k = 0; k < 50; k++) {
         LocalScanParticle res;
         gdouble r = params.radius, step = 1.5*r, r_max = params.r_max;
@@ -215,14 +221,11 @@ END_TEST
 /* Beyond the search's reach the particle is reported as not found. */
 START_TEST(test_beyond_reach)
 {
-    GwyDataField *field = make_field(128);
     LocalScanParams params;
-    IdealSample sample = { 0 };
+    IdealSample sample;
+    GwyDataField *field = ideal_setup(128, 1, &params, &sample);
     LocalScanParticle res;
 
-    local_scan_params_init(&params);
-    sample.n = 1;
-    sample.r[0] = params.radius;
     sample.x[0] = px_to_m(field, 64.0);
     sample.y[0] = px_to_m(field, 64.0) + 3.0*params.r_max;
     local_scan_particle(field, &params, ideal_probe, &sample, 64.0, 64.0,

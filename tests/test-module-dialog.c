@@ -21,6 +21,7 @@
 #include "localscan-params.h"
 #include "registration-frames.h"
 #include "test-common.h"
+#include "gui-widgets.h"
 #include "worked-example.h"
 
 #define RERUN_GUARD "LOCALSCAN_TEST_UNDER_XVFB"
@@ -73,20 +74,6 @@ set_stored_table_settings(void)
     gwy_container_set_boolean_by_name(settings, LOCALSCAN_SETTINGS_KEY(PLOT_DRIFT), FALSE);
 }
 
-static GtkWidget*
-find_module_dialog(void)
-{
-    GList *toplevels = gtk_window_list_toplevels(), *l;
-    GtkWidget *dialog = NULL;
-
-    for (l = toplevels; l; l = g_list_next(l)) {
-        if (GWY_IS_DIALOG(l->data) && gtk_widget_get_visible(GTK_WIDGET(l->data)))
-            dialog = GTK_WIDGET(l->data);
-    }
-    g_list_free(toplevels);
-    return dialog;
-}
-
 static gboolean
 widget_shows_text(GtkWidget *widget, const gchar *text)
 {
@@ -111,7 +98,7 @@ static gboolean
 probe_dialog(gpointer user_data)
 {
     DialogProbe *probe = (DialogProbe*)user_data;
-    GtkWidget *dialog = find_module_dialog(), *ok_button;
+    GtkWidget *dialog = gui_find_visible_dialog(GWY_TYPE_DIALOG), *ok_button;
 
     if (!dialog)
         return TRUE;
@@ -126,17 +113,6 @@ probe_dialog(gpointer user_data)
     gtk_dialog_response(GTK_DIALOG(dialog), probe->response);
     probe->answered = TRUE;
     return FALSE;
-}
-
-static gint
-count_channels(GwyContainer *data)
-{
-    gint *ids = gwy_app_data_browser_get_data_ids(data), n = 0;
-
-    while (ids[n] != -1)
-        n++;
-    g_free(ids);
-    return n;
 }
 
 static void
@@ -159,7 +135,7 @@ START_TEST(test_bad_table_disables_ok)
     ck_assert(probe.found_dialog);
     ck_assert_msg(probe.found_text, "the dialog does not show the parser's message");
     ck_assert(!probe.ok_sensitive);
-    ck_assert_int_eq(count_channels(data), 1);
+    ck_assert_int_eq(gui_count_channels(data), 1);
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
 }
@@ -178,7 +154,7 @@ START_TEST(test_good_table_ok_makes_channel)
     ck_assert(probe.found_dialog);
     ck_assert_msg(probe.found_text, "the dialog does not show the stripe summary");
     ck_assert(probe.ok_sensitive);
-    ck_assert_int_eq(count_channels(data), 2);
+    ck_assert_int_eq(gui_count_channels(data), 2);
     ck_assert(gwy_container_gis_object_by_name(data, "/1/data", &result));
     for (i = 0; i < 24; i++)
         ck_assert(gwy_data_field_get_data_const(result)[i] == worked_c[i]);
@@ -327,23 +303,6 @@ find_labelled_spin(GtkWidget *widget, const gchar *label_text)
     return found;
 }
 
-static GtkWidget*
-find_named_widget(GtkWidget *widget, const gchar *name)
-{
-    GList *children, *l;
-    GtkWidget *found = NULL;
-
-    if (!g_strcmp0(gtk_widget_get_name(widget), name))
-        return widget;
-    if (!GTK_IS_CONTAINER(widget))
-        return NULL;
-    children = gtk_container_get_children(GTK_CONTAINER(widget));
-    for (l = children; l && !found; l = g_list_next(l))
-        found = find_named_widget(GTK_WIDGET(l->data), name);
-    g_list_free(children);
-    return found;
-}
-
 static gboolean
 chooser_offers(GtkTreeModel *model, gint datano, gint id)
 {
@@ -364,7 +323,7 @@ chooser_offers(GtkTreeModel *model, gint datano, gint id)
 static void
 inspect_reference_chooser(GtkWidget *dialog, ReferenceProbe *probe)
 {
-    GtkWidget *chooser = find_named_widget(dialog, LOCALSCAN_REFERENCE_WIDGET_NAME);
+    GtkWidget *chooser = gui_find_named_widget(dialog, LOCALSCAN_REFERENCE_WIDGET_NAME);
     gint datano = gwy_app_data_browser_get_number(probe->data);
     GtkTreeModel *model;
     GtkTreeIter iter;
@@ -394,21 +353,9 @@ graph_points(GtkWidget *dialog)
 static gboolean
 save_screenshot(GtkWidget *dialog, const gchar *filename)
 {
-    GdkWindow *window = gtk_widget_get_window(dialog);
-    GdkPixbuf *pixbuf;
-    gint width, height, i;
-    gboolean ok;
+    gint width, height;
+    gboolean ok = gui_save_screenshot(dialog, filename, &width, &height);
 
-    for (i = 0; i < 50 && gtk_events_pending(); i++)
-        gtk_main_iteration_do(FALSE);
-    gdk_window_process_all_updates();
-    gdk_flush();
-    gdk_drawable_get_size(GDK_DRAWABLE(window), &width, &height);
-    pixbuf = gdk_pixbuf_get_from_drawable(NULL, GDK_DRAWABLE(window), NULL, 0, 0, 0, 0, width, height);
-    if (!pixbuf)
-        return FALSE;
-    ok = gdk_pixbuf_save(pixbuf, filename, "png", NULL, NULL);
-    g_object_unref(pixbuf);
     printf("test-module-dialog: the reference dialog (%d x %d) in %s\n", width, height, filename);
     return ok;
 }
@@ -439,7 +386,7 @@ probe_reference_dialog(gpointer user_data)
         "Registered ", "Line time", "of 8 stripes",
     };
     ReferenceProbe *probe = (ReferenceProbe*)user_data;
-    GtkWidget *dialog = find_module_dialog(), *ok_button, *widget;
+    GtkWidget *dialog = gui_find_visible_dialog(GWY_TYPE_DIALOG), *ok_button, *widget;
 
     if (!dialog)
         return TRUE;
@@ -549,7 +496,7 @@ START_TEST(test_reference_chooser_and_cache)
     ck_assert_int_eq(probe.registrations[STEP_EIGHT_STRIPES], 2);
     ck_assert_int_eq(registrations, 2);
 
-    ck_assert_int_eq(count_channels(probe.data), 5);
+    ck_assert_int_eq(gui_count_channels(probe.data), 5);
     table = localscan_channel_stored_table(probe.data, 4, NULL);
     ck_assert(table);
     ck_assert_int_eq(table->n_stripes, 8);

@@ -7,28 +7,12 @@
 # (../shared/data/measured) are corrected when present, else SKIPPED.
 # Copyright (C) 2026 The gwy-localscan authors.
 # SPDX-License-Identifier: GPL-2.0-or-later
-set -u
+. "$(dirname "$0")/shell-test-common.sh"
 tool=${GWY_LOCALSCAN:-./tools/gwy-localscan}
 simscan=${SIMSCAN:-./simscan/simscan}
-for v in tool simscan; do
-    eval "p=\$$v"
-    case $p in /*) ;; *) eval "$v=\$(pwd)/\$p" ;; esac
-done
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-checks=0
-skipped=0
-fail() {
-    echo "FAIL: $*"
-    failures=$((failures + 1))
-}
-check() {
-    checks=$((checks + 1))
-}
+make_absolute tool simscan
 
-seed=${LOCALSCAN_TEST_SEED:-$(od -An -N4 -tu4 /dev/urandom | tr -d ' ')}
-echo "test-series-command: seed $seed (LOCALSCAN_TEST_SEED overrides)"
+draw_seed
 # A steady drift drawn from the seed: vx, vy in nm/s (the frames are
 # 2.5 um, 128 px: 19.5 nm per px; 128 lines of 0.5 s, back to back, so up
 # to 3 px over the series).  Frame k is scanned 64 k s on: simscan starts every
@@ -156,11 +140,7 @@ if [ -n "$measured" ] && [ -d "$measured/fastscan-series" ] \
         [ "$(grep -c '"index"' "$tmp/hs.json" 2>/dev/null)" -eq 7 ] || fail "$(basename "$f"): not 7 frames"
     done
 else
-    echo "test-series-command: SKIPPED: measured data absent (${measured:-no LOCALSCAN_MEASURED_DIR})"
-    skipped=1
+    skip_part "measured data absent (${measured:-no LOCALSCAN_MEASURED_DIR})"
 fi
 
-echo "test-series-command: $checks checks, $failures failures, $skipped parts skipped"
-[ $failures -eq 0 ] || exit 1
-[ $skipped -eq 0 ] || exit 77
-exit 0
+finish

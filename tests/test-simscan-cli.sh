@@ -4,30 +4,11 @@
 # leaves no output; --help lists every option.
 # Copyright (C) 2026 The gwy-localscan authors.
 # SPDX-License-Identifier: GPL-2.0-or-later
-set -u
+. "$(dirname "$0")/shell-test-common.sh"
 simscan=${SIMSCAN:-./simscan/simscan}
-case $simscan in
-    /*) ;;
-    *) simscan=$(pwd)/$simscan ;;
-esac
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-checks=0
-# Parts that could not run: with no failure the test reports SKIP (77).
-skipped=0
+make_absolute simscan
 
-fail() {
-    echo "FAIL: $*"
-    failures=$((failures + 1))
-}
-
-check() {
-    checks=$((checks + 1))
-}
-
-seed=${LOCALSCAN_TEST_SEED:-$(od -An -N4 -tu4 /dev/urandom | tr -d ' ')}
-echo "test-simscan-cli: seed $seed (LOCALSCAN_TEST_SEED overrides)"
+draw_seed
 small="--xres 128 --yres 128 --size 2.5 --stripes 8 --noise 0.2 --seed $seed"
 
 # Same seed, same bytes; another seed, other bytes.
@@ -57,18 +38,25 @@ head -n 1 "$tmp/a.csv" | grep -q '^stripe,dx,dy,dx_exact,dy_exact,t_image,t_loca
 check
 [ "$(grep -c '^[0-9]' "$tmp/a.csv")" -eq 8 ] || fail "CSV has not 8 stripes"
 
-# Bad options: non-zero, exactly one line on stderr, nothing written.
-bad_case() {
-    rm -f "$tmp"/e.* "$tmp"/.e.*
-    "$simscan" "$@" -o "$tmp/e.gwy" --table "$tmp/e.csv" \
-        --json "$tmp/e.json" >"$tmp/out" 2>"$tmp/err"
+# simscan "$@" (the case $1 names) must be refused: non-zero, exactly one
+# line on stderr, no e.* output (nor its temporary .e.*) written.
+refused_case() {
+    what=$1
+    shift
+    "$simscan" "$@" >"$tmp/out" 2>"$tmp/err"
     status=$?
     check
-    [ $status -ne 0 ] || fail "$* exited 0"
-    [ "$(wc -l <"$tmp/err")" -eq 1 ] || fail "$*: stderr is not one line: $(cat "$tmp/err")"
+    [ $status -ne 0 ] || fail "$what exited 0"
+    [ "$(wc -l <"$tmp/err")" -eq 1 ] || fail "$what: stderr is not one line: $(cat "$tmp/err")"
     if ls -A "$tmp" | grep -q '^\.\{0,1\}e\.'; then
-        fail "$* left output: $(ls -A "$tmp")"
+        fail "$what left output: $(ls -A "$tmp")"
     fi
+}
+
+# Bad options: refused.
+bad_case() {
+    rm -f "$tmp"/e.* "$tmp"/.e.*
+    refused_case "$*" "$@" -o "$tmp/e.gwy" --table "$tmp/e.csv" --json "$tmp/e.json"
 }
 bad_case --stripes 0
 bad_case --stripes 300
@@ -203,15 +191,8 @@ fit_bad_case "3 lines" --line-time 1 --frame-times 0,100 \
 # An output that is a folder: refused before any output is renamed.
 rm -f "$tmp"/e.*
 mkdir "$tmp/e-folder"
-"$simscan" $small -q -o "$tmp/e.gwy" --table "$tmp/e.csv" --json "$tmp/e-folder" \
-    2>"$tmp/err"
-status=$?
-check
-[ $status -ne 0 ] || fail "a folder as --json exited 0"
-[ "$(wc -l <"$tmp/err")" -eq 1 ] || fail "a folder as --json: stderr is not one line: $(cat "$tmp/err")"
-if ls -A "$tmp" | grep -q '^\.\{0,1\}e\.'; then
-    fail "a folder as --json left output: $(ls -A "$tmp")"
-fi
+refused_case "a folder as --json" $small -q -o "$tmp/e.gwy" --table "$tmp/e.csv" \
+    --json "$tmp/e-folder"
 rmdir "$tmp/e-folder"
 
 # No output may be an input or another output: refused with one line, the
@@ -309,8 +290,7 @@ if [ -r "$measured" ]; then
         || fail "--sample: fewer than 10 stripes measured: $(cat "$tmp/m.csv")"
     bad_case --sample "$measured" --size 5
 else
-    echo "test-simscan-cli: SKIPPED: the --sample checks: measured data absent ($measured)"
-    skipped=$((skipped + 1))
+    skip_part "the --sample checks: measured data absent ($measured)"
 fi
 
 # A sample whose only channel has a high id (not the first 4097) is found.
@@ -348,8 +328,7 @@ if [ -x "$localscan" ] && [ -r "${LOCALSCAN_MODULE:-}" ]; then
             || fail "compare of a $mode-mode file says: $(head -n 1 "$tmp/out")"
     done
 else
-    echo "test-simscan-cli: SKIPPED: the compare checks: $localscan or LOCALSCAN_MODULE missing"
-    skipped=$((skipped + 1))
+    skip_part "the compare checks: $localscan or LOCALSCAN_MODULE missing"
 fi
 
 # The sweep runs and plots.
@@ -360,6 +339,4 @@ check
 check
 [ "$(grep -c '^ *[14] ' "$tmp/sweep")" -eq 2 ] || fail "sweep table: $(cat "$tmp/sweep")"
 
-echo "test-simscan-cli: $checks checks, $failures failures, $skipped parts skipped"
-[ $failures -eq 0 ] || exit 1
-[ $skipped -eq 0 ] || exit 77
+finish

@@ -6,29 +6,13 @@
 # nor in what simscan writes, nor in gwy-localscan's result of that.
 # Copyright (C) 2026 The gwy-localscan authors.
 # SPDX-License-Identifier: GPL-2.0-or-later
-set -u
+. "$(dirname "$0")/shell-test-common.sh"
 tool=${GWY_LOCALSCAN:-./tools/gwy-localscan}
 simscan=${SIMSCAN:-./simscan/simscan}
 thumbnailer=$(command -v gwyddion-thumbnailer)
 gwyddion=$(command -v gwyddion)
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-checks=0
 
-fail() {
-    echo "FAIL: $*"
-    failures=$((failures + 1))
-}
-
-check() {
-    checks=$((checks + 1))
-}
-
-if [ -z "$thumbnailer" ]; then
-    echo "test-thumbnailer: SKIPPED: gwyddion-thumbnailer is not installed"
-    exit 77
-fi
+[ -n "$thumbnailer" ] || skip_all "gwyddion-thumbnailer is not installed"
 
 # A 64 x 48 image of 8 x 8 blocks with heights 0..4 nm, float32 little
 # endian after a NUL-padded text header (perl is part of every Debian).
@@ -110,11 +94,7 @@ if [ -n "$gwyddion" ]; then
         fail "simscan exited with $?: $(cat "$tmp/err")"
     fi
 else
-    echo "test-thumbnailer: SKIPPED: gwyddion --check (gwyddion is not installed)"
-    skipped=1
+    skip_part "gwyddion --check (gwyddion is not installed)"
 fi
 
-echo "test-thumbnailer: $checks checks, $failures failures"
-[ $failures -eq 0 ] || exit 1
-# Part of it could not run: SKIP, not PASS.
-[ -z "${skipped:-}" ] || exit 77
+finish

@@ -1,0 +1,24 @@
+/*
+ *  What the dialog tests on a (virtual) X display share: finding the
+ *  dialog and its widgets, letting GTK draw, photographing a window and
+ *  counting a file's channels.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#ifndef LOCALSCAN_GUI_WIDGETS_H
+#define LOCALSCAN_GUI_WIDGETS_H
+
+#include <gtk/gtk.h>
+#include <libgwyddion/gwyddion.h>
+
+GtkWidget* gui_find_visible_dialog(GType type);
+GtkWidget* gui_find_named_widget  (GtkWidget *widget,
+                                   const gchar *name);
+void       gui_flush_drawing      (void);
+gboolean   gui_save_screenshot    (GtkWidget *widget,
+                                   const gchar *filename,
+                                   gint *width,
+                                   gint *height);
+gint       gui_count_channels     (GwyContainer *data);
+
+#endif
