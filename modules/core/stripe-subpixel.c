@@ -554,6 +554,81 @@ residual_correlation(const StripeSubpixel *sp, const StripeSpan *span, gboolean 
     return (s2 > 0.0) ? CLAMP(s11/s2, 0.0, 0.9) : 0.0;
 }
 
+/* The weighted residual sum of squares of the reference sampled along the
+ * motion m, shifted by (ky, kx) px, against the stripe with its gain, the
+ * rows' offsets and the x trend fitted but no gradient (the shift held
+ * there); dof gets the weight left for the residual.  FALSE when a row's
+ * taps leave the reference or the fit is singular. */
+static gboolean
+rss_held_at(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, gdouble ky, gdouble kx,
+            gdouble *rss, gdouble *dof)
+{
+    enum { HELD = 1 + TREND_TERMS };
+    gdouble normal[MAX_PARAMS][MAX_PARAMS], rhs[MAX_PARAMS], p[MAX_PARAMS], dots[ROW_REGRESSORS + 1];
+    gdouble t, vv = 0.0, wsum = 0.0;
+    gint reg[HELD], i, a, b;
+
+    reg[0] = 0;
+    for (a = 0; a < TREND_TERMS; a++)
+        reg[1 + a] = 4 + a;
+    memset(normal, 0, sizeof(normal));
+    memset(rhs, 0, sizeof(rhs));
+    for (i = 0; i < span->height; i++) {
+        const gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS;
+
+        if (sp->row_dropped[i])
+            continue;
+        t = i - span->centre;
+        if (!match_row(sp, span, i, m->dy + ky + m->vy*t, m->dx + kx + m->vx*t, NULL, t, dots))
+            return FALSE;
+        for (a = 0; a < HELD; a++) {
+            rhs[a] += dots[reg[a]];
+            for (b = a; b < HELD; b++)
+                normal[a][b] += terms[row_term(MIN(reg[a], reg[b]), MAX(reg[a], reg[b]))];
+        }
+        vv += dots[ROW_REGRESSORS];
+        wsum += terms[row_term(1, 1)];
+    }
+    if (!(wsum > HELD + 1) || !solve_normal(normal, rhs, HELD, p))
+        return FALSE;
+    *rss = vv;
+    for (a = 0; a < HELD; a++)
+        *rss -= p[a]*rhs[a];
+    *rss = MAX(*rss, 0.0);
+    *dof = wsum - HELD;
+    return TRUE;
+}
+
+/* The uncertainty (px) the match's residual profile gives along one axis:
+ * how much worse the stripe matches 1 and 3 px away on either side than
+ * where it matched (rss0), against the residual's own variance s2 (times
+ * the inflation for its correlation between neighbouring pixels).  The normal matrix sees only
+ * the curvature where the match converged, which on a ridge (the lines of
+ * a grating with a faint roughness) is the curvature of a bump of noise:
+ * stripes were given 1.5-3.5 px off with sigma 0.5 px.  Steps that leave
+ * the reference are not taken; 0 when none is. */
+static gdouble
+profile_sigma(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, gboolean along_x,
+              gdouble rss0, gdouble s2)
+{
+    static const gdouble steps[] = { 1.0, 3.0 };
+    gdouble rss, unused, sigma = 0.0, k;
+    guint j;
+    gint sign;
+
+    for (j = 0; j < G_N_ELEMENTS(steps); j++) {
+        for (sign = -1; sign <= 1; sign += 2) {
+            k = sign*steps[j];
+            if (!rss_held_at(sp, span, m, along_x ? 0.0 : k, along_x ? k : 0.0, &rss, &unused))
+                continue;
+            /* A step that matches as well says the optimum is that
+             * uncertain at least. */
+            sigma = MAX(sigma, (rss > rss0) ? steps[j]*sqrt(s2/(rss - rss0)) : steps[j]);
+        }
+    }
+    return sigma;
+}
+
 /* The standard uncertainty (px, the larger of dy's and dx's) of the match
  * at m: least squares' own, from the residual and the normal matrix,
  * inflated for the residual's correlation between neighbouring pixels
@@ -565,7 +640,7 @@ match_uncertainty(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion
 {
     gdouble normal[MAX_PARAMS][MAX_PARAMS], rhs[MAX_PARAMS], p[MAX_PARAMS] = { 0 };
     gdouble unit[MAX_PARAMS], inv[MAX_PARAMS], dots[ROW_REGRESSORS + 1], t, vv = 0.0, wsum = 0.0;
-    gdouble rss, var_y, var_x, rx, ry;
+    gdouble rss, var_y, var_x, rx, ry, inflation, rss0, dof;
     gint n = span->nparams, i, a, ra, pa;
 
     memset(normal, 0, sizeof(normal));
@@ -606,8 +681,13 @@ match_uncertainty(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion
     }
     rx = residual_correlation(sp, span, TRUE);
     ry = residual_correlation(sp, span, FALSE);
-    *sigma = sqrt(MAX(var_y, var_x)*(1.0 + rx)/(1.0 - rx)*(1.0 + ry)/(1.0 - ry));
-    return TRUE;
+    inflation = (1.0 + rx)/(1.0 - rx)*(1.0 + ry)/(1.0 - ry);
+    *sigma = sqrt(MAX(var_y, var_x)*inflation);
+    if (rss_held_at(sp, span, m, 0.0, 0.0, &rss0, &dof) && dof > 0.0) {
+        *sigma = MAX(*sigma, profile_sigma(sp, span, m, FALSE, rss0, rss0/dof*inflation));
+        *sigma = MAX(*sigma, profile_sigma(sp, span, m, TRUE, rss0, rss0/dof*inflation));
+    }
+    return isfinite(*sigma);
 }
 
 /* Gauss-Newton from (dy, dx) with nparams unknowns; TRUE and the motion
