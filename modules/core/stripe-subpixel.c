@@ -421,8 +421,11 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     gdouble *col = sp->column;
 
     /* Taps near the reference's edge would read what the filters moved
-     * there, as near the image's. */
-    if (top < sp->edge_margin || top + 3 >= sp->yres - sp->edge_margin)
+     * there, as near the image's.  The columns were prepared for shifts
+     * within reach of the anchor; the residual's profile steps beyond it
+     * (without this a step ran off the frame and overwrote the heap). */
+    if (top < sp->edge_margin || top + 3 >= sp->yres - sp->edge_margin
+        || span->col_lo + kx - 1 < sp->edge_margin || span->col_hi + kx + 2 > xres - sp->edge_margin)
         return FALSE;
     keys_weights(-shift_y - ky, 1.0 - (-shift_y - ky), wy);
     keys_weights(-shift_x - kx, 1.0 - (-shift_x - kx), wx);
