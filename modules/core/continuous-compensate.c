@@ -527,6 +527,62 @@ timing_or_default(const ScanTiming *timing, gint xres, gint yres,
     return default_timing;
 }
 
+/* How far row j stands out of its neighbours above and below somewhere
+ * along it: its largest local maximum or minimum along y.  G_MAXDOUBLE at
+ * the frame's edges. */
+static gdouble
+row_prominence(const gdouble *a, gint xres, gint yres, gint j)
+{
+    const gdouble *above, *row, *below;
+    gdouble best = 0.0, hi, lo;
+    gint c;
+
+    if (j < 1 || j >= yres - 1)
+        return G_MAXDOUBLE;
+    above = a + (j - 1)*(gsize)xres;
+    row = above + xres;
+    below = row + xres;
+    for (c = 0; c < xres; c++) {
+        if (!isfinite(above[c]) || !isfinite(row[c]) || !isfinite(below[c]))
+            continue;
+        hi = fmax(above[c], below[c]);
+        lo = fmin(above[c], below[c]);
+        best = fmax(best, fmax(row[c] - hi, lo - row[c]));
+    }
+    return best;
+}
+
+/* Nearest-neighbour resampling along y drops a source row wherever the
+ * drift compresses the frame (the rounded source rows of two output rows
+ * two apart), and which one is where the rounding happens to cross: a
+ * particle's peak on it is lost (2.6-4.1 % of its height in about one
+ * draw in a hundred of test-height-keeping).  Either neighbour of that row
+ * can be dropped instead, moving one output row by just over half a pixel
+ * (the rounding's own error), so the row that stands out least of the
+ * three is dropped.  Only between fractional source rows: whole-pixel
+ * drift keeps paper mode's rows exactly. */
+static void
+place_dropped_rows(ResamplePlan *plan, const gdouble *a, gint xres, gint yres)
+{
+    gdouble *rho = plan->rho, p0, p1, p2;
+    gint r, i0;
+
+    for (r = 0; r + 1 < yres; r++) {
+        if (isnan(rho[r]) || isnan(rho[r+1]) || rho[r] == floor(rho[r]) || rho[r+1] == floor(rho[r+1]))
+            continue;
+        i0 = (gint)floor(rho[r] + 0.5);
+        if ((gint)floor(rho[r+1] + 0.5) != i0 + 2 || i0 + 1 >= yres)
+            continue;
+        p0 = row_prominence(a, xres, yres, i0);
+        p1 = row_prominence(a, xres, yres, i0 + 1);
+        p2 = row_prominence(a, xres, yres, i0 + 2);
+        if (p0 < p1 && p0 <= p2)
+            rho[r] = i0 + 1;
+        else if (p2 < p1 && p2 < p0)
+            rho[r+1] = i0 + 1;
+    }
+}
+
 gboolean
 continuous_compensate_trajectory(const gdouble *a, gint xres, gint yres,
                                  const DriftTrajectory *trajectory,
@@ -549,6 +605,8 @@ continuous_compensate_trajectory(const gdouble *a, gint xres, gint yres,
     resample_plan_init(&plan, yres);
     ok = (plan_columns(trajectory, timing, &plan, error)
           && plan_rows(trajectory, timing, &plan, error));
+    if (ok && interpolation == GWY_INTERPOLATION_ROUND)
+        place_dropped_rows(&plan, a, xres, yres);
     if (ok)
         rebuild_image_with_missing(a, &output, interpolation);
     resample_plan_clear(&plan);
