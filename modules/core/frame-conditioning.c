@@ -409,19 +409,6 @@ blur(gdouble *data, gint xres, gint yres, gdouble sigma_x, gdouble sigma_y)
     blur_columns(data, xres, yres, sigma_y);
 }
 
-/* Whether every pixel is valid (weight 1). */
-static gboolean
-all_valid(const gdouble *weight, gsize n)
-{
-    gsize k;
-
-    for (k = 0; k < n; k++) {
-        if (weight[k] != 1.0)
-            return FALSE;
-    }
-    return TRUE;
-}
-
 /* The blur of a frame of ones is the product of the blurs of a row and of
  * a column of ones (the blur is separable): where every pixel is valid,
  * the normalisation costs two lines instead of a second blurred frame. */
@@ -448,16 +435,17 @@ divide_by_blurred_ones(gdouble *values, gint xres, gint yres, gdouble sigma_x, g
 }
 
 /* The normalised blur of the valid values, in values (data times weight
- * on entry): where no valid pixel is within reach, 0. */
+ * on entry): where no valid pixel is within reach, 0.  all_valid: every
+ * weight is 1 (the frame's valid_fraction says so). */
 static void
-normalised_blur(gdouble *values, const gdouble *weight, gint xres, gint yres,
+normalised_blur(gdouble *values, const gdouble *weight, gboolean all_valid, gint xres, gint yres,
                 gdouble sigma_x, gdouble sigma_y)
 {
     gsize k, n = (gsize)xres*yres;
     gdouble *weights;
 
     blur(values, xres, yres, sigma_x, sigma_y);
-    if (all_valid(weight, n)) {
+    if (all_valid) {
         divide_by_blurred_ones(values, xres, yres, sigma_x, sigma_y);
         return;
     }
@@ -529,12 +517,13 @@ band_pass(ConditionedFrame *frame, gdouble pixel_aspect, gdouble narrow)
     gsize k, n = (gsize)frame->xres*frame->yres;
     gdouble wide = wide_sigma(frame, pixel_aspect);
     gdouble *fine = g_new(gdouble, n), *coarse = frame->data;
+    gboolean all_valid = (frame->valid_fraction >= 1.0);
 
     for (k = 0; k < n; k++)
         coarse[k] *= frame->weight[k];
     memcpy(fine, coarse, n*sizeof(gdouble));
-    normalised_blur(fine, frame->weight, frame->xres, frame->yres, narrow, narrow);
-    normalised_blur(coarse, frame->weight, frame->xres, frame->yres, wide, wide/pixel_aspect);
+    normalised_blur(fine, frame->weight, all_valid, frame->xres, frame->yres, narrow, narrow);
+    normalised_blur(coarse, frame->weight, all_valid, frame->xres, frame->yres, wide, wide/pixel_aspect);
     for (k = 0; k < n; k++) {
         frame->data[k] = (fine[k] - coarse[k])*frame->weight[k];
         fine[k] *= frame->weight[k];
