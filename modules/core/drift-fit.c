@@ -17,9 +17,6 @@
 #define REFINED_MINIMA 12
 /* Distinct measured times a jump leaves on either side at least. */
 #define JUMP_MIN_SIDE 3
-/* A settling slower than half the series and an acceleration predicting
- * within this factor of it are the same curvature. */
-#define CURVATURE_TIE 1.05
 /* Oscillation periods whose cycles mostly cancel between the frames are not
  * searched (see oscillation_visibility). */
 #define MIN_VISIBILITY 0.25
@@ -1176,22 +1173,31 @@ drift_fit_select(const DriftMeasurement *meas, gint n,
     return drift_fit_select_kept(meas, n, options, fits, NULL);
 }
 
-/* Whether the acceleration fit predicts held-out groups within
- * CURVATURE_TIE of fit (or, without cross-validation, fits as well). */
+/* Whether a settling slower than half the series is more than curvature:
+ * over such a span the exponential differs from a parabola by a fraction of
+ * its bend, so it must beat the constant acceleration by the evidence any
+ * effect needs against constant drift (held-out gain cv_gain, explaining
+ * min_explained times its residual).  Registration errors of frames that
+ * share their content are correlated, and a shape of a few hundredths of a
+ * pixel is within them (test-hidden-effects seed 103000176: tau 183 s over
+ * 256 s, 0.27 nm beyond the acceleration at 0.59 nm residual). */
 static gboolean
-acceleration_as_good(const DriftFit *fits, const DriftModelType *types,
-                     gint n_types, const DriftFit *fit)
+settling_beyond_curvature(const DriftFit *fits, const DriftModelType *types,
+                          gint n_types, const DriftFit *fit,
+                          const DriftFitOptions *options)
 {
     gint i;
 
     for (i = 0; i < n_types; i++) {
         if (types[i] != DRIFT_MODEL_ACCELERATION || !fits[i].ok)
             continue;
-        if (isfinite(fits[i].cv_rms_nm) && isfinite(fit->cv_rms_nm))
-            return fits[i].cv_rms_nm <= CURVATURE_TIE*fit->cv_rms_nm;
-        return fits[i].rms_nm <= CURVATURE_TIE*fit->rms_nm;
+        if (explained_rms(fits + i, fit) < options->min_explained*fit->rms_nm)
+            return FALSE;
+        if (options->n_folds >= 2 && isfinite(fits[i].cv_rms_nm) && isfinite(fit->cv_rms_nm))
+            return fit->cv_rms_nm < (1.0 - options->cv_gain)*fits[i].cv_rms_nm;
+        return TRUE;
     }
-    return FALSE;
+    return TRUE;
 }
 
 /* The candidate models fitted by fit_every_model(), each on its own. */
@@ -1280,12 +1286,12 @@ drift_fit_select_kept(const DriftMeasurement *meas, gint n,
         if (types[i] == DRIFT_MODEL_OSCILLATION && fits[i].at_limit > 0)
             continue;
         /* A settling slower than the series is curvature, which a constant
-         * acceleration says with fewer parameters; so is one slower than
-         * half the series that an acceleration predicts as well. */
+         * acceleration says with fewer parameters; so, mostly, is one slower
+         * than half the series. */
         if (types[i] == DRIFT_MODEL_SETTLING
             && (fits[i].nonlinear > span
                 || (fits[i].nonlinear > 0.5*span
-                    && acceleration_as_good(fits, types, n_types, fits + i))))
+                    && !settling_beyond_curvature(fits, types, n_types, fits + i, options))))
             continue;
         if (inone >= 0 && fits[inone].ok
             && (fits[inone].bic - fits[i].bic < options->bic_margin
