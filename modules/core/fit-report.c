@@ -10,6 +10,17 @@
 #include "json-values.h"
 #include "fit-report.h"
 
+/* A residual below this part of a pixel is never a failed registration. */
+#define OUTLIER_FLOOR_PX 0.25
+
+void
+fit_report_options_for_series(DriftFitOptions *options, const FrameSeries *series)
+{
+    if (!(options->outlier_floor_nm > 0.0) && series->n_frames > 0)
+        options->outlier_floor_nm = OUTLIER_FLOOR_PX*1e9*MIN(frame_series_dx(series),
+                                                              frame_series_dy(series));
+}
+
 gboolean
 fit_report_compute(const FrameSeries *series,
                    const DisplacementOptions *doptions,
@@ -23,6 +34,7 @@ fit_report_compute(const FrameSeries *series,
         report->fit_options = *foptions;
     else
         drift_fit_options_init(&report->fit_options);
+    fit_report_options_for_series(&report->fit_options, series);
     report->meas = displacement_measure_series(series, doptions,
                                                &report->n_meas);
     drift_fit_candidates(&report->n_fits);

@@ -28,6 +28,10 @@ typedef struct {
     DriftFitOptions fit_options;  /* the options the fits were made with */
 } FitReport;
 
+/* Sets what options leaves to the series (the outlier floor from its
+ * pixel size). */
+void      fit_report_options_for_series(DriftFitOptions *options,
+                                        const FrameSeries *series);
 /* Measures the displacements of the series and fits every model. */
 gboolean  fit_report_compute  (const FrameSeries *series,
                                const DisplacementOptions *doptions,

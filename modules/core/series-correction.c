@@ -1166,6 +1166,7 @@ prepare_options(const FrameSeries *series, const DisplacementOptions *doptions,
         *f = *foptions;
     else
         drift_fit_options_init(f);
+    fit_report_options_for_series(f, series);
     if (f->min_period <= 0.0)
         f->min_period = drift_fit_min_period(timing->line_time, timing->yres,
                                              d->n_blocks);
