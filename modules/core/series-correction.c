@@ -174,6 +174,23 @@ plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
     return -1;
 }
 
+/* Every how many measurements a long series fits one: about count/most,
+ * sharing no factor with the blocks per pair, so that the subset takes
+ * every block of the frame in turn (a stride of 2 with 16 blocks took
+ * the even blocks of every pair and never the last one). */
+static gint
+subset_stride(gint count, gint most, gint n_blocks)
+{
+    gint stride = MAX((count + most - 1)/most, 1), a, b, t;
+
+    for (;; stride++) {
+        for (a = stride, b = MAX(n_blocks, 1); b; t = a % b, a = b, b = t)
+            ;
+        if (a == 1)
+            return stride;
+    }
+}
+
 /* The fit of every model to the measurements whose weight in `weights` is
  * positive; measurements the fit cuts as gross outliers get weight 0.  A
  * long series fits every stride-th of them only (FIT_MAX_MEASUREMENTS in
@@ -182,7 +199,7 @@ plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
  * and a few thousand measurements determine a handful of parameters as
  * well as fifty thousand. */
 static gboolean
-fit_models(SeriesCorrection *correction, const gdouble *weights)
+fit_models(SeriesCorrection *correction, const gdouble *weights, gint n_blocks)
 {
     FitReport *fit = &correction->fit;
     gboolean *kept = g_new(gboolean, MAX(fit->n_meas, 1));
@@ -190,7 +207,7 @@ fit_models(SeriesCorrection *correction, const gdouble *weights)
 
     for (i = 0; i < fit->n_meas; i++)
         used += (weights[i] > 0.0);
-    stride = MAX((used + FIT_MAX_MEASUREMENTS - 1)/FIT_MAX_MEASUREMENTS, 1);
+    stride = subset_stride(used, FIT_MAX_MEASUREMENTS, n_blocks);
     for (i = used = 0; i < fit->n_meas; i++) {
         fit->meas[i].weight = weights[i];
         if (weights[i] > 0.0 && used++ % stride)
@@ -1197,7 +1214,7 @@ measure_and_fit(SeriesCorrection *correction, const FrameSeries *series,
     }
     /* Frames that disagree with the rest are found first, then the
      * trajectory is fitted without them. */
-    if (!(ok = fit_models(correction, *registered)))
+    if (!(ok = fit_models(correction, *registered, d->n_blocks)))
         return FALSE;
     judge_frames(correction, *registered);
     flag_unregistered(correction);
@@ -1207,9 +1224,9 @@ measure_and_fit(SeriesCorrection *correction, const FrameSeries *series,
         || series->n_frames < LEAVE_OUT_MIN_OTHERS + 1)
         flag_outlying(correction);
     if (drop_flagged(correction, *registered, weights)
-        && !fit_models(correction, weights)) {
+        && !fit_models(correction, weights, d->n_blocks)) {
         /* Too little was left: keep every frame in the fit. */
-        ok = fit_models(correction, *registered);
+        ok = fit_models(correction, *registered, d->n_blocks);
     }
     return ok;
 }
