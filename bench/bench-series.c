@@ -10,6 +10,7 @@
 #include "config.h"
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <math.h>
 #include <libgwyddion/gwyddion.h>
 #include <libprocess/gwyprocess.h>
@@ -35,6 +36,7 @@
 #define OSC_AMPLITUDE 0.3       /* px */
 #define OSC_PERIOD 5.0          /* s, about two frames */
 #define NOISE 0.03              /* of the surface's RMS */
+#define MAX_BLOCKS 64
 
 static void
 true_drift(gdouble t, gdouble *px, gdouble *py)
@@ -326,6 +328,43 @@ print_time(const gchar *name, gdouble first, const gchar *first_name,
            name, total, 1e3*total/n, first_name, first, second);
 }
 
+/* The mean error of the measurements of each block position (px against
+ * the true drift at their times), and the worst of them: a bias of one
+ * block position that the pairs share becomes a velocity error of the
+ * fit, which a long series integrates. */
+static void
+print_block_bias(const SeriesCorrection *correction, const FrameSeries *series)
+{
+    gdouble sum[2][MAX_BLOCKS], count[MAX_BLOCKS], step = frame_series_dx(series), worst = 0.0;
+    gint i, g, worst_g = -1;
+
+    memset(sum, 0, sizeof(sum));
+    memset(count, 0, sizeof(count));
+    for (i = 0; i < correction->fit.n_meas; i++) {
+        const DriftMeasurement *m = correction->fit.meas + i;
+        gdouble xa, ya, xb, yb;
+
+        if (!(m->weight > 0.0) || m->group < 0 || m->group >= MAX_BLOCKS)
+            continue;
+        true_drift(m->t_a, &xa, &ya);
+        true_drift(m->t_b, &xb, &yb);
+        sum[0][m->group] += m->dx/step - (xa - xb);
+        sum[1][m->group] += m->dy/step - (ya - yb);
+        count[m->group]++;
+    }
+    for (g = 0; g < MAX_BLOCKS; g++) {
+        gdouble e = count[g] ? hypot(sum[0][g], sum[1][g])/count[g] : 0.0;
+
+        if (e > worst) {
+            worst = e;
+            worst_g = g;
+        }
+    }
+    if (worst_g >= 0)
+        printf("  worst block position: %d, mean error (%.4f, %.4f) px over %.0f fitted measurements\n",
+               worst_g, sum[0][worst_g]/count[worst_g], sum[1][worst_g]/count[worst_g], count[worst_g]);
+}
+
 static void
 print_verdicts(const SeriesCorrection *correction)
 {
@@ -338,6 +377,17 @@ print_verdicts(const SeriesCorrection *correction)
            correction->fit.chosen >= 0
            ? drift_model_type_name(correction->fit.fits[correction->fit.chosen].type) : "(none)",
            flagged, correction->typical_px);
+    if (correction->fit.chosen >= 0) {
+        const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
+        gdouble nm_x = 1e9*correction->xstep, nm_y = 1e9*correction->ystep;
+
+        /* The fit's own numbers beside the truth, so that an error of the
+         * trajectory can be told from a wrong model or period. */
+        printf("  fitted velocity (%.4f, %.4f) px/s (true %.2f, %.2f), nonlinear parameter %.4f s "
+               "(true period %.1f s), residual %.4f px; trajectory from the %s\n",
+               fit->coef[0][0]/nm_x, fit->coef[1][0]/nm_y, VX, VY, fit->nonlinear, OSC_PERIOD,
+               fit->rms_nm/nm_x, correction->use_smooth ? "flexible fit" : "model");
+    }
     for (w = 0; correction->warnings && w < MIN(correction->warnings->len, 5); w++)
         printf("  warning: %s\n", (const gchar*)g_ptr_array_index(correction->warnings, w));
 }
@@ -392,6 +442,7 @@ main(int argc, char *argv[])
         printf("series trajectory RMS error        %.3f px (vs p(t) - p(0))\n",
                ours_rms(&correction, series));
         print_verdicts(&correction);
+        print_block_bias(&correction, series);
         series_correction_clear(&correction);
     }
     print_rigid_accuracy(dx, dy, series);

@@ -870,8 +870,6 @@ registration_triangle(const SeriesSpec *spec, const gchar *measured,
         displacement_register_blocks(gwy_data_field_get_data_const(fa->field),
                                      gwy_data_field_get_data_const(fb->field),
                                      xres, yres, N_BLOCKS, &dopt,
-                                     frame_series_dy(series)
-                                     /frame_series_dx(series),
                                      p == 2 ? guess : NULL,
                                      dx[p], dy[p], score[p], whole[p]);
     }
@@ -1502,8 +1500,8 @@ write_header(GString *md)
         "every frame is registered against every earlier frame with the "
         "project's stripe registration (modules/core/stripe-registration.c: "
         "zero-mean normalised cross-correlation over the overlap, searched "
-        "around the frame's overall shift, chained across frames; frames "
-        "line-levelled and blurred by %.3g %% of the frame first; a block "
+        "around the frame's overall shift, chained across frames, on frames "
+        "conditioned as the registration conditions raw channels; a block "
         "counts only when its peak stands clear of rival peaks and "
         "correlates at least %.2g), which measures p(t_a) - p(t_b) at the "
         "two scan times of its content (conventions.md).  All "
@@ -1524,7 +1522,7 @@ write_header(GString *md)
         "(paper_compensate, drift rounded by drift_px_round) and "
         "continuous mode (continuous_compensate_trajectory with the "
         "module's sub-pixel B-spline interpolation).\n",
-        dopt.n_blocks, 100.0*dopt.smooth, dopt.min_score,
+        dopt.n_blocks, dopt.min_score,
         fopt.outlier_sigmas, fopt.n_folds, fopt.bic_margin,
         100.0*fopt.cv_gain, fopt.min_explained, fopt.min_cycles);
 }

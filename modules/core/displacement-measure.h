@@ -25,8 +25,6 @@ typedef struct {
     gint pair_reach;        /* frames are registered against the earlier
                                frames up to this many apart; 0 (default):
                                every earlier frame */
-    gdouble smooth;         /* Gaussian blur before registration, fraction of
-                               the smaller physical side (default 0.01) */
 } DisplacementOptions;
 
 void               displacement_options_init (DisplacementOptions *options);
@@ -36,8 +34,8 @@ void               displacement_options_init (DisplacementOptions *options);
  * rows, each giving (dx, dy) px in the drift-table convention (content of the
  * reference at (r, c) appears in the image at (r + dy, c + dx)) and a score
  * (the normalised correlation at the peak of a block the registration
- * accepted, else 0).  Frames are levelled line by line and blurred first;
- * pixel_aspect is the physical dy/dx of a pixel.  The frame's overall shift
+ * accepted, else 0).  The raw frames go to the registration's own
+ * conditioning (raw-channel artefacts, missing pixels).  The frame's overall shift
  * (the whole frame as one stripe) is searched around guess (px, may be NULL:
  * around 0, within max_shift) and stored in global (dx, dy, correlation; may
  * be NULL), to the correlation map's resolution only; the blocks are
@@ -48,7 +46,6 @@ void               displacement_register_blocks(const gdouble *image,
                                                 gint yres,
                                                 gint n,
                                                 const DisplacementOptions *options,
-                                                gdouble pixel_aspect,
                                                 const gdouble *guess,
                                                 gdouble *dx,
                                                 gdouble *dy,

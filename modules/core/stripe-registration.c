@@ -1125,10 +1125,11 @@ static gboolean
 measure_around_pair(const StripeRegistrationFrame *image,
                     const StripeRegistrationFrame *reference, gint n,
                     const gdouble *predicted_dx, const gdouble *predicted_dy, gdouble radius_px,
-                    gdouble min_score, gboolean polish, StripeShift *shifts, GError **error)
+                    gdouble min_narrow, gdouble min_score, gboolean polish, StripeShift *shifts,
+                    GError **error)
 {
-    /* The same band as condition_pair() gives the two frames. */
-    gdouble narrow = MAX(image->noise_scale, reference->noise_scale);
+    /* The same band as condition_pair() gives the two frames, or wider. */
+    gdouble narrow = MAX(MAX(image->noise_scale, reference->noise_scale), min_narrow);
     ConditionedFrame *made_image, *made_reference;
     const ConditionedFrame *cimage, *creference;
     gboolean ok;
@@ -1146,10 +1147,10 @@ gboolean
 stripe_registration_frame_shift(const StripeRegistrationFrame *image,
                                 const StripeRegistrationFrame *reference,
                                 gdouble predicted_dx, gdouble predicted_dy, gdouble radius_px,
-                                StripeShift *shift)
+                                gdouble min_narrow, StripeShift *shift)
 {
     g_return_val_if_fail(image && reference && shift, FALSE);
-    return measure_around_pair(image, reference, 1, &predicted_dx, &predicted_dy, radius_px,
+    return measure_around_pair(image, reference, 1, &predicted_dx, &predicted_dy, radius_px, min_narrow,
                                STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, FALSE, shift, NULL);
 }
 
@@ -1157,12 +1158,12 @@ gboolean
 stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
                                           const StripeRegistrationFrame *reference, gint n,
                                           const gdouble *predicted_dx, const gdouble *predicted_dy,
-                                          gdouble radius_px, gdouble min_score,
+                                          gdouble radius_px, gdouble min_narrow, gdouble min_score,
                                           StripeShift *shifts, GError **error)
 {
     g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
     return measure_around_pair(image, reference, n, predicted_dx, predicted_dy, radius_px,
-                               min_score, TRUE, shifts, error);
+                               min_narrow, min_score, TRUE, shifts, error);
 }
 
 gboolean

@@ -143,13 +143,15 @@ StripeRegistrationFrame* stripe_registration_frame_new(const gdouble *data,
 void         stripe_registration_frame_free(StripeRegistrationFrame *frame);
 
 /* stripe_registration_measure_around() for two such frames, conditioned
- * as it would condition them. */
+ * as it would condition them, with a narrow blur of at least min_narrow
+ * px (0: the frames' own noise scale). */
 gboolean     stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
                                                        const StripeRegistrationFrame *reference,
                                                        gint n,
                                                        const gdouble *predicted_dx,
                                                        const gdouble *predicted_dy,
                                                        gdouble radius_px,
+                                                       gdouble min_narrow,
                                                        gdouble min_score,
                                                        StripeShift *shifts,
                                                        GError **error);
@@ -158,12 +160,13 @@ gboolean     stripe_registration_measure_around_frames(const StripeRegistrationF
  * predicted one, to the correlation map's resolution (its peak refined by
  * a quadratic), without the sub-pixel match, which would cost as much as
  * all the stripes' together: where to search the stripes.  shift->peak
- * is the correlation at the peak. */
+ * is the correlation at the peak.  min_narrow as above. */
 gboolean     stripe_registration_frame_shift(const StripeRegistrationFrame *image,
                                              const StripeRegistrationFrame *reference,
                                              gdouble predicted_dx,
                                              gdouble predicted_dy,
                                              gdouble radius_px,
+                                             gdouble min_narrow,
                                              StripeShift *shift);
 
 /* The same for two channels; refuses (with a message giving both sizes)
