@@ -96,6 +96,61 @@ START_TEST(test_random_drift_pairs)
 }
 END_TEST
 
+/* Missing pixels in the reference read as 0 in the conditioned frames;
+ * the sub-pixel match must leave out the pixels whose reference sample
+ * reaches them.  A hole of 20-40 px at a random place in the reference of
+ * each pair, under the random drift: the stripes whose content meets it
+ * are held to what the others give (before the fix: rms 0.20 px, 0.84 px
+ * at worst over 20 pairs, against 0.036 px elsewhere). */
+START_TEST(test_reference_hole)
+{
+    enum { N = 16, PAIRS = 6 };
+    FramePairSpec spec;
+    GRand *rng = g_rand_new_with_seed(test_seed ^ 0x401eu);
+    gdouble sum2 = 0.0, worst = 0.0;
+    gint i, s, r, c, met = 0, given = 0;
+
+    frame_pair_spec_init(&spec);
+    for (i = 0; i < PAIRS; i++) {
+        FramePair *pair = frame_pair_generate(&spec, test_seed + 104729u*i);
+        gint w = g_rand_int_range(rng, 20, 41), h = g_rand_int_range(rng, 20, 41);
+        gint r0 = g_rand_int_range(rng, 40, pair->yres - 40 - h), c0 = g_rand_int_range(rng, 40, pair->xres - 40 - w);
+        StripeShift shifts[N];
+        gdouble tx[N], ty[N];
+
+        for (r = r0; r < r0 + h; r++) {
+            for (c = c0; c < c0 + w; c++)
+                pair->reference[r*pair->xres + c] = NAN;
+        }
+        register_pair(pair, N, shifts);
+        frame_pair_stripe_truth(pair, N, tx, ty);
+        for (s = 0; s < N; s++) {
+            gint first = s*pair->yres/N, end = (s + 1)*pair->yres/N;
+            gdouble e = hypot(shifts[s].dx - tx[s], shifts[s].dy - ty[s]);
+
+            /* The stripe's content lies ty rows higher in the reference. */
+            if (first - ty[s] - 2 >= r0 + h || end - ty[s] + 2 <= r0)
+                continue;
+            met++;
+            if (!shifts[s].accepted)
+                continue;
+            given++;
+            sum2 += e*e;
+            worst = MAX(worst, e);
+        }
+        frame_pair_free(pair);
+    }
+    g_rand_free(rng);
+    printf("reference holes: %d of %d stripes meeting them given, rms %.4f px, worst %.4f px\n",
+           given, met, given ? sqrt(sum2/given) : 0.0, worst);
+    ck_assert_msg(given >= 0.8*met, "only %d of %d stripes meeting a hole given (seed %u)", given, met,
+                  test_seed);
+    ck_assert_msg(sqrt(sum2/MAX(given, 1)) <= 0.08, "rms %g px on stripes meeting a hole (seed %u)",
+                  sqrt(sum2/MAX(given, 1)), test_seed);
+    ck_assert_msg(worst <= 0.3, "a stripe meeting a hole %g px off (seed %u)", worst, test_seed);
+}
+END_TEST
+
 /* The one-call path the tool and the module use gives a px table. */
 START_TEST(test_table_for_fields)
 {
@@ -714,6 +769,7 @@ registration_suite(void)
     Suite *suite = test_suite_new("stripe-registration", "core", &tc);
 
     tcase_add_test(tc, test_random_drift_pairs);
+    tcase_add_test(tc, test_reference_hole);
     tcase_add_test(tc, test_non_square_images);
     tcase_add_test(tc, test_integer_shift);
     tcase_add_test(tc, test_sign_convention);

@@ -156,6 +156,14 @@ level_max_height(gint n, gint yres)
     return h;
 }
 
+/* The reference's validity for the sub-pixel match; NULL when every
+ * pixel is valid (no check needed). */
+static const gdouble*
+reference_validity(const ConditionedFrame *reference)
+{
+    return (reference->valid_fraction >= 1.0) ? NULL : reference->weight;
+}
+
 static gint
 edge_margin(const ConditionedFrame *frame)
 {
@@ -193,7 +201,7 @@ level_init(Level *level, const ConditionedFrame *image, const ConditionedFrame *
          * edges, where the band-pass cannot. */
         level->subpixel = stripe_subpixel_new(image->levelled ? image->levelled : image->data,
                                               reference->levelled ? reference->levelled : reference->data,
-                                              image->weight,
+                                              image->weight, reference_validity(reference),
                                               image->xres, image->yres, level->window, h,
                                               edge_margin(image));
         /* Where pixel noise or what differs between the frames beyond the
@@ -201,6 +209,7 @@ level_init(Level *level, const ConditionedFrame *image, const ConditionedFrame *
          * match. */
         if (image->levelled && reference->levelled)
             level->subpixel_band = stripe_subpixel_new(image->data, reference->data, image->weight,
+                                                       reference_validity(reference),
                                                        image->xres, image->yres, level->window, h,
                                                        edge_margin(image));
     }

@@ -88,6 +88,7 @@ struct _StripeSubpixel {
     const gdouble *reference;
     const gdouble *window;
     const gdouble *weight;    /* image validity, NULL: all valid */
+    const gdouble *ref_weight; /* reference validity, NULL: all valid */
     gint xres;
     gint yres;
     gint max_height;
@@ -101,6 +102,14 @@ struct _StripeSubpixel {
                                  products with the constant, uncentred */
     gdouble *row_normal;      /* max_height x ROW_TERMS: each row's products
                                  of the row regressors, upper triangle */
+    gdouble *row_raw;         /* the same before the row's offset is
+                                 eliminated (centre_row_terms) */
+    gdouble *row_adjusted;    /* max_height x ROW_TERMS and x ROW_REGRESSORS:*/
+    gdouble *offset_adjusted; /* a row's terms and offsets without the
+                                 pixels whose reference sample reaches a
+                                 missing pixel at the current shift */
+    gdouble *column_valid;    /* xres: the reference's validity along y */
+    gdouble *used_weight;     /* xres: the current row's weights as used */
     gdouble *column;          /* xres: reference interpolated along y */
     gdouble *trend;           /* TREND_TERMS x xres: the x trend's terms */
     gdouble *residual;        /* max_height x xres: weighted residual of the
@@ -125,7 +134,8 @@ typedef struct {
 
 StripeSubpixel*
 stripe_subpixel_new(const gdouble *image, const gdouble *reference, const gdouble *weight,
-                    gint xres, gint yres, const gdouble *window, gint max_height, gint edge_margin)
+                    const gdouble *ref_weight, gint xres, gint yres, const gdouble *window,
+                    gint max_height, gint edge_margin)
 {
     StripeSubpixel *sp;
     gsize plane;
@@ -137,6 +147,7 @@ stripe_subpixel_new(const gdouble *image, const gdouble *reference, const gdoubl
     sp->reference = reference;
     sp->window = window;
     sp->weight = weight;
+    sp->ref_weight = ref_weight;
     sp->xres = xres;
     sp->yres = yres;
     sp->max_height = max_height;
@@ -149,7 +160,12 @@ stripe_subpixel_new(const gdouble *image, const gdouble *reference, const gdoubl
     sp->weighted_grad_x = g_new(gdouble, plane);
     sp->row_normal = g_new(gdouble, (gsize)max_height*ROW_TERMS);
     sp->row_offset = g_new(gdouble, (gsize)max_height*ROW_REGRESSORS);
+    sp->row_raw = g_new(gdouble, (gsize)max_height*ROW_TERMS);
+    sp->row_adjusted = g_new(gdouble, (gsize)max_height*ROW_TERMS);
+    sp->offset_adjusted = g_new(gdouble, (gsize)max_height*ROW_REGRESSORS);
     sp->column = g_new(gdouble, xres);
+    sp->column_valid = g_new(gdouble, xres);
+    sp->used_weight = g_new(gdouble, xres);
     sp->trend = g_new(gdouble, TREND_TERMS*(gsize)xres);
     for (gint c = 0; c < xres; c++) {
         gdouble u = (xres > 1) ? 2.0*c/(xres - 1) - 1.0 : 0.0, p0 = 1.0, p1 = u, p2;
@@ -178,6 +194,11 @@ stripe_subpixel_free(StripeSubpixel *sp)
     g_free(sp->weighted_grad_x);
     g_free(sp->row_normal);
     g_free(sp->row_offset);
+    g_free(sp->row_raw);
+    g_free(sp->row_adjusted);
+    g_free(sp->offset_adjusted);
+    g_free(sp->column_valid);
+    g_free(sp->used_weight);
     g_free(sp->column);
     g_free(sp->trend);
     g_free(sp->row_dropped);
@@ -223,9 +244,8 @@ tap_validity(const StripeSubpixel *sp, gint r, gint c)
  * (the row's weight) stays, with no coupling, so the common offset the
  * normal matrix still carries comes out 0. */
 static void
-centre_row_terms(StripeSubpixel *sp, gint i)
+centre_terms(gdouble *terms, gdouble *offset)
 {
-    gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS, *offset = sp->row_offset + (gsize)i*ROW_REGRESSORS;
     gdouble w1 = terms[row_term(1, 1)];
     gint a, b;
 
@@ -241,6 +261,14 @@ centre_row_terms(StripeSubpixel *sp, gint i)
                 terms[row_term(a, b)] = 0.0;
         }
     }
+}
+
+static void
+centre_row_terms(StripeSubpixel *sp, gint i)
+{
+    memcpy(sp->row_raw + (gsize)i*ROW_TERMS, sp->row_normal + (gsize)i*ROW_TERMS,
+           ROW_TERMS*sizeof(gdouble));
+    centre_terms(sp->row_normal + (gsize)i*ROW_TERMS, sp->row_offset + (gsize)i*ROW_REGRESSORS);
 }
 
 /* Row i's weighted stripe and gradients, and its products of the row
@@ -292,10 +320,9 @@ row_regressor_of(gint a, gint *t_power)
 
 /* Adds row i's share (at offset t from the centre) to the normal matrix. */
 static void
-add_row_normal(const StripeSubpixel *sp, gint nparams, gint i, gdouble t,
+add_row_normal(const gdouble *terms, gint nparams, gdouble t,
                gdouble normal[MAX_PARAMS][MAX_PARAMS])
 {
-    const gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS;
     gdouble power[3] = { 1.0, t, t*t };
     gint a, b, ra, rb, pa, pb;
 
@@ -356,9 +383,8 @@ solve_normal(gdouble normal[MAX_PARAMS][MAX_PARAMS], const gdouble *rhs, gint n,
  * its regressors (centre_row_terms): dots[1] becomes 0 and
  * dots[ROW_REGRESSORS] the sum of the centred samples' squares. */
 static void
-centre_row_dots(const StripeSubpixel *sp, gint i, const gdouble *sums, gdouble *dots)
+centre_row_dots(const gdouble *offset, const gdouble *sums, gdouble *dots)
 {
-    const gdouble *offset = sp->row_offset + (gsize)i*ROW_REGRESSORS;
     gdouble w1 = offset[1], mean = (w1 > 0.0) ? sums[1]/w1 : 0.0;
     gint a;
 
@@ -367,12 +393,13 @@ centre_row_dots(const StripeSubpixel *sp, gint i, const gdouble *sums, gdouble *
     dots[ROW_REGRESSORS] = sums[ROW_REGRESSORS] - sums[1]*mean;
 }
 
-/* The row's residual without its own offset: its weighted mean removed. */
+/* The row's residual without its own offset: its weighted mean removed
+ * (the weights as the row was matched, in used_weight). */
 static void
 centre_row_residual(StripeSubpixel *sp, const StripeSpan *span, gint i)
 {
     gdouble *res = sp->residual + (gsize)i*sp->xres;
-    const gdouble *pw = sp->pixel_weight + (gsize)i*sp->xres;
+    const gdouble *pw = sp->used_weight;
     gdouble sr = 0.0, sw = 0.0, mean;
     gint c;
 
@@ -401,13 +428,63 @@ row_model(const StripeSubpixel *sp, const gdouble *p, gint i, gint c, gdouble t)
             + (p[3] + t*p[BASE_PARAMS + 1])*sp->weighted_grad_x[k]);
 }
 
+/* Subtracts pixel c's share from a row's uncentred terms (terms, offset
+ * regressor products as prepare_row sums them). */
+static void
+remove_pixel_terms(const StripeSubpixel *sp, gint i, gint c, gdouble *terms)
+{
+    gsize k = (gsize)i*sp->xres + c;
+    gdouble w = sp->pixel_weight[k], wreg[ROW_REGRESSORS];
+    gint a, b;
+
+    if (!(w > 0.0))
+        return;
+    wreg[0] = sp->weighted_value[k];
+    wreg[1] = w;
+    wreg[2] = sp->weighted_grad_y[k];
+    wreg[3] = sp->weighted_grad_x[k];
+    for (a = 0; a < TREND_TERMS; a++)
+        wreg[4 + a] = w*sp->trend[a*sp->xres + c];
+    for (a = 0; a < ROW_REGRESSORS; a++) {
+        for (b = a; b < ROW_REGRESSORS; b++)
+            terms[row_term(a, b)] -= wreg[a]*wreg[b]/w;
+    }
+}
+
+/* Whether the reference sample of every column of the row is made of
+ * valid pixels only: column_valid[c] gets the product of the validity of
+ * the four reference rows from top on (c in [lo, hi)). */
+static gboolean
+reference_columns_valid(StripeSubpixel *sp, gint top, gint lo, gint hi)
+{
+    const gdouble *w0, *w1, *w2, *w3;
+    gboolean all = TRUE;
+    gint c;
+
+    if (!sp->ref_weight)
+        return TRUE;
+    w0 = sp->ref_weight + (gsize)top*sp->xres;
+    w1 = w0 + sp->xres;
+    w2 = w1 + sp->xres;
+    w3 = w2 + sp->xres;
+    for (c = lo; c < hi; c++) {
+        sp->column_valid[c] = w0[c]*w1[c]*w2[c]*w3[c];
+        all = all && sp->column_valid[c] > 0.0;
+    }
+    return all;
+}
+
 /* Dot products of row i's weighted regressors with the reference sampled
  * at (r - shift_y, c - shift_x), and the weighted sum of its squares;
- * FALSE if the taps leave the reference.  With fit (all MAX_PARAMS
+ * FALSE if the taps leave the reference.  *terms gets the row's centred
+ * products of its regressors to go with them: its own, or, where some of
+ * its pixels' samples reach missing reference pixels, those of the others
+ * (a missing pixel reads as 0, which pulled stripes crossing a hole in the
+ * reference 0.2 px off, 0.8 px at worst).  With fit (all MAX_PARAMS
  * parameters), the weighted residual of the row is kept too. */
 static gboolean
 match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, gdouble shift_x,
-          const gdouble *fit, gdouble t, gdouble *dots)
+          const gdouble *fit, gdouble t, gdouble *dots, const gdouble **terms)
 {
     gint xres = sp->xres, ky = (gint)floor(-shift_y), kx = (gint)floor(-shift_x);
     gint top = span->first + i + ky - 1, c;
@@ -416,7 +493,9 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     const gdouble *wv = sp->weighted_value + (gsize)i*xres;
     const gdouble *wgy = sp->weighted_grad_y + (gsize)i*xres;
     const gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
-    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], sums[ROW_REGRESSORS + 1], v, pv;
+    const gdouble *offset = sp->row_offset + (gsize)i*ROW_REGRESSORS, *valid;
+    gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], sums[ROW_REGRESSORS + 1], v, pv, w;
+    gdouble *adjusted = NULL;
     gint a;
     gdouble *col = sp->column;
 
@@ -427,6 +506,12 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     if (top < sp->edge_margin || top + 3 >= sp->yres - sp->edge_margin
         || span->col_lo + kx - 1 < sp->edge_margin || span->col_hi + kx + 2 > xres - sp->edge_margin)
         return FALSE;
+    *terms = sp->row_normal + (gsize)i*ROW_TERMS;
+    if (!reference_columns_valid(sp, top, span->col_lo + kx - 1, span->col_hi + kx + 2)) {
+        adjusted = sp->row_adjusted + (gsize)i*ROW_TERMS;
+        memcpy(adjusted, sp->row_raw + (gsize)i*ROW_TERMS, ROW_TERMS*sizeof(gdouble));
+    }
+    valid = sp->column_valid + kx;
     keys_weights(-shift_y - ky, 1.0 - (-shift_y - ky), wy);
     keys_weights(-shift_x - kx, 1.0 - (-shift_x - kx), wx);
     r0 = sp->reference + (gsize)top*xres;
@@ -439,8 +524,17 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     col += kx;
     memset(sums, 0, sizeof(sums));
     for (c = span->col_lo; c < span->col_hi; c++) {
+        w = pw[c];
+        if (adjusted && !(valid[c-1]*valid[c]*valid[c+1]*valid[c+2] > 0.0)) {
+            remove_pixel_terms(sp, i, c, adjusted);
+            sp->used_weight[c] = 0.0;
+            if (fit)
+                sp->residual[(gsize)i*xres + c] = 0.0;
+            continue;
+        }
+        sp->used_weight[c] = w;
         v = wx[0]*col[c-1] + wx[1]*col[c] + wx[2]*col[c+1] + wx[3]*col[c+2];
-        pv = pw[c]*v;
+        pv = w*v;
         sums[0] += wv[c]*v;
         sums[1] += pv;
         sums[2] += wgy[c]*v;
@@ -451,7 +545,14 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
         if (fit)
             sp->residual[(gsize)i*xres + c] = pv - row_model(sp, fit, i, c, t);
     }
-    centre_row_dots(sp, i, sums, dots);
+    if (adjusted) {
+        gdouble *adjusted_offset = sp->offset_adjusted + (gsize)i*ROW_REGRESSORS;
+
+        centre_terms(adjusted, adjusted_offset);
+        offset = adjusted_offset;
+        *terms = adjusted;
+    }
+    centre_row_dots(offset, sums, dots);
     if (fit)
         centre_row_residual(sp, span, i);
     return TRUE;
@@ -464,6 +565,7 @@ static gboolean
 match_step(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, StripeMotion *step)
 {
     gdouble normal[MAX_PARAMS][MAX_PARAMS], rhs[MAX_PARAMS], p[MAX_PARAMS], dots[ROW_REGRESSORS + 1], t;
+    const gdouble *terms;
     gint n = span->nparams, i, a, ra, pa, used = 0;
 
     memset(normal, 0, sizeof(normal));
@@ -475,7 +577,7 @@ match_step(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, St
          * the two sets' matches. */
         if (sp->row_dropped[i])
             continue;
-        if (!match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, NULL, t, dots)) {
+        if (!match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, NULL, t, dots, &terms)) {
             sp->row_dropped[i] = TRUE;
             continue;
         }
@@ -484,7 +586,7 @@ match_step(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, St
             ra = row_regressor_of(a, &pa);
             rhs[a] += (pa ? t : 1.0)*dots[ra];
         }
-        add_row_normal(sp, n, i, t, normal);
+        add_row_normal(terms, n, t, normal);
     }
     if (used < MAX(2, (gint)ceil(MIN_ROWS_FRACTION*span->height)))
         return FALSE;
@@ -577,12 +679,12 @@ rss_held_at(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, g
     memset(normal, 0, sizeof(normal));
     memset(rhs, 0, sizeof(rhs));
     for (i = 0; i < span->height; i++) {
-        const gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS;
+        const gdouble *terms;
 
         if (sp->row_dropped[i])
             continue;
         t = i - span->centre;
-        if (!match_row(sp, span, i, m->dy + ky + m->vy*t, m->dx + kx + m->vx*t, NULL, t, dots))
+        if (!match_row(sp, span, i, m->dy + ky + m->vy*t, m->dx + kx + m->vx*t, NULL, t, dots, &terms))
             return FALSE;
         for (a = 0; a < HELD; a++) {
             rhs[a] += dots[reg[a]];
@@ -647,6 +749,7 @@ match_uncertainty(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion
     gdouble normal[MAX_PARAMS][MAX_PARAMS], rhs[MAX_PARAMS], p[MAX_PARAMS] = { 0 };
     gdouble unit[MAX_PARAMS], inv[MAX_PARAMS], dots[ROW_REGRESSORS + 1], t, vv = 0.0, wsum = 0.0;
     gdouble rss, var_y, var_x, rx, ry, inflation, rss0, dof;
+    const gdouble *terms;
     gint n = span->nparams, i, a, ra, pa;
 
     memset(normal, 0, sizeof(normal));
@@ -654,15 +757,15 @@ match_uncertainty(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion
     for (i = 0; i < span->height; i++) {
         t = i - span->centre;
         if (sp->row_dropped[i]
-            || !match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, NULL, t, dots))
+            || !match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, NULL, t, dots, &terms))
             continue;
         for (a = 0; a < n; a++) {
             ra = row_regressor_of(a, &pa);
             rhs[a] += (pa ? t : 1.0)*dots[ra];
         }
-        add_row_normal(sp, n, i, t, normal);
+        add_row_normal(terms, n, t, normal);
         vv += dots[ROW_REGRESSORS];
-        wsum += sp->row_normal[(gsize)i*ROW_TERMS + row_term(1, 1)];
+        wsum += terms[row_term(1, 1)];
     }
     if (!(wsum > n + 1) || !solve_normal(normal, rhs, n, p) || !(p[0] > 0.0))
         return FALSE;
@@ -683,7 +786,7 @@ match_uncertainty(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion
     for (i = 0; i < span->height; i++) {
         t = i - span->centre;
         if (!sp->row_dropped[i])
-            match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, p, t, dots);
+            match_row(sp, span, i, m->dy + m->vy*t, m->dx + m->vx*t, p, t, dots, &terms);
     }
     rx = residual_correlation(sp, span, TRUE);
     ry = residual_correlation(sp, span, FALSE);

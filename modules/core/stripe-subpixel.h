@@ -13,14 +13,17 @@ G_BEGIN_DECLS
 
 typedef struct _StripeSubpixel StripeSubpixel;
 
-/* image and reference are yres x xres, row-major; weight (may be NULL: all
- * valid) is 1 on the image's valid pixels and 0 on its missing ones; window
- * holds xres column weights.  All must outlive the object.  Stripes up to
- * max_height rows can be refined.  Image pixels within edge_margin of the
- * frame's edge take no part (filtered frames are biased there). */
+/* image and reference are yres x xres, row-major; weight and ref_weight
+ * (either may be NULL: all valid) are 1 on the image's and the reference's
+ * valid pixels and 0 on their missing ones; window holds xres column
+ * weights.  All must outlive the object.  Stripes up to max_height rows can
+ * be refined.  Image pixels within edge_margin of the frame's edge take no
+ * part (filtered frames are biased there), nor do those whose reference
+ * sample reaches a missing pixel. */
 StripeSubpixel* stripe_subpixel_new   (const gdouble *image,
                                        const gdouble *reference,
                                        const gdouble *weight,
+                                       const gdouble *ref_weight,
                                        gint xres,
                                        gint yres,
                                        const gdouble *window,
