@@ -10,6 +10,7 @@
 #include <string.h>
 #include <check.h>
 #include <fftw3.h>
+#include <libprocess/gwyprocess.h>
 #include "stripe-registration.h"
 #include "registration-frames.h"
 #include "test-common.h"
@@ -96,19 +97,64 @@ START_TEST(test_random_drift_pairs)
 }
 END_TEST
 
+/* How a hole in the reference is given: NaN pixels, or filled with the
+ * frame's mean and marked in a mask, as Gwyddion's importers give what a
+ * file lacks (registered with masked pixels excluded). */
+typedef enum {
+    HOLE_NAN,
+    HOLE_MASKED,
+} HoleKind;
+
+/* The fields' registration of pair, the reference's pixels in the
+ * rectangle missing as kind says. */
+static void
+register_with_hole(const FramePair *pair, HoleKind kind, gint r0, gint c0, gint h, gint w,
+                   gint n, StripeShift *shifts)
+{
+    GwyDataField *image = gwy_data_field_new(pair->xres, pair->yres, pair->xres, pair->yres, FALSE);
+    GwyDataField *reference = gwy_data_field_new_alike(image, FALSE);
+    GwyDataField *mask = gwy_data_field_new_alike(image, TRUE);
+    StripeRegistrationOptions options;
+    gdouble *ref = gwy_data_field_get_data(reference), mean;
+    GError *error = NULL;
+    gint r, c;
+
+    memcpy(gwy_data_field_get_data(image), pair->image, pair->xres*pair->yres*sizeof(gdouble));
+    memcpy(ref, pair->reference, pair->xres*pair->yres*sizeof(gdouble));
+    mean = gwy_data_field_get_avg(reference);
+    for (r = r0; r < r0 + h; r++) {
+        for (c = c0; c < c0 + w; c++) {
+            ref[r*pair->xres + c] = (kind == HOLE_NAN) ? NAN : mean;
+            gwy_data_field_set_val(mask, c, r, 1.0);
+        }
+    }
+    gwy_data_field_invalidate(reference);
+    stripe_registration_options_init(&options);
+    if (kind == HOLE_MASKED) {
+        options.reference_mask = mask;
+        options.masking = GWY_MASK_EXCLUDE;
+    }
+    ck_assert_msg(stripe_registration_measure_fields(image, reference, n, &options, shifts, &error),
+                  "registration failed: %s", error ? error->message : "?");
+    g_object_unref(mask);
+    g_object_unref(reference);
+    g_object_unref(image);
+}
+
 /* Missing pixels in the reference read as 0 in the conditioned frames;
  * the sub-pixel match must leave out the pixels whose reference sample
  * reaches them.  A hole of 20-40 px at a random place in the reference of
  * each pair, under the random drift: the stripes whose content meets it
  * are held to what the others give (before the fix: rms 0.20 px, 0.84 px
  * at worst over 20 pairs, against 0.036 px elsewhere). */
-START_TEST(test_reference_hole)
+static void
+check_reference_holes(HoleKind kind)
 {
     enum { N = 16, PAIRS = 6 };
     FramePairSpec spec;
     GRand *rng = g_rand_new_with_seed(test_seed ^ 0x401eu);
     gdouble sum2 = 0.0, worst = 0.0;
-    gint i, s, r, c, met = 0, given = 0;
+    gint i, s, met = 0, given = 0;
 
     frame_pair_spec_init(&spec);
     for (i = 0; i < PAIRS; i++) {
@@ -118,11 +164,7 @@ START_TEST(test_reference_hole)
         StripeShift shifts[N];
         gdouble tx[N], ty[N];
 
-        for (r = r0; r < r0 + h; r++) {
-            for (c = c0; c < c0 + w; c++)
-                pair->reference[r*pair->xres + c] = NAN;
-        }
-        register_pair(pair, N, shifts);
+        register_with_hole(pair, kind, r0, c0, h, w, N, shifts);
         frame_pair_stripe_truth(pair, N, tx, ty);
         for (s = 0; s < N; s++) {
             gint first = s*pair->yres/N, end = (s + 1)*pair->yres/N;
@@ -141,13 +183,63 @@ START_TEST(test_reference_hole)
         frame_pair_free(pair);
     }
     g_rand_free(rng);
-    printf("reference holes: %d of %d stripes meeting them given, rms %.4f px, worst %.4f px\n",
-           given, met, given ? sqrt(sum2/given) : 0.0, worst);
+    printf("reference holes (%s): %d of %d stripes meeting them given, rms %.4f px, worst %.4f px\n",
+           kind == HOLE_NAN ? "NaN" : "masked", given, met, given ? sqrt(sum2/given) : 0.0, worst);
     ck_assert_msg(given >= 0.8*met, "only %d of %d stripes meeting a hole given (seed %u)", given, met,
                   test_seed);
     ck_assert_msg(sqrt(sum2/MAX(given, 1)) <= 0.08, "rms %g px on stripes meeting a hole (seed %u)",
                   sqrt(sum2/MAX(given, 1)), test_seed);
     ck_assert_msg(worst <= 0.3, "a stripe meeting a hole %g px off (seed %u)", worst, test_seed);
+}
+
+START_TEST(test_reference_hole)
+{
+    check_reference_holes(HOLE_NAN);
+}
+END_TEST
+
+/* The same holes filled and masked, the masked pixels excluded: without
+ * the mask the filled patch is a flat feature of the reference alone. */
+START_TEST(test_masked_reference)
+{
+    check_reference_holes(HOLE_MASKED);
+}
+END_TEST
+
+/* Masks that do not fit, or leave nothing, are refused with a message. */
+START_TEST(test_bad_masks)
+{
+    GwyDataField *image = gwy_data_field_new(64, 64, 64, 64, TRUE);
+    GwyDataField *reference = gwy_data_field_new_alike(image, TRUE);
+    GwyDataField *small = gwy_data_field_new(64, 60, 64, 60, TRUE);
+    GwyDataField *full = gwy_data_field_new_alike(image, FALSE);
+    StripeRegistrationOptions options;
+    StripeShift shifts[4];
+    GError *error = NULL;
+
+    gwy_data_field_fill(full, 1.0);
+    stripe_registration_options_init(&options);
+    options.masking = GWY_MASK_EXCLUDE;
+    options.reference_mask = small;
+    ck_assert(!stripe_registration_measure_fields(image, reference, 4, &options, shifts, &error));
+    ck_assert_str_eq(error->message,
+                     "The reference's mask (64 x 60 px) does not have the reference's size (64 x 64 px).");
+    g_clear_error(&error);
+    options.reference_mask = NULL;
+    options.image_mask = full;
+    ck_assert(!stripe_registration_measure_fields(image, reference, 4, &options, shifts, &error));
+    ck_assert_str_eq(error->message, "The mask leaves no pixel of the image to register.");
+    g_clear_error(&error);
+    /* Only the masked pixels are data: none is excluded (and the flat
+     * frames give no stripe). */
+    options.masking = GWY_MASK_INCLUDE;
+    ck_assert_msg(stripe_registration_measure_fields(image, reference, 4, &options, shifts, &error),
+                  "%s", error ? error->message : "?");
+    ck_assert_int_eq(stripe_registration_count_accepted(shifts, 4), 0);
+    g_object_unref(full);
+    g_object_unref(small);
+    g_object_unref(reference);
+    g_object_unref(image);
 }
 END_TEST
 
@@ -770,6 +862,8 @@ registration_suite(void)
 
     tcase_add_test(tc, test_random_drift_pairs);
     tcase_add_test(tc, test_reference_hole);
+    tcase_add_test(tc, test_masked_reference);
+    tcase_add_test(tc, test_bad_masks);
     tcase_add_test(tc, test_non_square_images);
     tcase_add_test(tc, test_integer_shift);
     tcase_add_test(tc, test_sign_convention);

@@ -126,6 +126,8 @@ stripe_registration_options_init(StripeRegistrationOptions *options)
     options->search_x = options->search_y = 0.0;
     options->min_score = STRIPE_REGISTRATION_DEFAULT_MIN_SCORE;
     options->pixel_aspect = 1.0;
+    options->image_mask = options->reference_mask = NULL;
+    options->masking = GWY_MASK_IGNORE;
 }
 
 static gint
@@ -1175,6 +1177,54 @@ stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
                                min_narrow, min_score, TRUE, shifts, error);
 }
 
+/* The field's data with the pixels its mask makes missing (masking) as
+ * NaN; NULL when none is: the field's own data serve. */
+static gdouble*
+data_without_masked(GwyDataField *field, GwyDataField *mask, GwyMaskingType masking)
+{
+    const gdouble *d = gwy_data_field_get_data_const(field), *m;
+    gsize k, n = (gsize)gwy_data_field_get_xres(field)*gwy_data_field_get_yres(field);
+    gdouble *copy;
+
+    if (!mask || (masking != GWY_MASK_EXCLUDE && masking != GWY_MASK_INCLUDE))
+        return NULL;
+    m = gwy_data_field_get_data_const(mask);
+    copy = g_new(gdouble, n);
+    for (k = 0; k < n; k++)
+        copy[k] = ((m[k] > 0.5) == (masking == GWY_MASK_EXCLUDE)) ? NAN : d[k];
+    return copy;
+}
+
+/* Whether the mask fits the field and leaves some of it as data. */
+static gboolean
+check_mask(GwyDataField *field, GwyDataField *mask, const gdouble *data, gboolean is_reference,
+           GError **error)
+{
+    gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
+    gsize k, n = (gsize)xres*yres;
+
+    if (!mask)
+        return TRUE;
+    if (gwy_data_field_get_xres(mask) != xres || gwy_data_field_get_yres(mask) != yres) {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE,
+                    is_reference
+                    ? _("The reference's mask (%d x %d px) does not have the reference's size (%d x %d px).")
+                    : _("The image's mask (%d x %d px) does not have the image's size (%d x %d px)."),
+                    gwy_data_field_get_xres(mask), gwy_data_field_get_yres(mask), xres, yres);
+        return FALSE;
+    }
+    for (k = 0; data && k < n; k++) {
+        if (!isnan(data[k]))
+            return TRUE;
+    }
+    if (!data)
+        return TRUE;
+    g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE, "%s",
+                is_reference ? _("The mask leaves no pixel of the reference to register.")
+                : _("The mask leaves no pixel of the image to register."));
+    return FALSE;
+}
+
 gboolean
 stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference, gint n,
                                    const StripeRegistrationOptions *options, StripeShift *shifts,
@@ -1182,6 +1232,8 @@ stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference,
 {
     StripeRegistrationOptions opts;
     gint xres, yres, rxres, ryres;
+    gdouble *image_data, *reference_data;
+    gboolean ok;
 
     g_return_val_if_fail(GWY_IS_DATA_FIELD(image) && GWY_IS_DATA_FIELD(reference), FALSE);
     xres = gwy_data_field_get_xres(image);
@@ -1198,10 +1250,25 @@ stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference,
         opts = *options;
     else
         stripe_registration_options_init(&opts);
+    if ((opts.image_mask && !check_mask(image, opts.image_mask, NULL, FALSE, error))
+        || (opts.reference_mask && !check_mask(reference, opts.reference_mask, NULL, TRUE, error)))
+        return FALSE;
     opts.pixel_aspect = gwy_data_field_get_dy(image)/gwy_data_field_get_dx(image);
-    return stripe_registration_measure(gwy_data_field_get_data_const(image),
-                                       gwy_data_field_get_data_const(reference),
-                                       xres, yres, n, &opts, shifts, error);
+    image_data = data_without_masked(image, opts.image_mask, opts.masking);
+    reference_data = data_without_masked(reference, opts.reference_mask, opts.masking);
+    if (!check_mask(image, opts.image_mask, image_data, FALSE, error)
+        || !check_mask(reference, opts.reference_mask, reference_data, TRUE, error)) {
+        g_free(image_data);
+        g_free(reference_data);
+        return FALSE;
+    }
+    ok = stripe_registration_measure(image_data ? image_data : gwy_data_field_get_data_const(image),
+                                     reference_data ? reference_data
+                                     : gwy_data_field_get_data_const(reference),
+                                     xres, yres, n, &opts, shifts, error);
+    g_free(image_data);
+    g_free(reference_data);
+    return ok;
 }
 
 gint

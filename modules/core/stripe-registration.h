@@ -9,6 +9,7 @@
 
 #include <glib.h>
 #include <libprocess/datafield.h>
+#include <libprocess/gwyprocessenums.h>
 #include "drift-table.h"
 #include "frame-conditioning.h"
 
@@ -37,6 +38,14 @@ typedef struct {
     gdouble search_y;      /* the same for dy and yres */
     gdouble min_score;     /* stripes scoring less are left empty */
     gdouble pixel_aspect;  /* physical height over width of a pixel */
+    /* For the field functions: the channels' masks (either may be NULL)
+     * and what they mean to the registration.  GWY_MASK_EXCLUDE: masked
+     * pixels are missing (Gwyddion's importers mask the pixels a file
+     * lacks and fill them); GWY_MASK_INCLUDE: only masked pixels are
+     * data; GWY_MASK_IGNORE (the default): masks do not matter. */
+    GwyDataField *image_mask;
+    GwyDataField *reference_mask;
+    GwyMaskingType masking;
 } StripeRegistrationOptions;
 
 typedef struct {
@@ -170,8 +179,9 @@ gboolean     stripe_registration_frame_shift(const StripeRegistrationFrame *imag
                                              StripeShift *shift);
 
 /* The same for two channels; refuses (with a message giving both sizes)
- * fields of different pixel dimensions.  The pixel aspect comes from the
- * image's pixel sizes (options' is ignored); options may be NULL. */
+ * fields or masks of different pixel dimensions.  The pixel aspect comes
+ * from the image's pixel sizes (options' is ignored); pixels the masks
+ * make missing carry no weight; options may be NULL. */
 gboolean     stripe_registration_measure_fields(GwyDataField *image,
                                                 GwyDataField *reference,
                                                 gint n,
