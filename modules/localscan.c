@@ -51,6 +51,7 @@ enum {
     PARAM_REFERENCE_CHANNEL,
     PARAM_FORCE,
     PARAM_ALL_CHANNELS,
+    PARAM_MASKING,
     WIDGET_TABLE_FILE,
     WIDGET_REFERENCE,
     MESSAGE_STATUS,
@@ -63,6 +64,7 @@ typedef struct {
     gboolean valid;
     GwyAppDataId reference;
     gint stripes;
+    GwyMaskingType masking;
     DriftTable *table;     /* px, exact (not rounded) */
     StripeRegistrationSupport support;
     GError *error;
@@ -276,6 +278,8 @@ define_module_params(void)
                               LOCALSCAN_DEFAULT_FORCE);
     gwy_param_def_add_boolean(paramdef, PARAM_ALL_CHANNELS, LOCALSCAN_KEY_ALL_CHANNELS,
                               _("_All channels of the scan"), LOCALSCAN_DEFAULT_ALL_CHANNELS);
+    gwy_param_def_add_enum(paramdef, PARAM_MASKING, LOCALSCAN_KEY_MASKING, _("Masked pixels"),
+                           GWY_TYPE_MASKING_TYPE, LOCALSCAN_DEFAULT_MASKING);
     return paramdef;
 }
 
@@ -514,25 +518,45 @@ format_registration_status(const MeasuredDrift *measured)
                            support->measured, support->in_reference, support->median_score);
 }
 
-/* The exact table registering image against reference measured, from the
- * last registration when it had the same reference and stripe count (its
- * failure is kept just as well). */
-static const DriftTable*
-measure_drift(MeasuredDrift *measured, GwyDataField *image, GwyDataField *reference,
-              GwyAppDataId refid, gint n, GError **error)
+/* A channel's mask, or NULL. */
+static GwyDataField*
+channel_mask(GwyContainer *data, gint id)
 {
-    if (!measured->valid || measured->stripes != n
+    GwyDataField *mask = NULL;
+
+    if (data && id >= 0)
+        gwy_container_gis_object(data, gwy_app_get_mask_key_for_id(id), (GObject**)&mask);
+    return mask;
+}
+
+/* The exact table registering image against reference measured, from the
+ * last registration when it had the same reference, stripe count and
+ * masking (its failure is kept just as well).  The masks are the image's
+ * and the reference's, in their pixels (either may be NULL). */
+static const DriftTable*
+measure_drift(MeasuredDrift *measured, GwyDataField *image, GwyDataField *image_mask,
+              GwyDataField *reference, GwyDataField *reference_mask, GwyAppDataId refid, gint n,
+              GwyMaskingType masking, GError **error)
+{
+    StripeRegistrationOptions options;
+
+    if (!measured->valid || measured->stripes != n || measured->masking != masking
         || measured->reference.datano != refid.datano || measured->reference.id != refid.id) {
         measured_drift_clear(measured);
         g_debug("%s: registering %d stripes against channel %d (%d x %d px)",
                 LOCALSCAN_FUNCTION_NAME, n, refid.id,
                 gwy_data_field_get_xres(image), gwy_data_field_get_yres(image));
-        measured->table = stripe_registration_table_for_fields(image, reference, n, NULL, FALSE,
+        stripe_registration_options_init(&options);
+        options.image_mask = image_mask;
+        options.reference_mask = reference_mask;
+        options.masking = masking;
+        measured->table = stripe_registration_table_for_fields(image, reference, n, &options, FALSE,
                                                                &measured->support, &measured->error);
         refuse_unsupported(measured);
         measured->valid = TRUE;
         measured->reference = refid;
         measured->stripes = n;
+        measured->masking = masking;
     }
     if (measured->error) {
         g_propagate_error(error, g_error_copy(measured->error));
@@ -549,8 +573,10 @@ measure_reference_drift(ModuleArgs *args, GError **error)
 
     if (!(reference = find_reference(args, &refid, error)))
         return NULL;
-    return measure_drift(&args->measured, args->field, reference, refid,
-                         gwy_params_get_int(args->params, PARAM_STRIPES), error);
+    return measure_drift(&args->measured, args->field, channel_mask(args->data, args->id), reference,
+                         channel_mask(gwy_app_data_browser_get(refid.datano), refid.id), refid,
+                         gwy_params_get_int(args->params, PARAM_STRIPES),
+                         gwy_params_get_enum(args->params, PARAM_MASKING), error);
 }
 
 /* Paper mode shifts by whole pixels; the exact columns stay for continuous
@@ -666,6 +692,7 @@ describe_run(ModuleArgs *args)
         reference = reference_label(refdata, refid.id);
     run.reference = reference;
     run.stripes = gwy_params_get_int(params, PARAM_STRIPES);
+    run.masking = gwy_params_get_enum(params, PARAM_MASKING);
     run.mode = gwy_params_get_enum(params, PARAM_MODE);
     run.interpolation = gwy_params_get_enum(params, PARAM_INTERPOLATION);
     run.fill = gwy_params_get_enum(params, PARAM_FILL);
@@ -990,6 +1017,10 @@ find_tooltip(const gchar *text)
         { N_("Table file"), N_("The CSV drift table to apply") },
         { N_("Stripes"),
           N_("How many stripes along the slow axis are registered against the reference") },
+        { N_("Masked pixels"),
+          N_("What the image's and the reference's masks mean to the registration: Exclude "
+             "leaves masked pixels out (Gwyddion's importers mask the pixels a file lacks), "
+             "Include uses only masked pixels, Ignore uses every pixel") },
         { N_("Paper (whole-pixel stripes)"),
           N_("Shift every stripe by whole pixels, exactly as the paper does") },
         { N_("Continuous (line by line)"),
@@ -1130,6 +1161,7 @@ run_gui(ModuleArgs *args)
     gwy_param_table_slider_restrict_range(table, PARAM_STRIPES, LOCALSCAN_STRIPES_MIN,
                                           MIN(LOCALSCAN_STRIPES_MAX,
                                               gwy_data_field_get_yres(args->field)));
+    gwy_param_table_append_combo(table, PARAM_MASKING);
     gwy_param_table_append_header(table, -1, _("Compensation"));
     gwy_param_table_append_radio(table, PARAM_MODE);
     gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
@@ -1442,6 +1474,7 @@ param_changed(ModuleGUI *gui, gint id)
         gwy_param_table_set_sensitive(table, WIDGET_TABLE_FILE, source == LOCALSCAN_SOURCE_FILE);
         gwy_param_table_set_sensitive(table, WIDGET_REFERENCE, source == LOCALSCAN_SOURCE_REFERENCE);
         gwy_param_table_set_sensitive(table, PARAM_STRIPES, source == LOCALSCAN_SOURCE_REFERENCE);
+        gwy_param_table_set_sensitive(table, PARAM_MASKING, source == LOCALSCAN_SOURCE_REFERENCE);
     }
     if (id < 0 || id == PARAM_MODE) {
         gwy_param_table_set_sensitive(table, PARAM_INTERPOLATION,
@@ -1563,7 +1596,7 @@ preview_drift_table(ModuleGUI *gui, gboolean *in_preview_px, GError **error)
     ModuleArgs *args = gui->args;
     gint n = gwy_params_get_int(args->params, PARAM_STRIPES);
     const DriftTable *measured;
-    GwyDataField *reference;
+    GwyDataField *reference, *image_mask, *reference_mask;
     GwyAppDataId refid;
 
     *in_preview_px = FALSE;
@@ -1580,8 +1613,16 @@ preview_drift_table(ModuleGUI *gui, gboolean *in_preview_px, GError **error)
         gui->preview_reference = preview_field_new(reference, PREVIEW_FIELD_SIZE);
         gui->preview_reference_id = refid;
     }
-    if (!(measured = measure_drift(&gui->preview_measured, preview_field_source(gui->preview),
-                                   preview_field_source(gui->preview_reference), refid, n, error)))
+    image_mask = preview_field_reduce_mask(gui->preview, channel_mask(args->data, args->id));
+    reference_mask = preview_field_reduce_mask(gui->preview_reference,
+                                               channel_mask(gwy_app_data_browser_get(refid.datano),
+                                                            refid.id));
+    measured = measure_drift(&gui->preview_measured, preview_field_source(gui->preview), image_mask,
+                             preview_field_source(gui->preview_reference), reference_mask, refid, n,
+                             gwy_params_get_enum(args->params, PARAM_MASKING), error);
+    g_clear_object(&image_mask);
+    g_clear_object(&reference_mask);
+    if (!measured)
         return NULL;
     *in_preview_px = TRUE;
     if (gwy_params_get_enum(args->params, PARAM_MODE) == LOCALSCAN_MODE_PAPER)

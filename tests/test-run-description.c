@@ -14,11 +14,12 @@
 START_TEST(test_format)
 {
     RunDescription run = { LOCALSCAN_SOURCE_REFERENCE, NULL, "a.gwy \342\200\224 Height", 16,
-                           LOCALSCAN_MODE_CONTINUOUS, GWY_INTERPOLATION_ROUND, LOCALSCAN_FILL_MEAN };
+                           GWY_MASK_EXCLUDE, LOCALSCAN_MODE_CONTINUOUS, GWY_INTERPOLATION_ROUND,
+                           LOCALSCAN_FILL_MEAN };
     gchar *text = run_description_format(&run);
 
     ck_assert_str_eq(text, "source=reference, reference=a.gwy \342\200\224 Height, stripes=16, "
-                           "mode=continuous, interpolation=round, fill=mean");
+                           "masking=exclude, mode=continuous, interpolation=round, fill=mean");
     g_free(text);
     run.source = LOCALSCAN_SOURCE_FILE;
     run.table_file = "/tmp/t.csv";
@@ -27,6 +28,20 @@ START_TEST(test_format)
     text = run_description_format(&run);
     ck_assert_str_eq(text, "source=table file, table=/tmp/t.csv, mode=paper, fill=maximum");
     g_free(text);
+}
+END_TEST
+
+/* The masking names gwy-localscan --masking takes, both ways. */
+START_TEST(test_masking_names)
+{
+    ck_assert_str_eq(run_description_masking_name(GWY_MASK_EXCLUDE), "exclude");
+    ck_assert_str_eq(run_description_masking_name(GWY_MASK_INCLUDE), "include");
+    ck_assert_str_eq(run_description_masking_name(GWY_MASK_IGNORE), "ignore");
+    ck_assert_int_eq(run_description_masking_from_name("exclude"), GWY_MASK_EXCLUDE);
+    ck_assert_int_eq(run_description_masking_from_name("include"), GWY_MASK_INCLUDE);
+    ck_assert_int_eq(run_description_masking_from_name("ignore"), GWY_MASK_IGNORE);
+    ck_assert_int_eq(run_description_masking_from_name("Exclude"), -1);
+    ck_assert_int_eq(run_description_masking_from_name(NULL), -1);
 }
 END_TEST
 
@@ -73,6 +88,7 @@ main(void)
     Suite *suite = test_suite_new("run-description", "description", &tc);
 
     tcase_add_test(tc, test_format);
+    tcase_add_test(tc, test_masking_names);
     tcase_add_test(tc, test_names);
     tcase_add_test(tc, test_parse_mode);
     return test_run_suite(suite);

@@ -61,6 +61,8 @@ typedef struct {
     gdouble search_x;            /* px, 0: the whole frame */
     gdouble search_y;
     gboolean accept_partial;
+    gchar *masking_name;
+    gint masking;                /* GwyMaskingType */
     gchar *line_time_arg;
     gchar *direction_name;
     gchar *frame_start_arg;
@@ -114,6 +116,10 @@ static GOptionEntry option_table[] = {
     { "search", 0, 0, G_OPTION_ARG_STRING, &options.search_arg,
       N_("With --reference: search shifts up to PX columns and PY rows (PY defaults to PX; "
          "default: 45 % of the frame in each axis)"), N_("PX[,PY]") },
+    { "masking", 0, 0, G_OPTION_ARG_STRING, &options.masking_name,
+      N_("With --reference: what the image's and the reference's masks mean: exclude (default: "
+         "masked pixels are missing, as Gwyddion's importers mark the pixels a file lacks), "
+         "include (only masked pixels are data) or ignore"), N_("MODE") },
     { "accept-partial", 0, 0, G_OPTION_ARG_NONE, &options.accept_partial,
       N_("With --reference: use the stripes measured even when they cannot support the result "
          "(fewer than two, or fewer than half of those whose content lies in the reference); "
@@ -195,6 +201,7 @@ free_options(void)
     g_free(options.write_drift);
     g_free(options.reference);
     g_free(options.search_arg);
+    g_free(options.masking_name);
     g_free(options.line_time_arg);
     g_free(options.direction_name);
     g_free(options.frame_start_arg);
@@ -429,9 +436,17 @@ check_command_line(GError **error)
     }
     if (options.reference && !parse_reference(options.reference, &reference_spec, error))
         return NULL;
-    if ((options.search_arg || options.accept_partial) && !options.reference) {
+    if ((options.search_arg || options.accept_partial || options.masking_name) && !options.reference) {
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
-                    _("%s needs --reference"), options.search_arg ? "--search" : "--accept-partial");
+                    _("%s needs --reference"),
+                    options.search_arg ? "--search" : options.accept_partial ? "--accept-partial" : "--masking");
+        return NULL;
+    }
+    options.masking = LOCALSCAN_DEFAULT_MASKING;
+    if (options.masking_name
+        && (options.masking = run_description_masking_from_name(options.masking_name)) < 0) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("--masking takes exclude, include or ignore, not \"%s\""), options.masking_name);
         return NULL;
     }
     if (options.search_arg && !parse_search(options.search_arg, error))
@@ -540,8 +555,8 @@ check_support(const StripeRegistrationSupport *support, const gchar *image_name,
 /* Registration's own messages name neither image nor reference; the one
  * a user meets most often gets both names. */
 static DriftTable*
-register_stripes(GwyDataField *image, const gchar *image_name,
-                 GwyDataField *reference, const gchar *reference_name,
+register_stripes(GwyDataField *image, GwyDataField *image_mask, const gchar *image_name,
+                 GwyDataField *reference, GwyDataField *reference_mask, const gchar *reference_name,
                  gint n, const CompensationMode *mode, GError **error)
 {
     StripeRegistrationOptions regopts;
@@ -552,6 +567,9 @@ register_stripes(GwyDataField *image, const gchar *image_name,
     stripe_registration_options_init(&regopts);
     regopts.search_x = options.search_x;
     regopts.search_y = options.search_y;
+    regopts.image_mask = image_mask;
+    regopts.reference_mask = reference_mask;
+    regopts.masking = options.masking;
     table = stripe_registration_table_for_fields(image, reference, n, &regopts,
                                                  mode->whole_pixels, &support, &err);
     if (table && !check_support(&support, image_name, error)) {
@@ -581,7 +599,7 @@ measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
 {
     const ReferenceSpec spec = reference_spec;
     GwyContainer *refdata;
-    GwyDataField *image, *reference;
+    GwyDataField *image, *reference, *image_mask = NULL, *reference_mask = NULL;
     gchar *image_name, *reference_name = NULL;
     const gchar *reffile;
     DriftTable *table = NULL;
@@ -607,10 +625,12 @@ measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
     image = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
     reference = gwy_container_get_object(refdata,
                                          gwy_app_get_data_key_for_id(refid));
+    gwy_container_gis_object(data, gwy_app_get_mask_key_for_id(id), (GObject**)&image_mask);
+    gwy_container_gis_object(refdata, gwy_app_get_mask_key_for_id(refid), (GObject**)&reference_mask);
     if (localscan_reference_check(image, image_name, reference, reference_name,
                                   options.stripes, error)) {
-        table = register_stripes(image, image_name, reference, reference_name,
-                                 options.stripes, mode, error);
+        table = register_stripes(image, image_mask, image_name, reference, reference_mask,
+                                 reference_name, options.stripes, mode, error);
     }
 
 end:

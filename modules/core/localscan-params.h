@@ -36,6 +36,7 @@
 #define LOCALSCAN_KEY_REFERENCE_CHANNEL "reference-channel"
 #define LOCALSCAN_KEY_FORCE             "force"
 #define LOCALSCAN_KEY_ALL_CHANNELS      "all-channels"
+#define LOCALSCAN_KEY_MASKING           "masking"
 
 #define LOCALSCAN_DEFAULT_SOURCE        LOCALSCAN_SOURCE_STORED
 #define LOCALSCAN_DEFAULT_MODE          LOCALSCAN_MODE_PAPER
@@ -48,6 +49,10 @@
 #define LOCALSCAN_DEFAULT_FORCE         FALSE
 /* One correction, from the image's drift, for every channel of its scan. */
 #define LOCALSCAN_DEFAULT_ALL_CHANNELS  FALSE
+/* What the channels' masks mean to the registration against a reference:
+ * as Gwyddion's levelling functions take them, masked pixels are left out
+ * (importers mask the pixels a file lacks and fill them with the mean). */
+#define LOCALSCAN_DEFAULT_MASKING       GWY_MASK_EXCLUDE
 
 /* Stripes registered against a reference image. */
 #define LOCALSCAN_STRIPES_MIN           1

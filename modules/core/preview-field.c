@@ -65,6 +65,28 @@ preview_field_free(PreviewField *preview)
     g_free(preview);
 }
 
+GwyDataField*
+preview_field_reduce_mask(const PreviewField *preview, GwyDataField *mask)
+{
+    GwyDataField *reduced;
+    gdouble *d;
+    gsize k, n;
+
+    if (!mask)
+        return NULL;
+    if (!preview->reduced)
+        return g_object_ref(mask);
+    reduced = gwy_data_field_new_resampled(mask, gwy_data_field_get_xres(preview->source),
+                                           gwy_data_field_get_yres(preview->source),
+                                           GWY_INTERPOLATION_LINEAR);
+    d = gwy_data_field_get_data(reduced);
+    n = (gsize)gwy_data_field_get_xres(reduced)*gwy_data_field_get_yres(reduced);
+    for (k = 0; k < n; k++)
+        d[k] = (d[k] > 1e-9) ? 1.0 : 0.0;
+    gwy_data_field_invalidate(reduced);
+    return reduced;
+}
+
 gboolean
 preview_field_is_reduced(const PreviewField *preview)
 {

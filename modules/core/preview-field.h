@@ -36,6 +36,11 @@ gint          preview_field_xres       (const PreviewField *preview);
 gint          preview_field_yres       (const PreviewField *preview);
 /* The field previewed: the reduced copy, or the image itself. */
 GwyDataField* preview_field_source     (PreviewField *preview);
+/* A mask of the image (its size) in the reduced copy's pixels: a preview
+ * pixel is masked when any pixel it averages is (a new field; the mask
+ * itself, referenced, when the copy is not reduced; NULL for NULL). */
+GwyDataField* preview_field_reduce_mask(const PreviewField *preview,
+                                        GwyDataField *mask);
 /* The compensated preview and its filled-pixel mask (preview size). */
 GwyDataField* preview_field_result     (PreviewField *preview);
 GwyDataField* preview_field_mask       (PreviewField *preview);

@@ -100,6 +100,32 @@ run_description_parse_mode(const gchar *text)
     return -1;
 }
 
+static const gchar *const masking_names[] = {
+    [GWY_MASK_EXCLUDE] = "exclude",
+    [GWY_MASK_INCLUDE] = "include",
+    [GWY_MASK_IGNORE] = "ignore",
+};
+
+const gchar*
+run_description_masking_name(GwyMaskingType masking)
+{
+    if ((guint)masking < G_N_ELEMENTS(masking_names))
+        return masking_names[masking];
+    return "?";
+}
+
+gint
+run_description_masking_from_name(const gchar *name)
+{
+    guint i;
+
+    for (i = 0; name && i < G_N_ELEMENTS(masking_names); i++) {
+        if (g_str_equal(name, masking_names[i]))
+            return i;
+    }
+    return -1;
+}
+
 gchar*
 run_description_format(const RunDescription *run)
 {
@@ -109,8 +135,9 @@ run_description_format(const RunDescription *run)
     if (run->source == LOCALSCAN_SOURCE_FILE && run->table_file)
         g_string_append_printf(text, ", table=%s", run->table_file);
     if (run->source == LOCALSCAN_SOURCE_REFERENCE) {
-        g_string_append_printf(text, ", reference=%s, stripes=%d",
-                               run->reference ? run->reference : "none", run->stripes);
+        g_string_append_printf(text, ", reference=%s, stripes=%d, masking=%s",
+                               run->reference ? run->reference : "none", run->stripes,
+                               run_description_masking_name(run->masking));
     }
     g_string_append_printf(text, ", mode=%s", run_description_mode_name(run->mode));
     if (run->mode == LOCALSCAN_MODE_CONTINUOUS) {

@@ -19,6 +19,7 @@ typedef struct {
     const gchar *table_file;        /* LOCALSCAN_SOURCE_FILE */
     const gchar *reference;         /* LOCALSCAN_SOURCE_REFERENCE: "file — channel" */
     gint stripes;                   /* LOCALSCAN_SOURCE_REFERENCE */
+    GwyMaskingType masking;         /* LOCALSCAN_SOURCE_REFERENCE */
     LocalscanMode mode;
     GwyInterpolationType interpolation;   /* continuous mode */
     LocalscanFill fill;
@@ -28,6 +29,9 @@ const gchar* run_description_source_name       (LocalscanSource source);
 const gchar* run_description_mode_name         (LocalscanMode mode);
 const gchar* run_description_interpolation_name(GwyInterpolationType interpolation);
 const gchar* run_description_fill_name         (LocalscanFill fill);
+/* "exclude", "include", "ignore"; -1 from a name that is none of them. */
+const gchar* run_description_masking_name      (GwyMaskingType masking);
+gint         run_description_masking_from_name (const gchar *name);
 /* The kernel of a name run_description_interpolation_name() gives; -1 for
  * none (and for "none", which cannot resample). */
 gint         run_description_interpolation_from_name(const gchar *name);
@@ -39,8 +43,8 @@ gchar*       run_description_interpolation_names(void);
 gint         run_description_parse_mode        (const gchar *text);
 
 /* "source=reference, reference=a.gwy — Height, stripes=16,
- * mode=continuous, interpolation=round, fill=mean": only what the run
- * used. */
+ * masking=exclude, mode=continuous, interpolation=round, fill=mean": only
+ * what the run used. */
 gchar*       run_description_format            (const RunDescription *run);
 
 G_END_DECLS
