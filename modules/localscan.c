@@ -278,7 +278,7 @@ define_module_params(void)
                               LOCALSCAN_DEFAULT_FORCE);
     gwy_param_def_add_boolean(paramdef, PARAM_ALL_CHANNELS, LOCALSCAN_KEY_ALL_CHANNELS,
                               _("_All channels of the scan"), LOCALSCAN_DEFAULT_ALL_CHANNELS);
-    gwy_param_def_add_enum(paramdef, PARAM_MASKING, LOCALSCAN_KEY_MASKING, _("Masked pixels"),
+    gwy_param_def_add_enum(paramdef, PARAM_MASKING, LOCALSCAN_KEY_MASKING, _("Mas_ked pixels"),
                            GWY_TYPE_MASKING_TYPE, LOCALSCAN_DEFAULT_MASKING);
     return paramdef;
 }
