@@ -4,6 +4,7 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include <math.h>
 #include <libgwyddion/gwymacros.h>
 #include "preview-field.h"
 
@@ -28,8 +29,11 @@ preview_field_new(GwyDataField *field, gint max_size)
     if (preview->reduced) {
         pxres = MAX(1, GWY_ROUND((gdouble)xres*max_size/longest));
         pyres = MAX(1, GWY_ROUND((gdouble)yres*max_size/longest));
-        /* Averaging the pixels a preview pixel covers keeps noise from
-         * aliasing into the preview. */
+        /* Sampled at the preview pixels' centres by linear interpolation:
+         * this does not average the pixels a preview pixel covers (period-2
+         * columns of 0 and 1 come out 0.55-0.98), so fine noise aliases into
+         * the preview; the final run measures and compensates the image
+         * itself. */
         preview->source = gwy_data_field_new_resampled(field, pxres, pyres,
                                                        GWY_INTERPOLATION_LINEAR);
     }
@@ -65,24 +69,49 @@ preview_field_free(PreviewField *preview)
     g_free(preview);
 }
 
+/* The preview pixels [*lo, *hi] along one axis that cover source pixel c
+ * (scale: preview pixels per source pixel) or whose sample (the reduced
+ * copy is sampled at the preview pixels' centres) is within a pixel of it. */
+static void
+preview_span(gint c, gdouble scale, gint n, gint *lo, gint *hi)
+{
+    gint cover = (gint)floor(c*scale);
+
+    *lo = MAX(MIN(cover, (gint)ceil((c - 0.5)*scale - 0.5)), 0);
+    *hi = MIN(MAX(cover, (gint)floor((c + 1.5)*scale - 0.5)), n - 1);
+}
+
 GwyDataField*
 preview_field_reduce_mask(const PreviewField *preview, GwyDataField *mask)
 {
     GwyDataField *reduced;
+    const gdouble *m;
     gdouble *d;
-    gsize k, n;
+    gint xres, yres, pxres, pyres, r, c, i, j, ilo, ihi, jlo, jhi;
 
     if (!mask)
         return NULL;
     if (!preview->reduced)
         return g_object_ref(mask);
-    reduced = gwy_data_field_new_resampled(mask, gwy_data_field_get_xres(preview->source),
-                                           gwy_data_field_get_yres(preview->source),
-                                           GWY_INTERPOLATION_LINEAR);
+    xres = gwy_data_field_get_xres(mask);
+    yres = gwy_data_field_get_yres(mask);
+    reduced = gwy_data_field_new_alike(preview->source, TRUE);
+    pxres = gwy_data_field_get_xres(reduced);
+    pyres = gwy_data_field_get_yres(reduced);
+    m = gwy_data_field_get_data_const(mask);
     d = gwy_data_field_get_data(reduced);
-    n = (gsize)gwy_data_field_get_xres(reduced)*gwy_data_field_get_yres(reduced);
-    for (k = 0; k < n; k++)
-        d[k] = (d[k] > 1e-9) ? 1.0 : 0.0;
+    for (r = 0; r < yres; r++) {
+        for (c = 0; c < xres; c++) {
+            if (!(m[(gsize)r*xres + c] > 0.5))
+                continue;
+            preview_span(r, (gdouble)pyres/yres, pyres, &ilo, &ihi);
+            preview_span(c, (gdouble)pxres/xres, pxres, &jlo, &jhi);
+            for (i = ilo; i <= ihi; i++) {
+                for (j = jlo; j <= jhi; j++)
+                    d[(gsize)i*pxres + j] = 1.0;
+            }
+        }
+    }
     gwy_data_field_invalidate(reduced);
     return reduced;
 }

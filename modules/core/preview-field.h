@@ -37,8 +37,9 @@ gint          preview_field_yres       (const PreviewField *preview);
 /* The field previewed: the reduced copy, or the image itself. */
 GwyDataField* preview_field_source     (PreviewField *preview);
 /* A mask of the image (its size) in the reduced copy's pixels: a preview
- * pixel is masked when any pixel it averages is (a new field; the mask
- * itself, referenced, when the copy is not reduced; NULL for NULL). */
+ * pixel is masked when any pixel it covers is, or one its value was
+ * interpolated from (a new field; the mask itself, referenced, when the
+ * copy is not reduced; NULL for NULL). */
 GwyDataField* preview_field_reduce_mask(const PreviewField *preview,
                                         GwyDataField *mask);
 /* The compensated preview and its filled-pixel mask (preview size). */
