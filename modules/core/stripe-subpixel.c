@@ -102,12 +102,11 @@ struct _StripeSubpixel {
                                  products with the constant, uncentred */
     gdouble *row_normal;      /* max_height x ROW_TERMS: each row's products
                                  of the row regressors, upper triangle */
-    gdouble *row_raw;         /* the same before the row's offset is
-                                 eliminated (centre_row_terms) */
-    gdouble *row_adjusted;    /* max_height x ROW_TERMS and x ROW_REGRESSORS:*/
-    gdouble *offset_adjusted; /* a row's terms and offsets without the
-                                 pixels whose reference sample reaches a
-                                 missing pixel at the current shift */
+    gdouble *row_adjusted;    /* max_height x ROW_TERMS: a row's terms, and */
+    gdouble *offset_adjusted; /* max_height x ROW_REGRESSORS: its offsets,
+                                 without the pixels whose reference sample
+                                 reaches a missing pixel at the current
+                                 shift */
     gdouble *column_valid;    /* xres: the reference's validity along y */
     gdouble *used_weight;     /* xres: the current row's weights as used */
     gdouble *column;          /* xres: reference interpolated along y */
@@ -160,7 +159,6 @@ stripe_subpixel_new(const gdouble *image, const gdouble *reference, const gdoubl
     sp->weighted_grad_x = g_new(gdouble, plane);
     sp->row_normal = g_new(gdouble, (gsize)max_height*ROW_TERMS);
     sp->row_offset = g_new(gdouble, (gsize)max_height*ROW_REGRESSORS);
-    sp->row_raw = g_new(gdouble, (gsize)max_height*ROW_TERMS);
     sp->row_adjusted = g_new(gdouble, (gsize)max_height*ROW_TERMS);
     sp->offset_adjusted = g_new(gdouble, (gsize)max_height*ROW_REGRESSORS);
     sp->column = g_new(gdouble, xres);
@@ -194,7 +192,6 @@ stripe_subpixel_free(StripeSubpixel *sp)
     g_free(sp->weighted_grad_x);
     g_free(sp->row_normal);
     g_free(sp->row_offset);
-    g_free(sp->row_raw);
     g_free(sp->row_adjusted);
     g_free(sp->offset_adjusted);
     g_free(sp->column_valid);
@@ -266,8 +263,6 @@ centre_terms(gdouble *terms, gdouble *offset)
 static void
 centre_row_terms(StripeSubpixel *sp, gint i)
 {
-    memcpy(sp->row_raw + (gsize)i*ROW_TERMS, sp->row_normal + (gsize)i*ROW_TERMS,
-           ROW_TERMS*sizeof(gdouble));
     centre_terms(sp->row_normal + (gsize)i*ROW_TERMS, sp->row_offset + (gsize)i*ROW_REGRESSORS);
 }
 
@@ -428,10 +423,10 @@ row_model(const StripeSubpixel *sp, const gdouble *p, gint i, gint c, gdouble t)
             + (p[3] + t*p[BASE_PARAMS + 1])*sp->weighted_grad_x[k]);
 }
 
-/* Subtracts pixel c's share from a row's uncentred terms (terms, offset
- * regressor products as prepare_row sums them). */
+/* Adds pixel c's share to a row's uncentred terms (the regressor products
+ * prepare_row sums). */
 static void
-remove_pixel_terms(const StripeSubpixel *sp, gint i, gint c, gdouble *terms)
+add_pixel_terms(const StripeSubpixel *sp, gint i, gint c, gdouble *terms)
 {
     gsize k = (gsize)i*sp->xres + c;
     gdouble w = sp->pixel_weight[k], wreg[ROW_REGRESSORS];
@@ -447,7 +442,7 @@ remove_pixel_terms(const StripeSubpixel *sp, gint i, gint c, gdouble *terms)
         wreg[4 + a] = w*sp->trend[a*sp->xres + c];
     for (a = 0; a < ROW_REGRESSORS; a++) {
         for (b = a; b < ROW_REGRESSORS; b++)
-            terms[row_term(a, b)] -= wreg[a]*wreg[b]/w;
+            terms[row_term(a, b)] += wreg[a]*wreg[b]/w;
     }
 }
 
@@ -496,7 +491,7 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     const gdouble *offset = sp->row_offset + (gsize)i*ROW_REGRESSORS, *valid;
     gdouble wy[KERNEL_TAPS], wx[KERNEL_TAPS], sums[ROW_REGRESSORS + 1], v, pv, w;
     gdouble *adjusted = NULL;
-    gint a;
+    gint a, kept = 0;
     gdouble *col = sp->column;
 
     /* Taps near the reference's edge would read what the filters moved
@@ -508,8 +503,10 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
         return FALSE;
     *terms = sp->row_normal + (gsize)i*ROW_TERMS;
     if (!reference_columns_valid(sp, top, span->col_lo + kx - 1, span->col_hi + kx + 2)) {
+        /* Summed anew from the pixels kept: subtracting those left out
+         * from the row's sums leaves their rounding where most are. */
         adjusted = sp->row_adjusted + (gsize)i*ROW_TERMS;
-        memcpy(adjusted, sp->row_raw + (gsize)i*ROW_TERMS, ROW_TERMS*sizeof(gdouble));
+        memset(adjusted, 0, ROW_TERMS*sizeof(gdouble));
     }
     valid = sp->column_valid + kx;
     keys_weights(-shift_y - ky, 1.0 - (-shift_y - ky), wy);
@@ -525,12 +522,15 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     memset(sums, 0, sizeof(sums));
     for (c = span->col_lo; c < span->col_hi; c++) {
         w = pw[c];
-        if (adjusted && !(valid[c-1]*valid[c]*valid[c+1]*valid[c+2] > 0.0)) {
-            remove_pixel_terms(sp, i, c, adjusted);
-            sp->used_weight[c] = 0.0;
-            if (fit)
-                sp->residual[(gsize)i*xres + c] = 0.0;
-            continue;
+        if (adjusted) {
+            if (!(valid[c-1]*valid[c]*valid[c+1]*valid[c+2] > 0.0)) {
+                sp->used_weight[c] = 0.0;
+                if (fit)
+                    sp->residual[(gsize)i*xres + c] = 0.0;
+                continue;
+            }
+            add_pixel_terms(sp, i, c, adjusted);
+            kept += (w > 0.0);
         }
         sp->used_weight[c] = w;
         v = wx[0]*col[c-1] + wx[1]*col[c] + wx[2]*col[c+1] + wx[3]*col[c+2];
@@ -548,6 +548,9 @@ match_row(StripeSubpixel *sp, const StripeSpan *span, gint i, gdouble shift_y, g
     if (adjusted) {
         gdouble *adjusted_offset = sp->offset_adjusted + (gsize)i*ROW_REGRESSORS;
 
+        /* A row mostly over missing reference pixels is off the reference. */
+        if (kept < MIN_COLUMNS)
+            return FALSE;
         centre_terms(adjusted, adjusted_offset);
         offset = adjusted_offset;
         *terms = adjusted;
@@ -717,18 +720,23 @@ rss_held_at(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, g
  * the reference are not taken; 0 when none is. */
 static gdouble
 profile_sigma(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion *m, gboolean along_x,
-              gdouble rss0, gdouble s2)
+              gdouble rss0, gdouble dof0, gdouble s2)
 {
     static const gdouble steps[] = { 3.0 };
-    gdouble rss, unused, sigma = 0.0, k;
+    gdouble rss, dof, sigma = 0.0, k;
     guint j;
     gint sign;
 
     for (j = 0; j < G_N_ELEMENTS(steps); j++) {
         for (sign = -1; sign <= 1; sign += 2) {
             k = sign*steps[j];
-            if (!rss_held_at(sp, span, m, along_x ? 0.0 : k, along_x ? k : 0.0, &rss, &unused))
+            if (!rss_held_at(sp, span, m, along_x ? 0.0 : k, along_x ? k : 0.0, &rss, &dof)
+                || !(dof > 0.0))
                 continue;
+            /* Where a hole of the reference is reached at one shift and not
+             * at another, the two sums run over different pixels: compared
+             * per degree of freedom. */
+            rss *= dof0/dof;
             /* A step that matches as well says the optimum is that
              * uncertain at least. */
             sigma = MAX(sigma, (rss > rss0) ? steps[j]*sqrt(s2/(rss - rss0)) : steps[j]);
@@ -793,8 +801,8 @@ match_uncertainty(StripeSubpixel *sp, const StripeSpan *span, const StripeMotion
     inflation = (1.0 + rx)/(1.0 - rx)*(1.0 + ry)/(1.0 - ry);
     *sigma = sqrt(MAX(var_y, var_x)*inflation);
     if (rss_held_at(sp, span, m, 0.0, 0.0, &rss0, &dof) && dof > 0.0) {
-        *sigma = MAX(*sigma, profile_sigma(sp, span, m, FALSE, rss0, rss0/dof*inflation));
-        *sigma = MAX(*sigma, profile_sigma(sp, span, m, TRUE, rss0, rss0/dof*inflation));
+        *sigma = MAX(*sigma, profile_sigma(sp, span, m, FALSE, rss0, dof, rss0/dof*inflation));
+        *sigma = MAX(*sigma, profile_sigma(sp, span, m, TRUE, rss0, dof, rss0/dof*inflation));
     }
     return isfinite(*sigma);
 }
