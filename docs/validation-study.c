@@ -870,6 +870,7 @@ registration_triangle(const SeriesSpec *spec, const gchar *measured,
         displacement_register_blocks(gwy_data_field_get_data_const(fa->field),
                                      gwy_data_field_get_data_const(fb->field),
                                      xres, yres, N_BLOCKS, &dopt,
+                                     frame_series_dy(series)/frame_series_dx(series),
                                      p == 2 ? guess : NULL,
                                      dx[p], dy[p], score[p], whole[p]);
     }

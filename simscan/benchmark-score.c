@@ -341,7 +341,7 @@ score_frame(const TruthCase *tc, const gdouble *frame, const gdouble *truth,
     gint i;
 
     displacement_register_blocks(frame, truth, tc->xres, tc->yres,
-                                 JUDGE_STRIPES, NULL, NULL,
+                                 JUDGE_STRIPES, NULL, tc->aspect, NULL,
                                  dx, dy, s, NULL);
     for (i = 0; i < JUDGE_STRIPES; i++) {
         if (stripe_coverage(tc, frame, i) < MIN_STRIPE_COVERAGE)

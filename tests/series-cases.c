@@ -251,7 +251,7 @@ judge_frames(const SeriesCorrection *correction, const FrameSeries *series,
         if (ok && k != options->disturbed) {
             displacement_register_blocks(gwy_data_field_get_data_const(fixed),
                                          gwy_data_field_get_data_const(truth[k]),
-                                         RES, RES, 1, NULL, NULL,
+                                         RES, RES, 1, NULL, 1.0, NULL,
                                          &dx, &dy, &score, NULL);
             result->frame_worst_px = MAX(result->frame_worst_px,
                                          score > 0.0

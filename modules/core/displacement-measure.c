@@ -41,16 +41,13 @@ copy_shifts(const StripeShift *shifts, gint n, gdouble *dx, gdouble *dy,
 /* A frame conditioned for registration (stripe-registration.h), as
  * displacement_register_blocks() registers it: what a series does once
  * per frame, however many partners the frame has.  The raw data go to the
- * core's conditioning as they are: an earlier blur of its own, mirrored at
- * the frame's edges, pulled the first and last blocks 0.02-0.03 px along
- * y, which the fit of a long series turned into a velocity 0.3-0.5 %
- * off (0.5 px RMS over 300 frames of bench/bench-series).  NULL when it
- * cannot be registered at all. */
+ * registration's own conditioning as they are, with the pixels' physical
+ * aspect (dy/dx), as a single pair's channels go.  NULL when it cannot be
+ * registered at all. */
 static StripeRegistrationFrame*
-prepare_frame(const gdouble *data, gint xres, gint yres)
+prepare_frame(const gdouble *data, gint xres, gint yres, gdouble pixel_aspect)
 {
-    const gchar *a = g_getenv("DBG_ASPECT");
-    return stripe_registration_frame_new(data, xres, yres, a ? g_ascii_strtod(a, NULL) : 1.0);
+    return stripe_registration_frame_new(data, xres, yres, pixel_aspect);
 }
 
 /* The narrow blur a pair whose blocks mostly fail to register at the
@@ -164,7 +161,7 @@ void
 displacement_register_blocks(const gdouble *image, const gdouble *reference,
                              gint xres, gint yres, gint n,
                              const DisplacementOptions *options,
-                             const gdouble *guess,
+                             gdouble pixel_aspect, const gdouble *guess,
                              gdouble *dx, gdouble *dy, gdouble *score,
                              gdouble *global)
 {
@@ -175,8 +172,8 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
         displacement_options_init(&defaults);
         options = &defaults;
     }
-    a = prepare_frame(image, xres, yres);
-    b = prepare_frame(reference, xres, yres);
+    a = prepare_frame(image, xres, yres, pixel_aspect);
+    b = prepare_frame(reference, xres, yres, pixel_aspect);
     register_prepared(a, b, xres, yres, n, options, guess, dx, dy, score,
                       global);
     stripe_registration_frame_free(a);
@@ -240,7 +237,8 @@ prepare_series_frame(const SeriesRegistration *reg, gint k)
 {
     const SeriesFrame *f = reg->series->frames + k;
 
-    return prepare_frame(gwy_data_field_get_data_const(f->field), f->timing.xres, f->timing.yres);
+    return prepare_frame(gwy_data_field_get_data_const(f->field), f->timing.xres, f->timing.yres,
+                         frame_series_dy(reg->series)/frame_series_dx(reg->series));
 }
 
 static void

@@ -35,7 +35,8 @@ void               displacement_options_init (DisplacementOptions *options);
  * reference at (r, c) appears in the image at (r + dy, c + dx)) and a score
  * (the normalised correlation at the peak of a block the registration
  * accepted, else 0).  The raw frames go to the registration's own
- * conditioning (raw-channel artefacts, missing pixels).  The frame's overall shift
+ * conditioning (raw-channel artefacts, missing pixels); pixel_aspect is the
+ * physical dy/dx of a pixel.  The frame's overall shift
  * (the whole frame as one stripe) is searched around guess (px, may be NULL:
  * around 0, within max_shift) and stored in global (dx, dy, correlation; may
  * be NULL), to the correlation map's resolution only; the blocks are
@@ -46,6 +47,7 @@ void               displacement_register_blocks(const gdouble *image,
                                                 gint yres,
                                                 gint n,
                                                 const DisplacementOptions *options,
+                                                gdouble pixel_aspect,
                                                 const gdouble *guess,
                                                 gdouble *dx,
                                                 gdouble *dy,
