@@ -168,8 +168,9 @@ gboolean     stripe_registration_measure_around_frames(const StripeRegistrationF
 /* The whole frame's shift (px, table convention) within radius_px of the
  * predicted one, to the correlation map's resolution (its peak refined by
  * a quadratic), without the sub-pixel match, which would cost as much as
- * all the stripes' together: where to search the stripes.  shift->peak
- * is the correlation at the peak.  min_narrow as above. */
+ * all the stripes' together: where to search the stripes (at half
+ * resolution on frames of 128 px and more).  shift->peak is the
+ * correlation at the peak.  min_narrow as above. */
 gboolean     stripe_registration_frame_shift(const StripeRegistrationFrame *image,
                                              const StripeRegistrationFrame *reference,
                                              gdouble predicted_dx,
