@@ -335,7 +335,8 @@ print_time(const gchar *name, gdouble first, const gchar *first_name,
 static void
 print_block_bias(const SeriesCorrection *correction, const FrameSeries *series)
 {
-    gdouble sum[2][MAX_BLOCKS], count[MAX_BLOCKS], step = frame_series_dx(series), worst = 0.0;
+    gdouble sum[2][MAX_BLOCKS], count[MAX_BLOCKS], worst = 0.0;
+    gdouble xstep = frame_series_dx(series), ystep = frame_series_dy(series);
     gint i, g, worst_g = -1;
 
     memset(sum, 0, sizeof(sum));
@@ -348,8 +349,8 @@ print_block_bias(const SeriesCorrection *correction, const FrameSeries *series)
             continue;
         true_drift(m->t_a, &xa, &ya);
         true_drift(m->t_b, &xb, &yb);
-        sum[0][m->group] += m->dx/step - (xa - xb);
-        sum[1][m->group] += m->dy/step - (ya - yb);
+        sum[0][m->group] += m->dx/xstep - (xa - xb);
+        sum[1][m->group] += m->dy/ystep - (ya - yb);
         count[m->group]++;
     }
     for (g = 0; g < MAX_BLOCKS; g++) {

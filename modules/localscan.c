@@ -278,7 +278,7 @@ define_module_params(void)
                               LOCALSCAN_DEFAULT_FORCE);
     gwy_param_def_add_boolean(paramdef, PARAM_ALL_CHANNELS, LOCALSCAN_KEY_ALL_CHANNELS,
                               _("_All channels of the scan"), LOCALSCAN_DEFAULT_ALL_CHANNELS);
-    gwy_param_def_add_enum(paramdef, PARAM_MASKING, LOCALSCAN_KEY_MASKING, _("Mas_ked pixels"),
+    gwy_param_def_add_enum(paramdef, PARAM_MASKING, LOCALSCAN_KEY_MASKING, _("Mas_ks in registration"),
                            GWY_TYPE_MASKING_TYPE, LOCALSCAN_DEFAULT_MASKING);
     return paramdef;
 }
@@ -529,10 +529,21 @@ channel_mask(GwyContainer *data, gint id)
     return mask;
 }
 
+/* Whether the last registration had this reference, stripe count and
+ * masking.  The masks themselves are not compared: they cannot change
+ * while the dialog, which is modal, is open. */
+static gboolean
+measured_drift_current(const MeasuredDrift *measured, GwyAppDataId refid, gint n,
+                       GwyMaskingType masking)
+{
+    return (measured->valid && measured->stripes == n && measured->masking == masking
+            && measured->reference.datano == refid.datano && measured->reference.id == refid.id);
+}
+
 /* The exact table registering image against reference measured, from the
- * last registration when it had the same reference, stripe count and
- * masking (its failure is kept just as well).  The masks are the image's
- * and the reference's, in their pixels (either may be NULL). */
+ * last registration when it is current (its failure is kept just as
+ * well).  The masks are the image's and the reference's, in their pixels
+ * (either may be NULL). */
 static const DriftTable*
 measure_drift(MeasuredDrift *measured, GwyDataField *image, GwyDataField *image_mask,
               GwyDataField *reference, GwyDataField *reference_mask, GwyAppDataId refid, gint n,
@@ -540,8 +551,7 @@ measure_drift(MeasuredDrift *measured, GwyDataField *image, GwyDataField *image_
 {
     StripeRegistrationOptions options;
 
-    if (!measured->valid || measured->stripes != n || measured->masking != masking
-        || measured->reference.datano != refid.datano || measured->reference.id != refid.id) {
+    if (!measured_drift_current(measured, refid, n, masking)) {
         measured_drift_clear(measured);
         g_debug("%s: registering %d stripes against channel %d (%d x %d px)",
                 LOCALSCAN_FUNCTION_NAME, n, refid.id,
@@ -1017,7 +1027,7 @@ find_tooltip(const gchar *text)
         { N_("Table file"), N_("The CSV drift table to apply") },
         { N_("Stripes"),
           N_("How many stripes along the slow axis are registered against the reference") },
-        { N_("Masked pixels"),
+        { N_("Masks in registration"),
           N_("What the image's and the reference's masks mean to the registration: Exclude "
              "leaves masked pixels out (Gwyddion's importers mask the pixels a file lacks), "
              "Include uses only masked pixels, Ignore uses every pixel") },
@@ -1596,7 +1606,8 @@ preview_drift_table(ModuleGUI *gui, gboolean *in_preview_px, GError **error)
     ModuleArgs *args = gui->args;
     gint n = gwy_params_get_int(args->params, PARAM_STRIPES);
     const DriftTable *measured;
-    GwyDataField *reference, *image_mask, *reference_mask;
+    GwyDataField *reference, *image_mask = NULL, *reference_mask = NULL;
+    GwyMaskingType masking;
     GwyAppDataId refid;
 
     *in_preview_px = FALSE;
@@ -1613,13 +1624,18 @@ preview_drift_table(ModuleGUI *gui, gboolean *in_preview_px, GError **error)
         gui->preview_reference = preview_field_new(reference, PREVIEW_FIELD_SIZE);
         gui->preview_reference_id = refid;
     }
-    image_mask = preview_field_reduce_mask(gui->preview, channel_mask(args->data, args->id));
-    reference_mask = preview_field_reduce_mask(gui->preview_reference,
-                                               channel_mask(gwy_app_data_browser_get(refid.datano),
-                                                            refid.id));
+    /* The masks are reduced with the copies only for a new registration
+     * (a 4096 x 4096 mask takes longer than the rest of a refresh). */
+    masking = gwy_params_get_enum(args->params, PARAM_MASKING);
+    if (!measured_drift_current(&gui->preview_measured, refid, n, masking)) {
+        image_mask = preview_field_reduce_mask(gui->preview, channel_mask(args->data, args->id));
+        reference_mask = preview_field_reduce_mask(gui->preview_reference,
+                                                   channel_mask(gwy_app_data_browser_get(refid.datano),
+                                                                refid.id));
+    }
     measured = measure_drift(&gui->preview_measured, preview_field_source(gui->preview), image_mask,
                              preview_field_source(gui->preview_reference), reference_mask, refid, n,
-                             gwy_params_get_enum(args->params, PARAM_MASKING), error);
+                             masking, error);
     g_clear_object(&image_mask);
     g_clear_object(&reference_mask);
     if (!measured)

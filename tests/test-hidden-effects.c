@@ -48,7 +48,10 @@ print_models(JsonObject *result)
     }
 }
 
-START_TEST(test_hidden_effect)
+/* Draws case i of seed, fits it and asserts the effect and its
+ * parameters. */
+static void
+check_hidden_case(guint32 seed, gint i)
 {
     gchar *dir = g_dir_make_tmp("hidden-effects-XXXXXX", NULL);
     JsonParser *parser = json_parser_new();
@@ -59,13 +62,13 @@ START_TEST(test_hidden_effect)
     gint k;
 
     ck_assert(dir != NULL);
-    hidden_case_draw(base_seed, _i, &model);
-    files = hidden_case_make_frames(base_seed, _i, &model, dir);
+    hidden_case_draw(seed, i, &model);
+    files = hidden_case_make_frames(seed, i, &model, dir);
     ck_assert(files != NULL);
     result = hidden_case_fit(files, dir, parser);
     ck_assert_msg(result != NULL, "simscan fit failed");
     effect = json_object_get_string_member(result, "effect");
-    printf("case %2d: hidden %-11s found %-11s (v %.3f, %.3f nm/s)\n", _i,
+    printf("case %2d: hidden %-11s found %-11s (v %.3f, %.3f nm/s)\n", i,
            drift_model_type_name(model.type), effect,
            hidden_case_pair(result, "velocity_nm_per_s", 0),
            hidden_case_pair(result, "velocity_nm_per_s", 1));
@@ -76,9 +79,9 @@ START_TEST(test_hidden_effect)
     print_models(result);
     fflush(stdout);
     ck_assert_msg(strcmp(effect, drift_model_type_name(model.type)) == 0,
-                  "case %d (seed %u): hidden %s, found %s", _i, base_seed,
+                  "case %d (seed %u): hidden %s, found %s", i, seed,
                   drift_model_type_name(model.type), effect);
-    why = hidden_case_check(_i, &model, result);
+    why = hidden_case_check(i, &model, result);
     ck_assert_msg(why == NULL, "%s", why);
     for (k = 0; k < HIDDEN_CASE_FRAMES; k++)
         g_unlink(files[k]);
@@ -86,6 +89,31 @@ START_TEST(test_hidden_effect)
     g_strfreev(files);
     g_free(dir);
     g_object_unref(parser);
+}
+
+START_TEST(test_hidden_effect)
+{
+    check_hidden_case(base_seed, _i);
+}
+END_TEST
+
+/* Cases soaks found wrong, fixed in the product, kept as they were drawn:
+ * seed 103000176 case 4, an acceleration read as settling with tau 183 s
+ * over the 256 s series (drift_fit_select_kept: a long settling must beat
+ * the acceleration like any effect beats constant drift); seed 104000114
+ * case 3, an 8 px jump read as none after the outlier rounds cut good
+ * blocks at a 0.05 nm scale (the outlier floor). */
+static const struct {
+    guint32 seed;
+    gint i;
+} known_cases[] = {
+    { 103000176u, 4 },
+    { 104000114u, 3 },
+};
+
+START_TEST(test_known_case)
+{
+    check_hidden_case(known_cases[_i].seed, known_cases[_i].i);
 }
 END_TEST
 
@@ -98,6 +126,7 @@ main(void)
     base_seed = test_seed_from_env("test-hidden-effects");
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     tcase_add_loop_test(tc, test_hidden_effect, 0, N_CASES);
+    tcase_add_loop_test(tc, test_known_case, 0, G_N_ELEMENTS(known_cases));
     tcase_set_timeout(tc, 60);
     return test_run_suite(s);
 }

@@ -1,7 +1,8 @@
 /*
  *  The dialog's reduced copy of a large image (modules/core/preview-field.c):
  *  its size, and the masks reduced with it for the registration, where a
- *  preview pixel is masked when any pixel it averages is.
+ *  preview pixel is masked when it covers a masked pixel or its value was
+ *  interpolated from one.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -32,6 +33,26 @@ START_TEST(test_small_image_as_is)
     g_object_unref(field);
 }
 END_TEST
+
+static void
+check_interpolated_masked(GwyDataField *mask, GwyDataField *reduced)
+{
+    GwyDataField *sampled = gwy_data_field_new_resampled(mask, gwy_data_field_get_xres(reduced),
+                                                         gwy_data_field_get_yres(reduced),
+                                                         GWY_INTERPOLATION_LINEAR);
+    const gdouble *s = gwy_data_field_get_data_const(sampled), *r = gwy_data_field_get_data_const(reduced);
+    gint k, n = gwy_data_field_get_xres(reduced)*gwy_data_field_get_yres(reduced), touched = 0;
+
+    for (k = 0; k < n; k++) {
+        if (s[k] > 1e-9) {
+            touched++;
+            ck_assert_msg(r[k] == 1.0, "preview pixel %d interpolated from a masked pixel (%g) is not "
+                          "masked (seed %u)", k, s[k], test_seed);
+        }
+    }
+    ck_assert_int_gt(touched, 0);
+    g_object_unref(sampled);
+}
 
 /* Masked pixels at random places of a 2000 x 1500 image: every preview
  * pixel that covers one is masked, and the preview pixels two or more away
@@ -83,6 +104,9 @@ START_TEST(test_reduced_mask_covers_masked_pixels)
     ck_assert_int_gt(far, pxres*pyres/2);
     ck_assert_msg(far_masked == 0, "%d preview pixels far from every masked pixel masked (seed %u)",
                   far_masked, test_seed);
+    /* The mask resampled as the copy is: every preview pixel whose value
+     * a masked pixel entered is masked. */
+    check_interpolated_masked(mask, reduced);
     g_object_unref(reduced);
     g_rand_free(rng);
     preview_field_free(preview);

@@ -228,14 +228,25 @@ START_TEST(test_bad_masks)
     options.reference_mask = NULL;
     options.image_mask = full;
     ck_assert(!stripe_registration_measure_fields(image, reference, 4, &options, shifts, &error));
-    ck_assert_str_eq(error->message, "The mask leaves no pixel of the image to register.");
+    ck_assert_str_eq(error->message, "The image's mask covers every pixel: with masked pixels excluded, "
+                     "nothing is left to register.");
     g_clear_error(&error);
     /* Only the masked pixels are data: none is excluded (and the flat
-     * frames give no stripe). */
+     * frames give no stripe); an empty mask leaves nothing. */
     options.masking = GWY_MASK_INCLUDE;
     ck_assert_msg(stripe_registration_measure_fields(image, reference, 4, &options, shifts, &error),
                   "%s", error ? error->message : "?");
     ck_assert_int_eq(stripe_registration_count_accepted(shifts, 4), 0);
+    options.image_mask = NULL;
+    options.reference_mask = reference;
+    ck_assert(!stripe_registration_measure_fields(image, reference, 4, &options, shifts, &error));
+    ck_assert_str_eq(error->message, "Only masked pixels are used, and the reference's mask has none.");
+    g_clear_error(&error);
+    /* Ignored masks do not matter, whatever their size. */
+    options.masking = GWY_MASK_IGNORE;
+    options.reference_mask = small;
+    ck_assert_msg(stripe_registration_measure_fields(image, reference, 4, &options, shifts, &error),
+                  "%s", error ? error->message : "?");
     g_object_unref(full);
     g_object_unref(small);
     g_object_unref(reference);

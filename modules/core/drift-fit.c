@@ -1091,8 +1091,8 @@ compare_residuals(gconstpointer a, gconstpointer b, gpointer user_data)
 }
 
 /* The kept measurements that are gross outliers (failed registrations) by
- * a robust (median) scale of the kept residuals, beyond floor (nm) and
- * within OUTLIER_ROUND of the largest residual, at most `most` of them
+ * a robust (median) scale of the kept residuals, beyond floor_nm (the
+ * residual is the RMS of its two axes) and within OUTLIER_ROUND of the largest residual, at most `most` of them
  * (the largest), lose their place in mask; returns how many did.  Without
  * the floor, nearly exact measurements lose good ones: at a scale of 0.05
  * nm the rounds cut blocks 0.3 nm off after a jump until too few measured
@@ -1100,7 +1100,7 @@ compare_residuals(gconstpointer a, gconstpointer b, gpointer user_data)
  * test-hidden-effects, an 8-px jump read as none). */
 static gint
 cut_outliers(const DriftMeasurement *meas, gint n, const DriftFit *fit,
-             gdouble sigmas, gdouble floor, gint most, gboolean *mask)
+             gdouble sigmas, gdouble floor_nm, gint most, gboolean *mask)
 {
     gdouble *r = g_new(gdouble, n), *sorted = g_new(gdouble, n), limit, cut;
     gint *beyond = g_new(gint, n), i, m = 0, worst = -1, count = 0;
@@ -1122,7 +1122,7 @@ cut_outliers(const DriftMeasurement *meas, gint n, const DriftFit *fit,
     }
     if (m) {
         /* The median of a 2-D radial residual is about 1.18 sigma. */
-        limit = MAX(sigmas*MAX(gwy_math_kth_rank(m, sorted, m/2)/1.1774, 1e-6), floor);
+        limit = MAX(sigmas*MAX(gwy_math_kth_rank(m, sorted, m/2)/1.1774, 1e-6), floor_nm);
         cut = MAX(limit, OUTLIER_ROUND*r[worst]);
         for (i = 0; i < n && r[worst] > limit; i++) {
             if (r[i] > cut)

@@ -64,10 +64,11 @@ typedef struct {
                                times its own residual RMS (default 1.5) */
     gdouble outlier_sigmas; /* residuals beyond this many robust sigmas are
                                dropped before the final fits (default 5) */
-    gdouble outlier_floor_nm; /* and beyond this: a gross outlier is a failed
-                               registration, off by a good part of a pixel
-                               (default 0: no floor; a series sets a
-                               quarter of its pixel) */
+    gdouble outlier_floor_nm; /* and beyond this (the RMS of the two axes):
+                               a gross outlier is a failed registration,
+                               off by a good part of a pixel (default 0: no
+                               floor; fit_report_options_for_series() sets a
+                               quarter of the series' pixel where it is 0) */
     gdouble min_period;     /* s, shortest period/tau searched; <= 0: from the
                                measurement times */
     gboolean no_jump_at_frame_gap; /* unused, reserved */

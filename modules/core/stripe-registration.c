@@ -1223,7 +1223,7 @@ data_without_masked(GwyDataField *field, GwyDataField *mask, GwyMaskingType mask
 /* Whether the mask fits the field and leaves some of it as data. */
 static gboolean
 check_mask(GwyDataField *field, GwyDataField *mask, const gdouble *data, gboolean is_reference,
-           GError **error)
+           GwyMaskingType masking, GError **error)
 {
     gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
     gsize k, n = (gsize)xres*yres;
@@ -1244,9 +1244,18 @@ check_mask(GwyDataField *field, GwyDataField *mask, const gdouble *data, gboolea
     }
     if (!data)
         return TRUE;
-    g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE, "%s",
-                is_reference ? _("The mask leaves no pixel of the reference to register.")
-                : _("The mask leaves no pixel of the image to register."));
+    if (masking == GWY_MASK_INCLUDE) {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE, "%s",
+                    is_reference ? _("Only masked pixels are used, and the reference's mask has none.")
+                    : _("Only masked pixels are used, and the image's mask has none."));
+    }
+    else {
+        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_VALUE, "%s",
+                    is_reference ? _("The reference's mask covers every pixel: with masked pixels "
+                                     "excluded, nothing is left to register.")
+                    : _("The image's mask covers every pixel: with masked pixels excluded, nothing "
+                        "is left to register."));
+    }
     return FALSE;
 }
 
@@ -1275,14 +1284,17 @@ stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference,
         opts = *options;
     else
         stripe_registration_options_init(&opts);
-    if ((opts.image_mask && !check_mask(image, opts.image_mask, NULL, FALSE, error))
-        || (opts.reference_mask && !check_mask(reference, opts.reference_mask, NULL, TRUE, error)))
+    if (opts.masking == GWY_MASK_IGNORE)
+        opts.image_mask = opts.reference_mask = NULL;
+    if (!check_mask(image, opts.image_mask, NULL, FALSE, opts.masking, error)
+        || !check_mask(reference, opts.reference_mask, NULL, TRUE, opts.masking, error))
         return FALSE;
     opts.pixel_aspect = gwy_data_field_get_dy(image)/gwy_data_field_get_dx(image);
     image_data = data_without_masked(image, opts.image_mask, opts.masking);
     reference_data = data_without_masked(reference, opts.reference_mask, opts.masking);
-    if (!check_mask(image, opts.image_mask, image_data, FALSE, error)
-        || !check_mask(reference, opts.reference_mask, reference_data, TRUE, error)) {
+    if ((image_data && !check_mask(image, opts.image_mask, image_data, FALSE, opts.masking, error))
+        || (reference_data
+            && !check_mask(reference, opts.reference_mask, reference_data, TRUE, opts.masking, error))) {
         g_free(image_data);
         g_free(reference_data);
         return FALSE;
