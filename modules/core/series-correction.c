@@ -176,8 +176,9 @@ plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
 
 /* Every how many measurements a long series fits one: about count/most,
  * sharing no factor with the blocks per pair, so that the subset takes
- * every block of the frame in turn (a stride of 2 with 16 blocks took
- * the even blocks of every pair and never the last one). */
+ * every block position in turn (exactly so where every block registered;
+ * the stride counts registered blocks).  A stride of 2 with 16 blocks took
+ * the even blocks of every pair and never the last one. */
 static gint
 subset_stride(gint count, gint most, gint n_blocks)
 {
