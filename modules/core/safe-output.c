@@ -63,8 +63,9 @@ install_handlers(void)
 
 static sigset_t held_before;
 
-void
-safe_output_hold_signals(void)
+/* Blocks the caught signals; *before gets the mask to restore. */
+static void
+block_caught_signals(sigset_t *before)
 {
     sigset_t caught;
     guint i;
@@ -72,7 +73,13 @@ safe_output_hold_signals(void)
     sigemptyset(&caught);
     for (i = 0; i < G_N_ELEMENTS(caught_signals); i++)
         sigaddset(&caught, caught_signals[i]);
-    sigprocmask(SIG_BLOCK, &caught, &held_before);
+    sigprocmask(SIG_BLOCK, &caught, before);
+}
+
+void
+safe_output_hold_signals(void)
+{
+    block_caught_signals(&held_before);
 }
 
 void
@@ -186,18 +193,25 @@ safe_output_temp_new(const gchar *target, const gchar *role, gint *fd)
     gchar *name = g_strdup_printf("%s%c.%s.%s%ld.XXXXXX%s", dir, G_DIR_SEPARATOR, base,
                                   role ? role : "", (glong)getpid(), SAFE_OUTPUT_SUFFIX);
     gint saved_errno, tmpfd;
+    sigset_t before;
 
     g_free(dir);
     g_free(base);
     safe_output_sweep(target);
     install_handlers();
+    /* A signal between the file's creation and its registration would
+     * leave it behind (test-hostile-input, seed 107000003, under load):
+     * it waits until the handler knows the file. */
+    block_caught_signals(&before);
     if ((tmpfd = g_mkstemp(name)) < 0) {
         saved_errno = errno;
+        sigprocmask(SIG_SETMASK, &before, NULL);
         g_free(name);
         errno = saved_errno;
         return NULL;
     }
     safe_output_register(name);
+    sigprocmask(SIG_SETMASK, &before, NULL);
     if (fd)
         *fd = tmpfd;
     else
@@ -208,11 +222,14 @@ safe_output_temp_new(const gchar *target, const gchar *role, gint *fd)
 gchar*
 safe_output_temp_dir_new(const gchar *what)
 {
-    gchar *tmpl = g_strdup_printf("%s-XXXXXX", what);
-    gchar *dir = g_dir_make_tmp(tmpl, NULL);
+    gchar *tmpl = g_strdup_printf("%s-XXXXXX", what), *dir;
+    sigset_t before;
 
-    g_free(tmpl);
-    if (dir)
+    install_handlers();
+    block_caught_signals(&before);
+    if ((dir = g_dir_make_tmp(tmpl, NULL)))
         safe_output_register(dir);
+    sigprocmask(SIG_SETMASK, &before, NULL);
+    g_free(tmpl);
     return dir;
 }
