@@ -38,18 +38,6 @@ copy_shifts(const StripeShift *shifts, gint n, gdouble *dx, gdouble *dy,
     }
 }
 
-/* A frame conditioned for registration (stripe-registration.h), as
- * displacement_register_blocks() registers it: what a series does once
- * per frame, however many partners the frame has.  The raw data go to the
- * registration's own conditioning as they are, with the pixels' physical
- * aspect (dy/dx), as a single pair's channels go.  NULL when it cannot be
- * registered at all. */
-static StripeRegistrationFrame*
-prepare_frame(const gdouble *data, gint xres, gint yres, gdouble pixel_aspect)
-{
-    return stripe_registration_frame_new(data, xres, yres, pixel_aspect);
-}
-
 /* The narrow blur a pair whose blocks mostly fail to register at the
  * frames' own band is tried with again: a fraction of the frame's smaller
  * side, at least a few pixels.  The band the frames' noise calls for suits
@@ -135,8 +123,11 @@ register_prepared(const StripeRegistrationFrame *image,
             && register_in_band(image, reference, xres, yres, n, options, guess,
                                 MAX(WIDER_BAND_FRACTION*MIN(xres, yres), WIDER_BAND_MIN_PX),
                                 &other_whole, other) > best) {
+            StripeShift *kept = shifts;
+
             whole = other_whole;
-            memcpy(shifts, other, n*sizeof(StripeShift));
+            shifts = other;
+            other = kept;
         }
     }
     else {
@@ -172,8 +163,10 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
         displacement_options_init(&defaults);
         options = &defaults;
     }
-    a = prepare_frame(image, xres, yres, pixel_aspect);
-    b = prepare_frame(reference, xres, yres, pixel_aspect);
+    /* The raw data go to the registration's own conditioning, with the
+     * pixels' physical aspect, as a single pair's channels go. */
+    a = stripe_registration_frame_new(image, xres, yres, pixel_aspect);
+    b = stripe_registration_frame_new(reference, xres, yres, pixel_aspect);
     register_prepared(a, b, xres, yres, n, options, guess, dx, dy, score,
                       global);
     stripe_registration_frame_free(a);
@@ -206,7 +199,7 @@ detail_row(const gdouble *data, gint xres, gint r0, gint r1)
 }
 
 /* A series registered pair by pair.  Each frame is prepared once
- * (prepare_frame) and held while the frames within reach of it are
+ * (prepare_series_frame) and held while the frames within reach of it are
  * registered against it.  Frames go in chunks: their preparation, then
  * their consecutive pairs, then their older pairs, each step spread over
  * the processor's cores (the pairs of a step do not depend on each other:
@@ -237,7 +230,7 @@ prepare_series_frame(const SeriesRegistration *reg, gint k)
 {
     const SeriesFrame *f = reg->series->frames + k;
 
-    return prepare_frame(gwy_data_field_get_data_const(f->field), f->timing.xres, f->timing.yres,
+    return stripe_registration_frame_new(gwy_data_field_get_data_const(f->field), f->timing.xres, f->timing.yres,
                          frame_series_dy(reg->series)/frame_series_dx(reg->series));
 }
 
