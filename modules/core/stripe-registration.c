@@ -1220,24 +1220,28 @@ data_without_masked(GwyDataField *field, GwyDataField *mask, GwyMaskingType mask
     return copy;
 }
 
-/* Whether the mask fits the field and leaves some of it as data. */
 static gboolean
-check_mask(GwyDataField *field, GwyDataField *mask, const gdouble *data, gboolean is_reference,
-           GwyMaskingType masking, GError **error)
+check_mask_size(GwyDataField *field, GwyDataField *mask, gboolean is_reference, GError **error)
 {
     gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
-    gsize k, n = (gsize)xres*yres;
 
-    if (!mask)
+    if (!mask || (gwy_data_field_get_xres(mask) == xres && gwy_data_field_get_yres(mask) == yres))
         return TRUE;
-    if (gwy_data_field_get_xres(mask) != xres || gwy_data_field_get_yres(mask) != yres) {
-        g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE,
-                    is_reference
-                    ? _("The reference's mask (%d x %d px) does not have the reference's size (%d x %d px).")
-                    : _("The image's mask (%d x %d px) does not have the image's size (%d x %d px)."),
-                    gwy_data_field_get_xres(mask), gwy_data_field_get_yres(mask), xres, yres);
-        return FALSE;
-    }
+    g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE,
+                is_reference
+                ? _("The reference's mask (%d x %d px) does not have the reference's size (%d x %d px).")
+                : _("The image's mask (%d x %d px) does not have the image's size (%d x %d px)."),
+                gwy_data_field_get_xres(mask), gwy_data_field_get_yres(mask), xres, yres);
+    return FALSE;
+}
+
+/* Whether data (NULL: the field's own, unmasked) keeps a pixel to register. */
+static gboolean
+check_mask_leaves_data(const gdouble *data, gsize n, gboolean is_reference, GwyMaskingType masking,
+                       GError **error)
+{
+    gsize k;
+
     for (k = 0; data && k < n; k++) {
         if (!isnan(data[k]))
             return TRUE;
@@ -1286,15 +1290,14 @@ stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference,
         stripe_registration_options_init(&opts);
     if (opts.masking == GWY_MASK_IGNORE)
         opts.image_mask = opts.reference_mask = NULL;
-    if (!check_mask(image, opts.image_mask, NULL, FALSE, opts.masking, error)
-        || !check_mask(reference, opts.reference_mask, NULL, TRUE, opts.masking, error))
+    if (!check_mask_size(image, opts.image_mask, FALSE, error)
+        || !check_mask_size(reference, opts.reference_mask, TRUE, error))
         return FALSE;
     opts.pixel_aspect = gwy_data_field_get_dy(image)/gwy_data_field_get_dx(image);
     image_data = data_without_masked(image, opts.image_mask, opts.masking);
     reference_data = data_without_masked(reference, opts.reference_mask, opts.masking);
-    if ((image_data && !check_mask(image, opts.image_mask, image_data, FALSE, opts.masking, error))
-        || (reference_data
-            && !check_mask(reference, opts.reference_mask, reference_data, TRUE, opts.masking, error))) {
+    if (!check_mask_leaves_data(image_data, (gsize)xres*yres, FALSE, opts.masking, error)
+        || !check_mask_leaves_data(reference_data, (gsize)xres*yres, TRUE, opts.masking, error)) {
         g_free(image_data);
         g_free(reference_data);
         return FALSE;
