@@ -116,7 +116,19 @@ typedef struct {
     gdouble *window;              /* xres, for the sub-pixel match */
     StripeSubpixel *subpixel;     /* NULL: no sub-pixel match */
     StripeSubpixel *subpixel_band;/* the same on the band-passed frames */
+    gboolean uncertainty;         /* the sub-pixel match's sigma wanted */
 } Level;
+
+/* How far a stripe's shift is refined beyond its map's whole-pixel peak:
+ * by a quadratic through the map, or by matching the stripe against the
+ * interpolated reference, with or without the match's uncertainty (which
+ * costs more than the match: a series that weighs its blocks by their
+ * correlation has no use for it). */
+typedef enum {
+    REFINE_QUADRATIC,
+    REFINE_MATCH,
+    REFINE_MATCH_SIGMA,
+} Refinement;
 
 G_DEFINE_QUARK(stripe-registration-error-quark, stripe_registration_error)
 
@@ -339,11 +351,15 @@ polish_peak(Level *level, gint s, gint reach, Peak *peak)
     if (level->subpixel && peak->trusted && !peak->polished) {
         gint ky = peak->ky, kx = peak->kx;
 
+        gdouble *sigma = level->uncertainty ? &peak->sigma : NULL;
+
+        peak->sigma = 0.0;
+
         peak->polished = stripe_subpixel_refine(level->subpixel, first, end, peak->ky, peak->kx,
-                                                reach, &peak->dy, &peak->dx, &peak->sigma);
+                                                reach, &peak->dy, &peak->dx, sigma);
         if (!peak->polished && level->subpixel_band) {
             peak->polished = stripe_subpixel_refine(level->subpixel_band, first, end, peak->ky, peak->kx,
-                                                    reach, &peak->dy, &peak->dx, &peak->sigma);
+                                                    reach, &peak->dy, &peak->dx, sigma);
         }
         /* The match must not carry the stripe out of its searched window,
          * whose border a peak of its own could not cross. */
@@ -832,6 +848,7 @@ levelled_view(const ConditionedFrame *frame)
 typedef struct {
     const ConditionedFrame *image, *reference;   /* levelled views */
     const ConditionedFrame *sub_image, *sub_reference;
+    gboolean uncertainty;
     gint n, radius, workers;
     const gdouble *pdy, *pdx;
     Peak *own;
@@ -846,6 +863,7 @@ measure_fine_share(gpointer user_data, gint worker)
 
     level_init(&level, fs->image, fs->reference, fs->sub_image, fs->sub_reference, fs->n,
                fs->radius, fs->radius);
+    level.uncertainty = fs->uncertainty;
     for (s = worker; s < fs->n; s += fs->workers)
         measure_stripe_peak(&level, s, fs->pdy, fs->pdx, fs->radius, fs->radius, 0, fs->own + s);
     level_free(&level);
@@ -862,18 +880,20 @@ measure_fine_share(gpointer user_data, gint worker)
  * runs its pairs in parallel already). */
 static void
 measure_fine(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
-             const gdouble *pdy, const gdouble *pdx, gint radius, gdouble min_score, gboolean polish,
-             gboolean parallel, StripeShift *shifts)
+             const gdouble *pdy, const gdouble *pdx, gint radius, gdouble min_score,
+             Refinement refine, gboolean parallel, StripeShift *shifts)
 {
     ConditionedFrame image_view = levelled_view(image), reference_view = levelled_view(reference);
+    gboolean match = (refine != REFINE_QUADRATIC);
     FineStripes fs = {
-        &image_view, &reference_view, polish ? image : NULL, polish ? reference : NULL,
+        &image_view, &reference_view, match ? image : NULL, match ? reference : NULL,
+        refine == REFINE_MATCH_SIGMA,
         n, radius, parallel ? CLAMP((gint)g_get_num_processors(), 1, n) : 1, pdy, pdx,
         g_new(Peak, MAX(n, 1)),
     };
 
     parallel_run(0, fs.workers, measure_fine_share, &fs);
-    set_own_shifts(fs.own, n, polish, radius, radius, min_score, shifts);
+    set_own_shifts(fs.own, n, match, radius, radius, min_score, shifts);
     g_free(fs.own);
 }
 
@@ -928,7 +948,8 @@ stripe_registration_measure_conditioned(const ConditionedFrame *image, const Con
     }
     else {
         radius = MIN(fine_radius(factor), MIN(image->xres, image->yres)/2);
-        measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, TRUE, TRUE, shifts);
+        measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, REFINE_MATCH_SIGMA, TRUE,
+                     shifts);
         for (s = 0; s < n; s++)
             shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres, pdy[s], pdx[s]);
     }
@@ -937,12 +958,12 @@ stripe_registration_measure_conditioned(const ConditionedFrame *image, const Con
     return TRUE;
 }
 
-/* stripe_registration_measure_around_conditioned(); without polish the
- * shifts stay at the maps' resolution (peaks refined by a quadratic). */
+/* stripe_registration_measure_around_conditioned(), the shifts refined as
+ * refine says. */
 static gboolean
 measure_around(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
                const gdouble *predicted_dx, const gdouble *predicted_dy, gdouble radius_px,
-               gdouble min_score, gboolean polish, StripeShift *shifts, GError **error)
+               gdouble min_score, Refinement refine, StripeShift *shifts, GError **error)
 {
     gint s, radius;
 
@@ -958,7 +979,7 @@ measure_around(const ConditionedFrame *image, const ConditionedFrame *reference,
         }
     }
     radius = (gint)CLAMP(ceil(radius_px), 1, MIN(image->xres, image->yres)/2);
-    measure_fine(image, reference, n, predicted_dy, predicted_dx, radius, min_score, polish, FALSE,
+    measure_fine(image, reference, n, predicted_dy, predicted_dx, radius, min_score, refine, FALSE,
                  shifts);
     for (s = 0; s < n; s++) {
         shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres,
@@ -976,7 +997,7 @@ stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
 {
     g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
     return measure_around(image, reference, n, predicted_dx, predicted_dy, radius_px, min_score,
-                          TRUE, shifts, error);
+                          REFINE_MATCH_SIGMA, shifts, error);
 }
 
 /* The two frames of a pair, conditioned at once on two cores: each
@@ -1136,7 +1157,7 @@ static gboolean
 measure_around_pair(const StripeRegistrationFrame *image,
                     const StripeRegistrationFrame *reference, gint n,
                     const gdouble *predicted_dx, const gdouble *predicted_dy, gdouble radius_px,
-                    gdouble min_narrow, gdouble min_score, gboolean polish, StripeShift *shifts,
+                    gdouble min_narrow, gdouble min_score, Refinement refine, StripeShift *shifts,
                     GError **error)
 {
     /* The same band as condition_pair() gives the two frames, or wider. */
@@ -1148,7 +1169,7 @@ measure_around_pair(const StripeRegistrationFrame *image,
     cimage = band_passed(image, narrow, &made_image);
     creference = band_passed(reference, narrow, &made_reference);
     ok = measure_around(cimage, creference, n, predicted_dx, predicted_dy, radius_px, min_score,
-                        polish, shifts, error);
+                        refine, shifts, error);
     conditioned_frame_free(made_image);
     conditioned_frame_free(made_reference);
     return ok;
@@ -1173,14 +1194,14 @@ stripe_registration_frame_shift(const StripeRegistrationFrame *image,
     g_return_val_if_fail(image && reference && shift, FALSE);
     if (MIN(image->unfiltered->xres, image->unfiltered->yres) < FRAME_SHIFT_HALVED_FROM)
         return measure_around_pair(image, reference, 1, &predicted_dx, &predicted_dy, radius_px, min_narrow,
-                                   STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, FALSE, shift, NULL);
+                                   STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, REFINE_QUADRATIC, shift, NULL);
     narrow = MAX(MAX(image->noise_scale, reference->noise_scale), min_narrow);
     cimage = band_passed(image, narrow, &made_image);
     creference = band_passed(reference, narrow, &made_reference);
     small_image = conditioned_frame_downsample(cimage, 2);
     small_reference = conditioned_frame_downsample(creference, 2);
     ok = measure_around(small_image, small_reference, 1, &pdx, &pdy, MAX(0.5*radius_px, 1.0),
-                        STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, FALSE, shift, NULL);
+                        STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, REFINE_QUADRATIC, shift, NULL);
     shift->dx *= 2.0;
     shift->dy *= 2.0;
     conditioned_frame_free(small_image);
@@ -1195,11 +1216,12 @@ stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
                                           const StripeRegistrationFrame *reference, gint n,
                                           const gdouble *predicted_dx, const gdouble *predicted_dy,
                                           gdouble radius_px, gdouble min_narrow, gdouble min_score,
-                                          StripeShift *shifts, GError **error)
+                                          gboolean uncertainty, StripeShift *shifts, GError **error)
 {
     g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
     return measure_around_pair(image, reference, n, predicted_dx, predicted_dy, radius_px,
-                               min_narrow, min_score, TRUE, shifts, error);
+                               min_narrow, min_score, uncertainty ? REFINE_MATCH_SIGMA : REFINE_MATCH,
+                               shifts, error);
 }
 
 /* The field's data with the pixels its mask makes missing (masking) as

@@ -153,7 +153,10 @@ void         stripe_registration_frame_free(StripeRegistrationFrame *frame);
 
 /* stripe_registration_measure_around() for two such frames, conditioned
  * as it would condition them, with a narrow blur of at least min_narrow
- * px (0: the frames' own noise scale). */
+ * px (0: the frames' own noise scale).  Without uncertainty, the shifts'
+ * sigma is not computed (0; it costs more than the sub-pixel match
+ * itself), and a stripe is not rejected for a sigma as wide as its
+ * search window. */
 gboolean     stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
                                                        const StripeRegistrationFrame *reference,
                                                        gint n,
@@ -162,6 +165,7 @@ gboolean     stripe_registration_measure_around_frames(const StripeRegistrationF
                                                        gdouble radius_px,
                                                        gdouble min_narrow,
                                                        gdouble min_score,
+                                                       gboolean uncertainty,
                                                        StripeShift *shifts,
                                                        GError **error);
 
