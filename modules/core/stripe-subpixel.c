@@ -283,9 +283,11 @@ prepare_row(StripeSubpixel *sp, const StripeSpan *span, gint i)
     gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
     gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS;
     gdouble inv_dist = 1.0/(MIN(r + 1, sp->yres - 1) - MAX(r - 1, 0));
-    gdouble reg[ROW_REGRESSORS], w;
+    /* The sums go to a local array: terms may alias the rows as far as the
+     * compiler knows, and would be loaded and stored for every pixel. */
+    gdouble reg[ROW_REGRESSORS], sums[ROW_TERMS], w;
 
-    memset(terms, 0, ROW_TERMS*sizeof(gdouble));
+    memset(sums, 0, sizeof(sums));
     for (c = span->col_lo; c < span->col_hi; c++) {
         w = sp->window[c]*tap_validity(sp, r, c);
         pw[c] = w;
@@ -302,9 +304,10 @@ prepare_row(StripeSubpixel *sp, const StripeSpan *span, gint i)
             gdouble wa = w*reg[a];
 
             for (b = a; b < ROW_REGRESSORS; b++)
-                terms[row_term(a, b)] += wa*reg[b];
+                sums[row_term(a, b)] += wa*reg[b];
         }
     }
+    memcpy(terms, sums, sizeof(sums));
     centre_row_terms(sp, i);
 }
 
