@@ -114,6 +114,8 @@ struct _StripeSubpixel {
     gdouble *used_weight;     /* xres: the current row's weights as used */
     gdouble *column;          /* xres: reference interpolated along y */
     gdouble *trend;           /* TREND_TERMS x xres: the x trend's terms */
+    gdouble *row_scratch;     /* (2 + TREND_TERMS) x xres: a row's
+                                 gradients and weighted trend */
     gdouble *residual;        /* max_height x xres: weighted residual of the
                                  final match, for its uncertainty */
     gboolean *row_dropped;    /* max_height: rows that left the reference */
@@ -168,6 +170,7 @@ stripe_subpixel_new(const gdouble *image, const gdouble *reference, const gdoubl
     sp->column_valid = g_new(gdouble, xres);
     sp->used_weight = g_new(gdouble, xres);
     sp->trend = g_new(gdouble, TREND_TERMS*(gsize)xres);
+    sp->row_scratch = g_new(gdouble, (2 + TREND_TERMS)*(gsize)xres);
     for (gint c = 0; c < xres; c++) {
         gdouble u = (xres > 1) ? 2.0*c/(xres - 1) - 1.0 : 0.0, p0 = 1.0, p1 = u, p2;
 
@@ -201,6 +204,7 @@ stripe_subpixel_free(StripeSubpixel *sp)
     g_free(sp->used_weight);
     g_free(sp->column);
     g_free(sp->trend);
+    g_free(sp->row_scratch);
     g_free(sp->row_dropped);
     g_free(sp);
 }
@@ -269,45 +273,96 @@ centre_row_terms(StripeSubpixel *sp, gint i)
     centre_terms(sp->row_normal + (gsize)i*ROW_TERMS, sp->row_offset + (gsize)i*ROW_REGRESSORS);
 }
 
+/* The dot product of a and b over columns lo .. hi - 1, in four running
+ * sums: one sum's chain of additions would make every pixel wait for the
+ * one before. */
+static gdouble
+columns_dot(const gdouble *a, const gdouble *b, gint lo, gint hi)
+{
+    gdouble s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    gint c = lo;
+
+    for (; c + 4 <= hi; c += 4) {
+        s0 += a[c]*b[c];
+        s1 += a[c+1]*b[c+1];
+        s2 += a[c+2]*b[c+2];
+        s3 += a[c+3]*b[c+3];
+    }
+    for (; c < hi; c++)
+        s0 += a[c]*b[c];
+    return (s0 + s1) + (s2 + s3);
+}
+
+/* columns_dot() with b all ones. */
+static gdouble
+columns_sum(const gdouble *a, gint lo, gint hi)
+{
+    gdouble s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    gint c = lo;
+
+    for (; c + 4 <= hi; c += 4) {
+        s0 += a[c];
+        s1 += a[c+1];
+        s2 += a[c+2];
+        s3 += a[c+3];
+    }
+    for (; c < hi; c++)
+        s0 += a[c];
+    return (s0 + s1) + (s2 + s3);
+}
+
 /* Row i's weighted stripe and gradients, and its products of the row
- * regressors (stripe, 1, d/dy, d/dx, the x trend), upper triangle by rows. */
+ * regressors (stripe, 1, d/dy, d/dx, the x trend), upper triangle by rows:
+ * first the regressors along the row, then each product as one pass over
+ * it. */
 static void
 prepare_row(StripeSubpixel *sp, const StripeSpan *span, gint i)
 {
-    gint xres = sp->xres, r = span->first + i, c, a, b;
+    gint xres = sp->xres, r = span->first + i, lo = span->col_lo, hi = span->col_hi, c, a, b;
     const gdouble *row = sp->image + (gsize)r*xres;
     const gdouble *above = image_row_clamped(sp, r - 1), *below = image_row_clamped(sp, r + 1);
     gdouble *pw = sp->pixel_weight + (gsize)i*xres;
     gdouble *wv = sp->weighted_value + (gsize)i*xres;
     gdouble *wgy = sp->weighted_grad_y + (gsize)i*xres;
     gdouble *wgx = sp->weighted_grad_x + (gsize)i*xres;
+    gdouble *gy = sp->row_scratch, *gx = gy + xres, *wtrend = gx + xres;
     gdouble *terms = sp->row_normal + (gsize)i*ROW_TERMS;
-    gdouble inv_dist = 1.0/(MIN(r + 1, sp->yres - 1) - MAX(r - 1, 0));
-    /* The sums go to a local array: terms may alias the rows as far as the
-     * compiler knows, and would be loaded and stored for every pixel. */
-    gdouble reg[ROW_REGRESSORS], sums[ROW_TERMS], w;
+    gdouble inv_dist = 1.0/(MIN(r + 1, sp->yres - 1) - MAX(r - 1, 0)), w;
+    const gdouble *plain[ROW_REGRESSORS], *weighted[ROW_REGRESSORS];
 
-    memset(sums, 0, sizeof(sums));
-    for (c = span->col_lo; c < span->col_hi; c++) {
+    for (c = lo; c < hi; c++) {
         w = sp->window[c]*tap_validity(sp, r, c);
         pw[c] = w;
-        reg[0] = row[c];
-        reg[1] = 1.0;
-        reg[2] = (below[c] - above[c])*inv_dist;
-        reg[3] = 0.5*(row[c+1] - row[c-1]);
-        for (a = 0; a < TREND_TERMS; a++)
-            reg[4 + a] = sp->trend[a*xres + c];
-        wv[c] = w*reg[0];
-        wgy[c] = w*reg[2];
-        wgx[c] = w*reg[3];
-        for (a = 0; a < ROW_REGRESSORS; a++) {
-            gdouble wa = w*reg[a];
+        gy[c] = (below[c] - above[c])*inv_dist;
+        gx[c] = 0.5*(row[c+1] - row[c-1]);
+        wv[c] = w*row[c];
+        wgy[c] = w*gy[c];
+        wgx[c] = w*gx[c];
+    }
+    for (a = 0; a < TREND_TERMS; a++) {
+        const gdouble *t = sp->trend + (gsize)a*xres;
+        gdouble *wt = wtrend + (gsize)a*xres;
 
-            for (b = a; b < ROW_REGRESSORS; b++)
-                sums[row_term(a, b)] += wa*reg[b];
+        for (c = lo; c < hi; c++)
+            wt[c] = pw[c]*t[c];
+        plain[4 + a] = t;
+        weighted[4 + a] = wt;
+    }
+    plain[0] = row;
+    plain[1] = NULL;
+    plain[2] = gy;
+    plain[3] = gx;
+    weighted[0] = wv;
+    weighted[1] = pw;
+    weighted[2] = wgy;
+    weighted[3] = wgx;
+    for (a = 0; a < ROW_REGRESSORS; a++) {
+        for (b = a; b < ROW_REGRESSORS; b++) {
+            /* Regressor 1 is the constant. */
+            terms[row_term(a, b)] = (b == 1) ? columns_sum(weighted[a], lo, hi)
+                                             : columns_dot(weighted[a], plain[b], lo, hi);
         }
     }
-    memcpy(terms, sums, sizeof(sums));
     centre_row_terms(sp, i);
 }
 
