@@ -142,20 +142,30 @@ START_TEST(test_random_walk_smooth)
 }
 END_TEST
 
-/* A steady drift of whole pixels per frame: the CSV holds every line of
- * every frame with the fitted drift, the JSON the frames and the fit. */
+/* A steady drift of vx_px and vy_px per frame (of 64 s, 96 x 64 px, lines
+ * of 1 s) over a canvas of bumps; content at (x, y) appears at (x + dx,
+ * y + dy).  The canvas is 160 px, the frames at (30, 40) on it, unless the
+ * travel needs more. */
 static FrameSeries*
-steady_series(gint n_frames, gdouble vx_px, GwyDataField **truth)
+steady_series(gint n_frames, gdouble vx_px, gdouble vy_px, GwyDataField **truth)
 {
     FrameSeries *series = frame_series_new();
     GRand *rng = g_rand_new_with_seed(base_seed);
-    gint xres = 96, yres = 64, canvas = 160, k, r, c, b;
-    GwyDataField *surface = gwy_data_field_new(canvas, canvas, canvas, canvas,
-                                               TRUE);
-    gdouble *s = gwy_data_field_get_data(surface);
+    gint travel = (gint)ceil(n_frames*MAX(fabs(vx_px), fabs(vy_px))) + 2;
+    gint xres = 96, yres = 64, canvas = 160, x0 = 30, y0 = 40, k, r, c, b, n_bumps;
+    GwyDataField *surface;
+    gdouble *s;
 
+    if (travel > 28) {
+        x0 = y0 = travel;
+        canvas = xres + 2*travel;
+    }
+    /* 120 bumps on 160 x 160 px, as dense on a larger canvas. */
+    n_bumps = (gint)ceil(120.0*canvas*canvas/(160.0*160.0));
+    surface = gwy_data_field_new(canvas, canvas, canvas, canvas, TRUE);
+    s = gwy_data_field_get_data(surface);
     /* Bumps on a canvas wider than any frame's travel. */
-    for (b = 0; b < 120; b++) {
+    for (b = 0; b < n_bumps; b++) {
         gdouble x0 = g_rand_double_range(rng, 0, canvas);
         gdouble y0 = g_rand_double_range(rng, 0, canvas);
 
@@ -173,16 +183,18 @@ steady_series(gint n_frames, gdouble vx_px, GwyDataField **truth)
         scan_timing_init(&timing, xres, yres, k*yres*1.0, 1.0,
                          SCAN_DIRECTION_DOWN);
         for (r = 0; r < yres; r++) {
-            gdouble shift = vx_px*scan_timing_rows_time(&timing, r, r+1)/yres;
-            gint whole = (gint)floor(shift);
-            gdouble f = shift - whole;
+            gdouble t = scan_timing_rows_time(&timing, r, r+1)/yres;
+            gdouble shift = vx_px*t, yshift = vy_px*t;
+            gint whole = (gint)floor(shift), ywhole = (gint)floor(yshift);
+            gdouble f = shift - whole, g = yshift - ywhole;
+            const gdouble *s0 = s + (r + y0 - ywhole)*canvas, *s1 = s0 - canvas;
 
             /* Content at x appears at x + shift. */
             for (c = 0; c < xres; c++) {
-                gint x = c + 30 - whole;
+                gint x = c + x0 - whole;
 
-                d[r*xres + c] = (1.0 - f)*s[(r + 40)*canvas + x]
-                                + f*s[(r + 40)*canvas + x - 1];
+                d[r*xres + c] = (1.0 - g)*((1.0 - f)*s0[x] + f*s0[x - 1])
+                                + g*((1.0 - f)*s1[x] + f*s1[x - 1]);
             }
         }
         gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
@@ -199,7 +211,7 @@ steady_series(gint n_frames, gdouble vx_px, GwyDataField **truth)
 
 START_TEST(test_outputs)
 {
-    FrameSeries *series = steady_series(3, 4.0, NULL);
+    FrameSeries *series = steady_series(3, 4.0, 0.0, NULL);
     SeriesCorrection correction;
     GError *error = NULL;
     gchar *csv, *json, **lines;
@@ -267,7 +279,7 @@ END_TEST
  * have data. */
 START_TEST(test_frames_overlay)
 {
-    FrameSeries *series = steady_series(3, 6.0, NULL);
+    FrameSeries *series = steady_series(3, 6.0, 0.0, NULL);
     SeriesCorrection correction;
     GwyDataField *fixed[3], *mask[3];
     gint k, r, c, area[4], xres = 96, yres = 64, count = 0;
@@ -316,6 +328,61 @@ START_TEST(test_frames_overlay)
 }
 END_TEST
 
+/* A series longer than SERIES_CORRECTION_ALL_PAIRS_UP_TO registers each
+ * frame against SERIES_CORRECTION_PAIR_REACH older ones only, the older
+ * pairs searched narrowly (at least 6 px) around the chained shifts of the
+ * consecutive pairs (displacement-measure.c): a steady drift drawn at
+ * random (seeded), 2.5 to 4 px per frame, so that an older pair's shift
+ * lies beyond the narrow search unless it is centred right, must come out
+ * on every line, the older pairs registered. */
+START_TEST(test_long_series)
+{
+    GRand *rng = g_rand_new_with_seed(base_seed + 17);
+    gint n_frames = SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4, k, r, older = 0, older_used = 0, i;
+    gdouble speed = g_rand_double_range(rng, 2.5, 4.0), angle = g_rand_double_range(rng, 0.0, 2.0*G_PI);
+    gdouble vx = speed*cos(angle), vy = speed*sin(angle);
+    FrameSeries *series = steady_series(n_frames, vx, vy, NULL);
+    SeriesCorrection correction;
+    GError *error = NULL;
+    gdouble sum = 0.0, worst = 0.0, dx, dy, t, e;
+
+    ck_assert_msg(series_correction_compute(series, NULL, NULL, &correction, &error),
+                  "%s", error ? error->message : "?");
+    for (k = 0; k < n_frames; k++) {
+        for (r = 0; r < 64; r++) {
+            t = scan_timing_rows_time(&series->frames[k].timing, r, r+1);
+            series_correction_eval(&correction, t, &dx, &dy);
+            e = hypot(dx - vx*t/64.0, dy - vy*t/64.0);
+            sum += e*e;
+            worst = MAX(worst, e);
+        }
+    }
+    for (i = 0; i < correction.fit.n_meas; i++) {
+        const DriftMeasurement *m = correction.fit.meas + i;
+
+        if (m->frame_a - m->frame_b >= 2) {
+            older++;
+            older_used += (m->weight > 0.0);
+        }
+    }
+    printf("long series of %d frames, drift (%.3f, %.3f) px per frame: trajectory RMS %.4f px, "
+           "worst %.4f px; older pairs' blocks used %d of %d\n", n_frames, vx, vy,
+           sqrt(sum/(64*n_frames)), worst, older_used, older);
+    /* n - 1 consecutive pairs and 2n - 5 older ones (reach 3), in blocks. */
+    ck_assert_int_eq(correction.fit.n_meas % (3*n_frames - 6), 0);
+    ck_assert_int_eq(older, (2*n_frames - 5)*(correction.fit.n_meas/(3*n_frames - 6)));
+    /* Up to 12 px along y: blocks of 8 lines whose content left the
+     * reference are lost (one or two of each older pair). */
+    ck_assert_msg(older_used >= 0.7*older, "only %d of %d older blocks used", older_used, older);
+    ck_assert_msg(sqrt(sum/(64*n_frames)) <= 0.05 && worst <= 0.15,
+                  "trajectory RMS %g px, worst %g px (seed %u)", sqrt(sum/(64*n_frames)), worst,
+                  base_seed);
+    series_correction_clear(&correction);
+    frame_series_free(series);
+    g_rand_free(rng);
+}
+END_TEST
+
 int
 main(void)
 {
@@ -328,6 +395,7 @@ main(void)
     tcase_add_loop_test(tc, test_random_walk_smooth, 0, 2);
     tcase_add_test(tc, test_outputs);
     tcase_add_test(tc, test_frames_overlay);
+    tcase_add_test(tc, test_long_series);
     tcase_set_timeout(tc, 120);
     return test_run_suite(s);
 }
