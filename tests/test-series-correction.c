@@ -142,24 +142,24 @@ START_TEST(test_random_walk_smooth)
 }
 END_TEST
 
-/* A steady drift of vx_px and vy_px per frame (of 64 s, 96 x 64 px, lines
- * of 1 s) over a field of Gaussian bumps, each line sampled exactly where
+/* A steady drift of vx_px and vy_px per frame (96 x yres px, lines of
+ * 1 s) over a field of Gaussian bumps, each line sampled exactly where
  * the drift puts it (an interpolated canvas would smooth each frame by its
  * own sub-pixel phase, which biased the registration by about 0.1 % of a
  * long travel); content at (x, y) appears at (x + dx, y + dy).  The bumps
  * lie on 160 x 160 px around the frames, wider where the travel needs. */
 static FrameSeries*
-steady_series(gint n_frames, gdouble vx_px, gdouble vy_px)
+steady_series(gint n_frames, gint yres, gdouble vx_px, gdouble vy_px)
 {
     FrameSeries *series = frame_series_new();
     GRand *rng = g_rand_new_with_seed(base_seed);
     gint travel = (gint)ceil(n_frames*MAX(fabs(vx_px), fabs(vy_px))) + 2;
-    gint xres = 96, yres = 64, canvas = 160, x0 = 30, y0 = 40, k, r, c, b, n_bumps;
+    gint xres = 96, canvas = 160, x0 = 30, y0 = 40, k, r, c, b, n_bumps;
     gdouble *bx, *by;
 
-    if (travel > 28) {
+    if (travel > 28 || yres > 64) {
         x0 = y0 = travel;
-        canvas = xres + 2*travel;
+        canvas = MAX(xres, yres) + 2*travel;
     }
     /* 120 bumps on 160 x 160 px, as dense on a larger canvas. */
     n_bumps = (gint)ceil(120.0*canvas*canvas/(160.0*160.0));
@@ -203,7 +203,7 @@ steady_series(gint n_frames, gdouble vx_px, gdouble vy_px)
 
 START_TEST(test_outputs)
 {
-    FrameSeries *series = steady_series(3, 4.0, 0.0);
+    FrameSeries *series = steady_series(3, 64, 4.0, 0.0);
     SeriesCorrection correction;
     GError *error = NULL;
     gchar *csv, *json, **lines;
@@ -271,7 +271,7 @@ END_TEST
  * have data. */
 START_TEST(test_frames_overlay)
 {
-    FrameSeries *series = steady_series(3, 6.0, 0.0);
+    FrameSeries *series = steady_series(3, 64, 6.0, 0.0);
     SeriesCorrection correction;
     GwyDataField *fixed[3], *mask[3];
     gint k, r, c, area[4], xres = 96, yres = 64, count = 0;
@@ -323,29 +323,32 @@ END_TEST
 /* A series longer than SERIES_CORRECTION_ALL_PAIRS_UP_TO registers each
  * frame against SERIES_CORRECTION_PAIR_REACH older ones only, the older
  * pairs searched narrowly (at least 6 px) around the chained shifts of the
- * consecutive pairs (displacement-measure.c): a steady drift drawn at
- * random (seeded), 2.5 to 4 px per frame, so that an older pair's shift
- * lies beyond the narrow search unless it is centred right, must come out
- * on every line, the older pairs registered. */
+ * consecutive pairs, and those of nearly rigid frames in four blocks of 32
+ * lines instead of sixteen of 8 (displacement-measure.c): a steady drift
+ * drawn at random (seeded), 2.5 to 4 px per frame, so that an older pair's
+ * shift lies beyond the narrow search unless it is centred right, must
+ * come out on every line, the older pairs registered and counted in the
+ * frames' verdicts. */
 START_TEST(test_long_series)
 {
+    enum { N_FRAMES = SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4, YRES = 128 };
     GRand *rng = g_rand_new_with_seed(base_seed + 17);
-    gint n_frames = SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4, k, r, older = 0, older_used = 0, i, pairs = 0;
-    gboolean seen[SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4][SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4];
+    gint k, r, older = 0, older_used = 0, i, pairs = 0;
+    gboolean seen[N_FRAMES][N_FRAMES];
     gdouble speed = g_rand_double_range(rng, 2.5, 4.0), angle = g_rand_double_range(rng, 0.0, 2.0*G_PI);
     gdouble vx = speed*cos(angle), vy = speed*sin(angle);
-    FrameSeries *series = steady_series(n_frames, vx, vy);
+    FrameSeries *series = steady_series(N_FRAMES, YRES, vx, vy);
     SeriesCorrection correction;
     GError *error = NULL;
     gdouble sum = 0.0, worst = 0.0, dx, dy, t, e;
 
     ck_assert_msg(series_correction_compute(series, NULL, NULL, &correction, &error),
                   "%s", error ? error->message : "?");
-    for (k = 0; k < n_frames; k++) {
-        for (r = 0; r < 64; r++) {
+    for (k = 0; k < N_FRAMES; k++) {
+        for (r = 0; r < YRES; r++) {
             t = scan_timing_rows_time(&series->frames[k].timing, r, r+1);
             series_correction_eval(&correction, t, &dx, &dy);
-            e = hypot(dx - vx*t/64.0, dy - vy*t/64.0);
+            e = hypot(dx - vx*t/YRES, dy - vy*t/YRES);
             sum += e*e;
             worst = MAX(worst, e);
         }
@@ -362,18 +365,21 @@ START_TEST(test_long_series)
         }
     }
     printf("long series of %d frames, drift (%.3f, %.3f) px per frame: trajectory RMS %.4f px, "
-           "worst %.4f px; older pairs' blocks used %d of %d in %d pairs\n", n_frames, vx, vy,
-           sqrt(sum/(64*n_frames)), worst, older_used, older, pairs);
-    /* 2n - 5 older pairs (reach 3). */
-    ck_assert_int_eq(pairs, 2*n_frames - 5);
-    /* Up to 12 px along y: blocks of 8 lines whose content left the
-     * reference are lost (one or two of each older pair). */
-    ck_assert_msg(older_used >= 0.7*older, "only %d of %d older blocks used", older_used, older);
-    /* Over 80 seeds, with sixteen blocks or with four times taller ones
-     * for the older pairs alike: up to 0.046 px RMS, 0.08 px on a line (a
-     * velocity 0.1 % off over 74 px of travel on frames of 96 x 64 px). */
-    ck_assert_msg(sqrt(sum/(64*n_frames)) <= 0.08 && worst <= 0.15,
-                  "trajectory RMS %g px, worst %g px (seed %u)", sqrt(sum/(64*n_frames)), worst,
+           "worst %.4f px; older pairs' blocks used %d of %d in %d pairs\n", N_FRAMES, vx, vy,
+           sqrt(sum/(YRES*N_FRAMES)), worst, older_used, older, pairs);
+    /* 2n - 5 older pairs (reach 3), in four tall blocks each. */
+    ck_assert_int_eq(pairs, 2*N_FRAMES - 5);
+    ck_assert_int_eq(older, 4*pairs);
+    /* Up to 12 px along y, a tenth of a tall block, can leave the
+     * reference. */
+    ck_assert_msg(older_used >= 0.8*older, "only %d of %d older blocks used (seed %u)", older_used,
+                  older, base_seed);
+    /* A frame inside the series belongs to three pairs on either side. */
+    for (k = 3; k < N_FRAMES - 3; k++)
+        ck_assert_msg(correction.frames[k].n_pairs >= 5, "frame %d is in %d registered pairs (seed %u)",
+                      k, correction.frames[k].n_pairs, base_seed);
+    ck_assert_msg(sqrt(sum/(YRES*N_FRAMES)) <= 0.08 && worst <= 0.15,
+                  "trajectory RMS %g px, worst %g px (seed %u)", sqrt(sum/(YRES*N_FRAMES)), worst,
                   base_seed);
     series_correction_clear(&correction);
     frame_series_free(series);

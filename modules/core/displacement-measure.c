@@ -96,8 +96,10 @@ register_in_band(const StripeRegistrationFrame *image,
     }
     memset(whole, 0, sizeof(StripeShift));
     memset(shifts, 0, n*sizeof(StripeShift));
-    /* To whole pixels, near enough: the blocks search around it. */
-    if (guess && search->centred)
+    /* To whole pixels, near enough: the blocks search around it.  A guess
+     * trusted within a reach wider than the blocks may search is not
+     * trusted: the frame is searched as for any guess. */
+    if (guess && search->centred && search->radius <= radius)
         ok = TRUE;
     else {
         ok = stripe_registration_frame_shift(image, reference, centre[0], centre[1],
@@ -256,10 +258,14 @@ typedef struct {
 #define OLDER_PAIR_MIN_RADIUS_PX 6.0
 /* In a long series, an older pair whose consecutive pairs between found
  * the drift nearly rigid within a frame (blocks within RIGID_SPREAD_PX of
- * the frame's shift) is registered in blocks TALL_BLOCKS times taller
- * (older_pair_blocks). */
+ * the frame's shift) is registered in fewer, taller blocks
+ * (older_pair_blocks, displacement_tall_blocks). */
 #define RIGID_SPREAD_PX 1.0
 #define TALL_BLOCKS 4
+#define TALL_MIN_BLOCKS 4
+
+/* Series blocks searched within less than this (px) keep their sigma. */
+#define SIGMA_WINDOW_PX 12.0
 
 /* Frames registered per chunk: enough to keep the cores busy, few enough
  * to hold (about 2.5 MB each at 256 x 256 px). */
@@ -317,9 +323,10 @@ block_spread(const gdouble *dx, const gdouble *dy, const gdouble *score, gint n,
  * blocks searched within radius px (<= 0: block_range of the frame);
  * global gets the frame's overall shift and spread (may be NULL) how far
  * the blocks lay from it.  A frame no longer held is prepared for this
- * pair alone.  The fit weighs blocks by their correlation, so their
- * sigma, which costs more than their match, is not computed (a 1000-frame
- * series 22 % faster, its trajectory the same to the digit). */
+ * pair alone.  The fit weighs blocks by their correlation, so the sigma of
+ * blocks with wide windows, which costs more than their match, is not
+ * computed (a 1000-frame series of 256 x 256 px 22 % faster, its
+ * trajectory the same to the digit). */
 static void
 measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
              const gdouble *guess, gdouble radius, gdouble *global, gdouble *spread,
@@ -338,6 +345,13 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
      * register few blocks, the 06->16 pair centred on it left 8.9 px RMS
      * between the measurements against 7.4 px with the frame searched. */
     BlockSearch search = { radius, FALSE, radius > 0.0 && reg->reach > 0 };
+
+    /* Blocks of small frames search small windows, where a match as
+     * uncertain as a quarter of its window is a chance peak to reject
+     * (stripe_registration_measure_around_frames), and their sigma costs
+     * little: the benchmark's 64 x 64 movie (14-movie, full set) read
+     * 0.88 px without it against 0.70 px. */
+    search.uncertainty = MAX(options->block_range*MIN(xres, yres), 4.0) < SIGMA_WINDOW_PX;
     gint s;
 
     if (!reg->prepared[ka])
@@ -366,7 +380,9 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
         m->dx = dx[s]*xstep;
         m->dy = dy[s]*ystep;
         m->weight = (score[s] >= options->min_score) ? score[s] : 0.0;
-        m->group = s;
+        /* A tall block's group is that of the block at its centre, so that
+         * the folds of the fit's cross-validation keep rows apart alike. */
+        m->group = (2*s + 1)*options->n_blocks/(2*n);
         m->frame_a = ka;
         m->frame_b = kb;
         m->span = (r1 - r0)*fa->timing.line_time;
@@ -434,13 +450,21 @@ older_pair_blocks(const SeriesRegistration *reg, gint k, gint j)
 {
     gint n = reg->options->n_blocks, i;
 
-    if (reg->reach <= 0 || n < TALL_BLOCKS)
+    if (reg->reach <= 0)
         return n;
     for (i = j + 1; i <= k; i++) {
         if (!(reg->spread[i] >= 0.0 && reg->spread[i] <= RIGID_SPREAD_PX))
             return n;
     }
-    return n/TALL_BLOCKS;
+    return displacement_tall_blocks(n);
+}
+
+gint
+displacement_tall_blocks(gint n_blocks)
+{
+    /* Too few blocks and a pair loses its say in the frames' verdicts (a
+     * pair counts with three blocks registered, series-correction.c). */
+    return (n_blocks/TALL_BLOCKS >= TALL_MIN_BLOCKS) ? n_blocks/TALL_BLOCKS : n_blocks;
 }
 
 /* Frame k against its older frames, the nearest first: the overall shifts

@@ -57,8 +57,14 @@ void               displacement_register_blocks(const gdouble *image,
 /* All measurements of the series (metres, seconds); *n gets their count.
  * Block b of frame k against frame j becomes one measurement of group b;
  * with a pair reach (a long series), an older pair whose frames hardly
- * change within themselves comes in a quarter of the blocks, each four
- * times taller (displacement-measure.c, older_pair_blocks). */
+ * change within themselves comes in displacement_tall_blocks() taller
+ * blocks (displacement-measure.c, older_pair_blocks), each of the group of
+ * the block at its centre. */
+/* How many blocks an older pair of nearly rigid frames of a long series
+ * is registered in, for n_blocks blocks a pair: a quarter, each four times
+ * taller, where that leaves four or more; else n_blocks. */
+gint               displacement_tall_blocks (gint n_blocks);
+
 DriftMeasurement*  displacement_measure_series(const FrameSeries *series,
                                                const DisplacementOptions *options,
                                                gint *n);

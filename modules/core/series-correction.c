@@ -174,22 +174,34 @@ plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
     return -1;
 }
 
+static gint
+greatest_common_divisor(gint a, gint b)
+{
+    gint t;
+
+    while (b) {
+        t = a % b;
+        a = b;
+        b = t;
+    }
+    return a;
+}
+
 /* Every how many measurements a long series fits one: about count/most,
- * sharing no factor with the blocks per pair, so that the subset takes
- * every block position in turn (exactly so where every block registered;
- * the stride counts registered blocks).  A stride of 2 with 16 blocks took
- * the even blocks of every pair and never the last one. */
+ * sharing no factor with the blocks per pair, nor with the taller blocks of
+ * its rigid older pairs (displacement_tall_blocks), so that the subset
+ * takes every block position in turn (exactly so where every block
+ * registered; the stride counts registered blocks).  A stride of 2 with 16
+ * blocks took the even blocks of every pair and never the last one. */
 static gint
 subset_stride(gint count, gint most, gint n_blocks)
 {
-    gint stride = MAX((count + most - 1)/most, 1), a, b, t;
+    gint stride = MAX((count + most - 1)/most, 1), tall = displacement_tall_blocks(MAX(n_blocks, 1));
 
-    for (;; stride++) {
-        for (a = stride, b = MAX(n_blocks, 1); b; t = a % b, a = b, b = t)
-            ;
-        if (a == 1)
-            return stride;
-    }
+    while (greatest_common_divisor(stride, MAX(n_blocks, 1)) != 1
+           || greatest_common_divisor(stride, tall) != 1)
+        stride++;
+    return stride;
 }
 
 /* The fit of every model to the measurements whose weight in `weights` is
