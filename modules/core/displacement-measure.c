@@ -264,9 +264,6 @@ typedef struct {
 #define TALL_BLOCKS 4
 #define TALL_MIN_BLOCKS 4
 
-/* Series blocks searched within less than this (px) keep their sigma. */
-#define SIGMA_WINDOW_PX 12.0
-
 /* Frames registered per chunk: enough to keep the cores busy, few enough
  * to hold (about 2.5 MB each at 256 x 256 px). */
 #define CHUNK_FRAMES 16
@@ -323,10 +320,15 @@ block_spread(const gdouble *dx, const gdouble *dy, const gdouble *score, gint n,
  * blocks searched within radius px (<= 0: block_range of the frame);
  * global gets the frame's overall shift and spread (may be NULL) how far
  * the blocks lay from it.  A frame no longer held is prepared for this
- * pair alone.  The fit weighs blocks by their correlation, so the sigma of
- * blocks with wide windows, which costs more than their match, is not
- * computed (a 1000-frame series of 256 x 256 px 22 % faster, its
- * trajectory the same to the digit). */
+ * pair alone.  The fit weighs blocks by their correlation, so their
+ * sigma, which costs more than their match, is not computed (a 1000-frame
+ * series 22 % faster, its trajectory the same to the digit).  Nor are
+ * blocks then rejected for a sigma as wide as a quarter of their window:
+ * kept for the small windows of small frames, that rejection left seed
+ * 3816531782 of test-series-command.sh 0.27 px off (128 x 128 frames)
+ * where without it 0.23 px; the benchmark's 64 x 64 movie (14-movie) is
+ * the one case that reads better with it (0.70 against 0.88 px, full
+ * set). */
 static void
 measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
              const gdouble *guess, gdouble radius, gdouble *global, gdouble *spread,
@@ -345,13 +347,6 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
      * register few blocks, the 06->16 pair centred on it left 8.9 px RMS
      * between the measurements against 7.4 px with the frame searched. */
     BlockSearch search = { radius, FALSE, radius > 0.0 && reg->reach > 0 };
-
-    /* Blocks of small frames search small windows, where a match as
-     * uncertain as a quarter of its window is a chance peak to reject
-     * (stripe_registration_measure_around_frames), and their sigma costs
-     * little: the benchmark's 64 x 64 movie (14-movie, full set) read
-     * 0.88 px without it against 0.70 px. */
-    search.uncertainty = MAX(options->block_range*MIN(xres, yres), 4.0) < SIGMA_WINDOW_PX;
     gint s;
 
     if (!reg->prepared[ka])
