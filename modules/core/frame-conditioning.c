@@ -8,6 +8,7 @@
 #include <string.h>
 #include <libgwyddion/gwymacros.h>
 #include <libgwyddion/gwymath.h>
+#include "coprime-step.h"
 #include "frame-conditioning.h"
 
 /*
@@ -572,29 +573,13 @@ remove_strokes(ConditionedFrame *frame)
     g_free(current);
 }
 
-static gsize
-greatest_common_divisor(gsize a, gsize b)
-{
-    while (b) {
-        gsize t = a % b;
-
-        a = b;
-        b = t;
-    }
-    return a;
-}
-
 /* A step through n pixels in lines of xres that takes about count of them
  * and, prime to xres, visits every column alike (a step dividing the line
  * would sample a few columns only). */
 static gsize
 sample_step(gsize n, gint xres, gsize count)
 {
-    gsize step = MAX(1, n/count);
-
-    while (step > 1 && greatest_common_divisor(step, xres) != 1)
-        step++;
-    return step;
+    return coprime_step(n/count, xres);
 }
 
 static void

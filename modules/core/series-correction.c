@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <math.h>
 #include <libprocess/gwyprocess.h>
+#include "coprime-step.h"
 #include "json-values.h"
 #include "continuous-compensate.h"
 #include "drift-trajectory.h"
@@ -174,19 +175,6 @@ plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
     return -1;
 }
 
-static gint
-greatest_common_divisor(gint a, gint b)
-{
-    gint t;
-
-    while (b) {
-        t = a % b;
-        a = b;
-        b = t;
-    }
-    return a;
-}
-
 /* Every how many measurements a long series fits one: about count/most,
  * sharing no factor with the blocks per pair, nor with the taller blocks of
  * its rigid older pairs (displacement_tall_blocks), so that the subset
@@ -196,12 +184,10 @@ greatest_common_divisor(gint a, gint b)
 static gint
 subset_stride(gint count, gint most, gint n_blocks)
 {
-    gint stride = MAX((count + most - 1)/most, 1), tall = displacement_tall_blocks(MAX(n_blocks, 1));
+    gint tall = displacement_tall_blocks(MAX(n_blocks, 1));
 
-    while (greatest_common_divisor(stride, MAX(n_blocks, 1)) != 1
-           || greatest_common_divisor(stride, tall) != 1)
-        stride++;
-    return stride;
+    /* No factor of either: none of their product. */
+    return (gint)coprime_step((count + most - 1)/most, (gsize)MAX(n_blocks, 1)*tall);
 }
 
 /* The fit of every model to the measurements whose weight in `weights` is
