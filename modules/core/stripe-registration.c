@@ -921,10 +921,10 @@ check_frames(const ConditionedFrame *image, const ConditionedFrame *reference, g
     return TRUE;
 }
 
-gboolean
-stripe_registration_measure_conditioned(const ConditionedFrame *image, const ConditionedFrame *reference,
-                                        gint n, const StripeRegistrationOptions *options,
-                                        StripeShift *shifts, GError **error)
+/* stripe_registration_measure() for frames conditioned already. */
+static gboolean
+measure_conditioned(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
+                    const StripeRegistrationOptions *options, StripeShift *shifts, GError **error)
 {
     StripeRegistrationOptions defaults;
     gdouble *pdy, *pdx;
@@ -958,8 +958,8 @@ stripe_registration_measure_conditioned(const ConditionedFrame *image, const Con
     return TRUE;
 }
 
-/* stripe_registration_measure_around_conditioned(), the shifts refined as
- * refine says. */
+/* stripe_registration_measure_around() for frames conditioned already,
+ * the shifts refined as refine says. */
 static gboolean
 measure_around(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
                const gdouble *predicted_dx, const gdouble *predicted_dy, gdouble radius_px,
@@ -986,18 +986,6 @@ measure_around(const ConditionedFrame *image, const ConditionedFrame *reference,
                                                      predicted_dy[s], predicted_dx[s]);
     }
     return TRUE;
-}
-
-gboolean
-stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
-                                               const ConditionedFrame *reference, gint n,
-                                               const gdouble *predicted_dx, const gdouble *predicted_dy,
-                                               gdouble radius_px, gdouble min_score,
-                                               StripeShift *shifts, GError **error)
-{
-    g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
-    return measure_around(image, reference, n, predicted_dx, predicted_dy, radius_px, min_score,
-                          REFINE_MATCH_SIGMA, shifts, error);
 }
 
 /* The two frames of a pair, conditioned at once on two cores: each
@@ -1068,7 +1056,7 @@ stripe_registration_measure(const gdouble *image, const gdouble *reference, gint
     if (!condition_pair(image, reference, xres, yres, options ? options->pixel_aspect : 1.0,
                         &cimage, &creference, error))
         return FALSE;
-    ok = stripe_registration_measure_conditioned(cimage, creference, n, options, shifts, error);
+    ok = measure_conditioned(cimage, creference, n, options, shifts, error);
     conditioned_frame_free(cimage);
     conditioned_frame_free(creference);
     return ok;
@@ -1086,8 +1074,8 @@ stripe_registration_measure_around(const gdouble *image, const gdouble *referenc
     g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
     if (!condition_pair(image, reference, xres, yres, 1.0, &cimage, &creference, error))
         return FALSE;
-    ok = stripe_registration_measure_around_conditioned(cimage, creference, n, predicted_dx, predicted_dy,
-                                                        radius_px, min_score, shifts, error);
+    ok = measure_around(cimage, creference, n, predicted_dx, predicted_dy, radius_px, min_score,
+                        REFINE_MATCH_SIGMA, shifts, error);
     conditioned_frame_free(cimage);
     conditioned_frame_free(creference);
     return ok;

@@ -99,15 +99,6 @@ gboolean     stripe_registration_measure (const gdouble *image,
                                           StripeShift *shifts,
                                           GError **error);
 
-/* The same for frames conditioned already (a series conditions each frame
- * once). */
-gboolean     stripe_registration_measure_conditioned(const ConditionedFrame *image,
-                                                     const ConditionedFrame *reference,
-                                                     gint n,
-                                                     const StripeRegistrationOptions *options,
-                                                     StripeShift *shifts,
-                                                     GError **error);
-
 /* Each stripe searched only within radius_px (in both axes) of its
  * predicted shift (px, table convention), with no coarse stage: for shifts
  * known roughly beforehand, such as those of a frame series registered
@@ -124,16 +115,6 @@ gboolean     stripe_registration_measure_around(const gdouble *image,
                                                 gdouble min_score,
                                                 StripeShift *shifts,
                                                 GError **error);
-
-gboolean     stripe_registration_measure_around_conditioned(const ConditionedFrame *image,
-                                                            const ConditionedFrame *reference,
-                                                            gint n,
-                                                            const gdouble *predicted_dx,
-                                                            const gdouble *predicted_dy,
-                                                            gdouble radius_px,
-                                                            gdouble min_score,
-                                                            StripeShift *shifts,
-                                                            GError **error);
 
 /* A frame conditioned once for registration against several others (a
  * series registers each frame against its neighbours): the steps up to
