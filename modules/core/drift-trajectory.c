@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <libgwyddion/gwymath.h>
 #include "drift-trajectory.h"
+#include "median.h"
 #include "stripe-geometry.h"
 #include "localscan-intl.h"
 
@@ -473,20 +474,6 @@ smoother_leverages(Smoother *smoother)
         trace += smoother->leverage[i];
     }
     return trace;
-}
-
-/* Median of n values, which it reorders; of an even count the mean of the
- * two middle ones (gwy_math_median takes one of them). */
-static gdouble
-median_in_place(gdouble *values, gint n)
-{
-    const guint k[2] = { n/2 - 1, n/2 };
-    gdouble middle[2];
-
-    if (n % 2)
-        return gwy_math_kth_rank(n, values, n/2);
-    gwy_math_kth_ranks(n, values, 2, k, middle);
-    return 0.5*(middle[0] + middle[1]);
 }
 
 /* Standardises the residuals of the current fit to the noise of one

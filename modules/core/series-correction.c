@@ -14,6 +14,7 @@
 #include "continuous-compensate.h"
 #include "drift-trajectory.h"
 #include "localscan-channel.h"
+#include "median.h"
 #include "missing-data.h"
 #include "series-correction.h"
 #include "trajectory-csv.h"
@@ -224,23 +225,6 @@ fit_models(SeriesCorrection *correction, const gdouble *weights, gint n_blocks)
     return fit->chosen >= 0;
 }
 
-static gint
-compare_doubles(gconstpointer a, gconstpointer b)
-{
-    gdouble x = *(const gdouble*)a, y = *(const gdouble*)b;
-
-    return (x > y) - (x < y);
-}
-
-static gdouble
-median_of(gdouble *values, gint n)
-{
-    if (n <= 0)
-        return NAN;
-    qsort(values, n, sizeof(gdouble), compare_doubles);
-    return (n % 2) ? values[n/2] : 0.5*(values[n/2 - 1] + values[n/2]);
-}
-
 /* |measured - fitted| of a measurement in pixels; fit NULL: the
  * trajectory the series is corrected with. */
 static gdouble
@@ -339,7 +323,7 @@ frame_residual(const SeriesCorrection *correction, const DriftFit *fit,
         if (count < PAIR_MIN_BLOCKS)
             continue;
         (*n_pairs)++;
-        r = median_of(values, count);
+        r = median_in_place(values, count);
         partner_flagged = correction->frames[j].flagged;
         if (!(best[partner_flagged] <= r))
             best[partner_flagged] = r;
@@ -367,7 +351,7 @@ judge_frames(SeriesCorrection *correction, const gdouble *registered)
         if (!v->flagged && isfinite(v->residual_px))
             typical[count++] = v->residual_px;
     }
-    correction->typical_px = median_of(typical, count);
+    correction->typical_px = median_in_place(typical, count);
     frame_pairs_clear(&pairs);
     g_free(values);
 }
@@ -474,7 +458,7 @@ others_spread(const SeriesCorrection *correction, const DriftFit *fit, gint k,
     }
     if (!n)
         return NAN;
-    clip = MAX(10.0*median_of(values, n), 1.0);
+    clip = MAX(10.0*median_in_place(values, n), 1.0);
     for (i = 0; i < n; i++)
         sum += MIN(values[i], clip);
     return sum/n;
@@ -543,7 +527,7 @@ fit_leaving_out(const SeriesCorrection *correction, const FramePairs *pairs,
             if (isfinite(r))
                 others[count++] = r;
         }
-        result->typical = median_of(others, count);
+        result->typical = median_in_place(others, count);
         result->spread = others_spread(correction, fits + chosen, k,
                                        registered, values);
         result->agreeing = agreeing_blocks(correction, fits + chosen, k,
