@@ -43,8 +43,10 @@
 
 static guint32 base_seed;
 
+/* Case i of the series scanned under model, corrected and judged. */
 static void
-check_case(gint i, const SeriesCaseOptions *options)
+check_model_case(gint i, const DriftModel *model_given,
+                 const SeriesCaseOptions *options)
 {
     DriftModel model;
     GwyDataField **truth = NULL;
@@ -52,7 +54,7 @@ check_case(gint i, const SeriesCaseOptions *options)
     FrameSeries *series;
     gint k;
 
-    hidden_case_draw(base_seed, i, &model);
+    drift_model_copy(&model, model_given);
     series = series_case_scan(base_seed, i, &model, options, &truth);
     ck_assert(series != NULL);
     ck_assert_msg(series_case_judge(series, truth, &model, options, &r),
@@ -89,6 +91,16 @@ check_case(gint i, const SeriesCaseOptions *options)
     drift_model_clear(&model);
 }
 
+static void
+check_case(gint i, const SeriesCaseOptions *options)
+{
+    DriftModel model;
+
+    hidden_case_draw(base_seed, i, &model);
+    check_model_case(i, &model, options);
+    drift_model_clear(&model);
+}
+
 START_TEST(test_hidden_drift_corrected)
 {
     SeriesCaseOptions options;
@@ -104,6 +116,34 @@ START_TEST(test_hidden_drift_corrected)
         g_rand_free(rng);
     }
     check_case(_i, &options);
+}
+END_TEST
+
+/* A jump in the last lines of the first frame, whose next frame slipped
+ * (flagged, left out): the step moves those lines' content down out of
+ * every later frame under the drift without it, and no earlier frame
+ * shows it, so only their match under the drift with it tells that they
+ * lie after the jump.  Without that evidence the jump went into the
+ * slipped frame, and those lines kept the whole step (5.4 px; seed
+ * 310000476, case 13).  Frames of 128 lines of 0.5 s, back to back; the
+ * jump 1-6 lines before the end of frame 0, a step of 3.5-6 px down and
+ * up to 1 px across. */
+START_TEST(test_jump_before_slipped_frame)
+{
+    GRand *rng = test_rand_salted(base_seed, 4000 + _i);
+    SeriesCaseOptions options = { FALSE, 1 };
+    DriftModel model;
+    gdouble px = 1e-6/128.0;
+
+    drift_model_init(&model, DRIFT_MODEL_JUMP);
+    model.v[0] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
+    model.v[1] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
+    model.t_jump = 64.0 - 0.5*g_rand_double_range(rng, 1.0, 6.0);
+    model.step[0] = px*g_rand_double_range(rng, -1.0, 1.0);
+    model.step[1] = px*g_rand_double_range(rng, 3.5, 6.0);
+    check_model_case(300 + _i, &model, &options);
+    drift_model_clear(&model);
+    g_rand_free(rng);
 }
 END_TEST
 
@@ -409,6 +449,7 @@ main(void)
     base_seed = test_seed_from_env("test-series-correction");
     gwy_process_type_init();
     tcase_add_loop_test(tc, test_hidden_drift_corrected, 0, N_CASES);
+    tcase_add_loop_test(tc, test_jump_before_slipped_frame, 0, 3);
     tcase_add_loop_test(tc, test_random_walk_smooth, 0, 2);
     tcase_add_test(tc, test_outputs);
     tcase_add_test(tc, test_frames_overlay);

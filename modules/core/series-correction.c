@@ -899,23 +899,34 @@ line_mismatch(const gdouble *data, const gdouble *pred, gint n, gdouble *u,
     return sdd/m;
 }
 
+/* What the frames near a line tell of which side of the jump it lies on:
+ * its mean mismatch under the drift without the step and with it over the
+ * frames that show its content under both (two_sided), else over those
+ * that show it under one of them only (a line at a frame's edge, whose
+ * content the step takes out of every other frame), with the line's own
+ * texture to judge that one cost by. */
+typedef struct {
+    gdouble before, after;   /* mean mismatches; NAN where not seen */
+    gboolean two_sided;
+    gdouble texture;         /* the line's mean square after its quadratic */
+} LineEvidence;
+
 /* How well line r of frame k matches the frames near it (those not
  * flagged, up to JUMP_PARTNER_REACH away: the next frame may be flagged,
  * the previous one may not show the line's content) with the drift
- * without the step and with it: the mean mismatches over the frames that
- * show the line's content under both, 0 and 0 when none does (no evidence
- * either way: content seen under one only would favour the other). */
+ * without the step and with it.  Frames that show the line's content
+ * under both count alone when there are any: content seen under one only
+ * is compared with nothing under the other. */
 static void
 line_costs(const SeriesCorrection *correction, const FrameSeries *series,
-           gint k, gint r, gdouble *line, gdouble *before, gdouble *after)
+           gint k, gint r, gdouble *line, LineEvidence *ev)
 {
     const SeriesFrame *fk = series->frames + k;
-    gint j, count = 0, xres = fk->timing.xres;
+    gint j, count = 0, nb = 0, na = 0, xres = fk->timing.xres;
     const gdouble *row = gwy_data_field_get_data_const(fk->field) + (gsize)r*xres;
-    gdouble eb, ea, *u = line + xres, *d = u + xres;
+    gdouble eb, ea, sb = 0.0, sa = 0.0, ob = 0.0, oa = 0.0, *u = line + xres, *d = u + xres;
     const gdouble *ref;
 
-    *before = *after = 0.0;
     for (j = k - JUMP_PARTNER_REACH; j <= k + JUMP_PARTNER_REACH; j++) {
         if (j == k || j < 0 || j >= series->n_frames
             || correction->frames[j].flagged)
@@ -927,15 +938,76 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
         predict_line(correction, fk, series->frames + j, ref, r, JUMP_ALWAYS,
                      line);
         ea = line_mismatch(row, line, xres, u, d);
-        if (isnan(eb) || isnan(ea))
-            continue;
-        *before += eb;
-        *after += ea;
-        count++;
+        if (!isnan(eb) && !isnan(ea)) {
+            sb += eb;
+            sa += ea;
+            count++;
+        }
+        else if (!isnan(eb)) {
+            ob += eb;
+            nb++;
+        }
+        else if (!isnan(ea)) {
+            oa += ea;
+            na++;
+        }
     }
-    if (count) {
-        *before /= count;
-        *after /= count;
+    ev->two_sided = (count > 0);
+    ev->before = count ? sb/count : (nb ? ob/nb : NAN);
+    ev->after = count ? sa/count : (na ? oa/na : NAN);
+    for (j = 0; j < xres; j++)
+        line[j] = 0.0;
+    ev->texture = line_mismatch(row, line, xres, u, d);
+}
+
+/* A one-sided line's cost against its texture: content matching is far
+ * below the mismatch of unrelated content of that texture (twice the
+ * texture), content not matching is about it.  Between the two the line
+ * tells nothing. */
+#define ONE_SIDED_MATCH 0.25
+#define ONE_SIDED_MISMATCH 0.5
+
+/* Costs without and with the step of each line, as steady_votes() weighs
+ * them (0 and 0: no evidence).  A line seen under one drift only is given
+ * a cost under the other: where its content matches, the other drift
+ * would show it unrelated content (twice its texture); where it does not,
+ * the other drift is taken to match as well as the two-sided lines' right
+ * side typically does.  Without this, the lines after a jump of a few rows
+ * at the end of a frame followed by a flagged one, whose content the step
+ * takes out of every later frame, told nothing, and the jump was placed in
+ * the flagged frame: 5.4 px on those lines (test-series-correction seed
+ * 310000476). */
+static void
+evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
+{
+    gdouble *right = g_new(gdouble, MAX(n, 1)), match, cost, wrong, other;
+    gint i, m = 0;
+
+    for (i = 0; i < n; i++) {
+        if (ev[i].two_sided)
+            right[m++] = MIN(ev[i].before, ev[i].after);
+    }
+    match = m ? median_in_place(right, m) : 0.0;
+    g_free(right);
+    for (i = 0; i < n; i++) {
+        before[i] = after[i] = 0.0;
+        if (ev[i].two_sided) {
+            before[i] = ev[i].before;
+            after[i] = ev[i].after;
+            continue;
+        }
+        if (isnan(ev[i].before) == isnan(ev[i].after) || !(ev[i].texture > 0.0))
+            continue;
+        cost = isnan(ev[i].before) ? ev[i].after : ev[i].before;
+        wrong = 2.0*ev[i].texture;
+        if (cost <= ONE_SIDED_MATCH*wrong)
+            other = wrong;
+        else if (cost >= ONE_SIDED_MISMATCH*wrong)
+            other = MIN(match, cost);
+        else
+            continue;
+        before[i] = isnan(ev[i].before) ? other : cost;
+        after[i] = isnan(ev[i].before) ? cost : other;
     }
 }
 
@@ -1077,6 +1149,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     DriftFit *fit = correction->fit.fits + correction->fit.chosen;
     gint nf = series->n_frames, k, r, i, n = 0, first, last, most = 0;
     gdouble *line, *after, *before, *when, *ends, *votes, t, t_lo, t_hi;
+    LineEvidence *evidence;
     gint *frame;
 
     if (fit->type != DRIFT_MODEL_JUMP || nf < 2)
@@ -1092,6 +1165,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     ends = when + most;
     votes = ends + most;
     frame = g_new(gint, most);
+    evidence = g_new(LineEvidence, most);
     /* The lines around the jump in the order they were scanned. */
     for (k = 0; k < nf; k++) {
         const SeriesFrame *fk = series->frames + k;
@@ -1102,18 +1176,20 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
             t = scan_timing_rows_time(&fk->timing, r, r+1);
             if (t < t_lo || t > t_hi)
                 continue;
-            line_costs(correction, series, k, r, line, before + n, after + n);
+            line_costs(correction, series, k, r, line, evidence + n);
             when[n] = scan_timing_row_start(&fk->timing, r);
             ends[n] = when[n] + fk->timing.line_time;
             frame[n] = k;
             n++;
         }
     }
+    evidence_costs(evidence, n, before, after);
     steady_votes(before, after, frame, n, votes);
     best_split(votes, n, &first, &last);
     if (n >= 2 && last > 0 && first < n)
         fit->nonlinear = jump_within_ties(fit->nonlinear, when, ends, n,
                                           first, last, t_lo, t_hi);
+    g_free(evidence);
     g_free(frame);
     g_free(line);
     g_free(after);
