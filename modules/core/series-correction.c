@@ -960,12 +960,17 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     ev->texture = line_mismatch(row, line, xres, u, d);
 }
 
-/* A one-sided line's cost against its texture: content matching is far
- * below the mismatch of unrelated content of that texture (twice the
- * texture), content not matching is about it.  Between the two the line
- * tells nothing. */
+/* A one-sided line's cost is judged on the scale from the typical cost of
+ * a line under its right drift (match: noise and interpolation) to that of
+ * unrelated content of the line's texture (twice its mean square): within
+ * the lowest quarter of it the content matches, from half of it up it does
+ * not, in between the line tells nothing.  And only a line whose texture
+ * stands well above that match level is judged at all: a featureless line
+ * costs about the match level under either drift, which would read as "not
+ * matching" on a scale that has no room. */
 #define ONE_SIDED_MATCH 0.25
 #define ONE_SIDED_MISMATCH 0.5
+#define ONE_SIDED_CONTRAST 8.0
 
 /* Costs without and with the step of each line, as steady_votes() weighs
  * them (0 and 0: no evidence).  A line seen under one drift only is given
@@ -976,18 +981,21 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
  * at the end of a frame followed by a flagged one, whose content the step
  * takes out of every later frame, told nothing, and the jump was placed in
  * the flagged frame: 5.4 px on those lines (test-series-correction seed
- * 310000476). */
+ * 310000476).  Without two-sided lines there is no match level and no
+ * one-sided line is judged; a line that some frames show under one drift
+ * and others under the other only is not judged either (its two costs
+ * come from different frames). */
 static void
 evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
 {
-    gdouble *right = g_new(gdouble, MAX(n, 1)), match, cost, wrong, other;
+    gdouble *right = g_new(gdouble, MAX(n, 1)), match, cost, wrong, other, r;
     gint i, m = 0;
 
     for (i = 0; i < n; i++) {
         if (ev[i].two_sided)
             right[m++] = MIN(ev[i].before, ev[i].after);
     }
-    match = m ? median_in_place(right, m) : 0.0;
+    match = m ? median_in_place(right, m) : NAN;
     g_free(right);
     for (i = 0; i < n; i++) {
         before[i] = after[i] = 0.0;
@@ -996,14 +1004,16 @@ evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
             after[i] = ev[i].after;
             continue;
         }
-        if (isnan(ev[i].before) == isnan(ev[i].after) || !(ev[i].texture > 0.0))
+        if (!m || isnan(ev[i].before) == isnan(ev[i].after)
+            || !(2.0*ev[i].texture > ONE_SIDED_CONTRAST*match))
             continue;
         cost = isnan(ev[i].before) ? ev[i].after : ev[i].before;
         wrong = 2.0*ev[i].texture;
-        if (cost <= ONE_SIDED_MATCH*wrong)
+        r = (cost - match)/(wrong - match);
+        if (r <= ONE_SIDED_MATCH)
             other = wrong;
-        else if (cost >= ONE_SIDED_MISMATCH*wrong)
-            other = MIN(match, cost);
+        else if (r >= ONE_SIDED_MISMATCH)
+            other = match;
         else
             continue;
         before[i] = isnan(ev[i].before) ? other : cost;
