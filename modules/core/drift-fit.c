@@ -805,8 +805,9 @@ used_values_finite(const Prepared *pm)
  * values within its span: a long series' grid has thousands of values and
  * each sees a few of its tens of thousands of measurements.  Every sum
  * takes its nonzero terms in solve_fixed()'s order, and the zeros it
- * leaves out change no sum.  NULL when the grid is not ascending or a
- * value is not finite (solve_fixed() at each value then). */
+ * leaves out change no sum (with doubles evaluated as doubles, as on
+ * x86-64's SSE: FLT_EVAL_METHOD 0).  NULL when the grid is not ascending
+ * or a value is not finite (solve_fixed() at each value then). */
 static gdouble*
 jump_grid_rss(const Prepared *pm, const gdouble *grid, gint m)
 {
@@ -814,8 +815,8 @@ jump_grid_rss(const Prepared *pm, const gdouble *grid, gint m)
     gdouble sums0[5] = { 0.0, 0.0, 0.0, 0.0, 0.0 }, *sums1, *rss, wi, r0, r1, lo, hi, margin;
     gint i, j, ax;
 
-    for (j = 1; j < m; j++) {
-        if (!(grid[j-1] <= grid[j]))
+    for (j = 0; j < m; j++) {
+        if (!isfinite(grid[j]) || (j && !(grid[j-1] <= grid[j])))
             return NULL;
     }
     if (!used_values_finite(pm))
