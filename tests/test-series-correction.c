@@ -140,10 +140,11 @@ line_texture(GwyDataField *field, gint r)
     return sum/xres;
 }
 
-/* Whether frame 0 has a line the judge counts after the jump (3 lines past
- * it and more) and the first of them shows particles: a featureless line
- * matches either drift, and nothing in the data says on which side of the
- * jump it lies. */
+/* Whether the first line of frame 0 that the judge counts after the jump
+ * (3 lines past it and more) shows particles and is not the frame's last
+ * line: a featureless line matches either drift, and the last line's
+ * content lies past the last line of every later frame, so nothing in the
+ * data says on which side of the jump they lie. */
 static gboolean
 judged_line_has_evidence(guint32 seed, gint i, const DriftModel *model,
                          const SeriesCaseOptions *options)
@@ -157,7 +158,7 @@ judged_line_has_evidence(guint32 seed, gint i, const DriftModel *model,
     f0 = series->frames;
     for (r = 0; r < f0->timing.yres; r++) {
         if (scan_timing_rows_time(&f0->timing, r, r+1) >= model->t_jump + 1.5) {
-            found = line_texture(f0->field, r) > 2e-17;
+            found = (r < f0->timing.yres - 1 && line_texture(f0->field, r) > 2e-17);
             break;
         }
     }
@@ -172,10 +173,10 @@ judged_line_has_evidence(guint32 seed, gint i, const DriftModel *model,
  * lie after the jump.  Without that evidence the jump went into the
  * slipped frame, and those lines kept the whole step (5.4 px; seed
  * 310000476, case 13).  Frames of 128 lines of 0.5 s, back to back; the
- * jump 3.5-6 lines before the end of frame 0 (so that the judge counts a
- * line after it), a step of 3.5-6 px down and up to 1 px across; the
- * sample drawn again until the first line judged after the jump shows
- * particles. */
+ * jump 4.5-6.5 lines before the end of frame 0 (so that the judge counts
+ * a line after it other than the last), a step of 3.5-6 px down and up to
+ * 1 px across; the sample drawn again until the first line judged after
+ * the jump shows particles. */
 START_TEST(test_jump_before_slipped_frame)
 {
     GRand *rng = test_rand_salted(base_seed, 4000 + _i);
@@ -188,7 +189,7 @@ START_TEST(test_jump_before_slipped_frame)
     for (attempt = 0; attempt < 20; attempt++, i++) {
         model.v[0] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
         model.v[1] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
-        model.t_jump = 64.0 - 0.5*g_rand_double_range(rng, 3.5, 6.0);
+        model.t_jump = 64.0 - 0.5*g_rand_double_range(rng, 4.5, 6.5);
         model.step[0] = px*g_rand_double_range(rng, -1.0, 1.0);
         model.step[1] = px*g_rand_double_range(rng, 3.5, 6.0);
         if (judged_line_has_evidence(base_seed, i, &model, &options))

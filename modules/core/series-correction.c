@@ -780,11 +780,15 @@ warn_about_fit(SeriesCorrection *correction, const gdouble *registered)
 }
 
 /* Which side of a jump a trajectory follows: the fit itself, the drift
- * without the step, or with the step from the start. */
+ * without the step, or with the step from the start; and, to tell what a
+ * displacement by the step costs a line's match, the step taken twice, or
+ * taken away from the drift without it. */
 typedef enum {
     JUMP_AS_FITTED,
     JUMP_NEVER,
     JUMP_ALWAYS,
+    JUMP_TWICE,
+    JUMP_BACKWARDS,
 } JumpSide;
 
 /* p(t) - p(0) of a fit in pixels, a jump's step taken as side says. */
@@ -797,10 +801,16 @@ fit_eval_side(const DriftFit *fit, gdouble xstep, gdouble ystep, gdouble t,
     drift_fit_eval(fit, t, &x, &y);
     drift_fit_eval(fit, 0.0, &x0, &y0);
     if (fit->type == DRIFT_MODEL_JUMP && fit->creep == DRIFT_FIT_CREEP_NONE) {
-        if (side == JUMP_NEVER && t >= fit->nonlinear)
+        gboolean after = (t >= fit->nonlinear);
+
+        if (side == JUMP_NEVER && after)
             sign = -1.0;
-        else if (side == JUMP_ALWAYS && t < fit->nonlinear)
+        else if (side == JUMP_ALWAYS && !after)
             sign = 1.0;
+        else if (side == JUMP_TWICE)
+            sign = after ? 1.0 : 2.0;
+        else if (side == JUMP_BACKWARDS)
+            sign = after ? -2.0 : -1.0;
     }
     *dx = (x - x0 + sign*1e-9*fit->coef[0][1])/xstep;
     *dy = (y - y0 + sign*1e-9*fit->coef[1][1])/ystep;
@@ -903,11 +913,13 @@ line_mismatch(const gdouble *data, const gdouble *pred, gint n, gdouble *u,
  * its mean mismatch under the drift without the step and with it over the
  * frames that show its content under both (two_sided), else over those
  * that show it under one of them only (a line at a frame's edge, whose
- * content the step takes out of every other frame), with the line's own
- * texture to judge that one cost by. */
+ * content the step takes out of every other frame), with the mismatch of
+ * that one side's content displaced by the step once more (control): what
+ * being a step off costs this line's content. */
 typedef struct {
     gdouble before, after;   /* mean mismatches; NAN where not seen */
     gboolean two_sided;
+    gdouble control;         /* one-sided only; NAN where not seen */
     gdouble texture;         /* the line's mean square after its quadratic */
 } LineEvidence;
 
@@ -924,7 +936,8 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     const SeriesFrame *fk = series->frames + k;
     gint j, count = 0, nb = 0, na = 0, xres = fk->timing.xres;
     const gdouble *row = gwy_data_field_get_data_const(fk->field) + (gsize)r*xres;
-    gdouble eb, ea, sb = 0.0, sa = 0.0, ob = 0.0, oa = 0.0, *u = line + xres, *d = u + xres;
+    gdouble eb, ea, ec, sb = 0.0, sa = 0.0, ob = 0.0, oa = 0.0, cb = 0.0, ca = 0.0;
+    gdouble *u = line + xres, *d = u + xres;
     const gdouble *ref;
 
     for (j = k - JUMP_PARTNER_REACH; j <= k + JUMP_PARTNER_REACH; j++) {
@@ -942,53 +955,69 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
             sb += eb;
             sa += ea;
             count++;
+            continue;
         }
-        else if (!isnan(eb)) {
-            ob += eb;
-            nb++;
-        }
-        else if (!isnan(ea)) {
+        if (isnan(eb) && isnan(ea))
+            continue;
+        predict_line(correction, fk, series->frames + j, ref, r,
+                     isnan(eb) ? JUMP_TWICE : JUMP_BACKWARDS, line);
+        if (isnan(ec = line_mismatch(row, line, xres, u, d)))
+            continue;
+        if (isnan(eb)) {
             oa += ea;
+            ca += ec;
             na++;
+        }
+        else {
+            ob += eb;
+            cb += ec;
+            nb++;
         }
     }
     ev->two_sided = (count > 0);
     ev->before = count ? sb/count : (nb ? ob/nb : NAN);
     ev->after = count ? sa/count : (na ? oa/na : NAN);
+    ev->control = (count || (nb && na)) ? NAN : (nb ? cb/nb : (na ? ca/na : NAN));
     for (j = 0; j < xres; j++)
         line[j] = 0.0;
     ev->texture = line_mismatch(row, line, xres, u, d);
 }
 
-/* A one-sided line's cost is judged on the scale from the typical cost of
- * a line under its right drift (match: noise and interpolation) to that of
- * unrelated content of the line's texture (twice its mean square): within
- * the lowest quarter of it the content matches, from half of it up it does
- * not, in between the line tells nothing.  And only a line whose texture
- * stands well above that match level is judged at all: a featureless line
- * costs about the match level under either drift, which would read as "not
- * matching" on a scale that has no room. */
-#define ONE_SIDED_MATCH 0.25
-#define ONE_SIDED_MISMATCH 0.5
+/* A one-sided line's cost is placed on the scale from the typical cost of
+ * a line under its right drift (match: noise and interpolation) to its
+ * control, the cost of its content a step off.  Under the right drift the
+ * cost is about the match level and the control a step's displacement;
+ * under the wrong one the cost is a step's displacement and the control
+ * two, which costs at most four times as much (displacements small beside
+ * the content's features cost as their square): above a fifth of the
+ * scale the side is wrong, below a tenth right, in between the line tells
+ * nothing.  And only a line whose own texture and control both stand
+ * well above the match level is judged at all: a featureless line, or one
+ * whose features a step hardly moves, costs about the same under either
+ * drift, and a featureless line matches featureless content a step off
+ * as well as its own while its control may meet a particle (seed 21). */
+#define ONE_SIDED_MATCH 0.1
+#define ONE_SIDED_MISMATCH 0.2
 #define ONE_SIDED_CONTRAST 8.0
 
 /* Costs without and with the step of each line, as steady_votes() weighs
  * them (0 and 0: no evidence).  A line seen under one drift only is given
- * a cost under the other: where its content matches, the other drift
- * would show it unrelated content (twice its texture); where it does not,
- * the other drift is taken to match as well as the two-sided lines' right
- * side typically does.  Without this, the lines after a jump of a few rows
- * at the end of a frame followed by a flagged one, whose content the step
- * takes out of every later frame, told nothing, and the jump was placed in
- * the flagged frame: 5.4 px on those lines (test-series-correction seed
- * 310000476).  Without two-sided lines there is no match level and no
- * one-sided line is judged; a line that some frames show under one drift
- * and others under the other only is not judged either (its two costs
- * come from different frames). */
+ * a cost under the other: where its content matches, that of a step off
+ * (its control); where it does not, the typical match of the two-sided
+ * lines.  Without this, the lines after a jump of a few rows at the end of
+ * a frame followed by a flagged one, whose content the step takes out of
+ * every later frame, told nothing, and the jump was placed in the flagged
+ * frame: 5.4 px on those lines (test-series-correction seed 310000476).
+ * Judged against unrelated content instead of the control, a line 3 px
+ * off matched well enough to pull a jump out of the flagged frame into
+ * the end of the one before (seed 350000212).  Without two-sided lines
+ * there is no match level and no one-sided line is judged; a line that
+ * some frames show under one drift only and others under the other only
+ * is not judged either (its two costs come from different frames). */
 static void
 evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
 {
-    gdouble *right = g_new(gdouble, MAX(n, 1)), match, cost, wrong, other, r;
+    gdouble *right = g_new(gdouble, MAX(n, 1)), match, cost, other, q;
     gint i, m = 0;
 
     for (i = 0; i < n; i++) {
@@ -1004,15 +1033,14 @@ evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
             after[i] = ev[i].after;
             continue;
         }
-        if (!m || isnan(ev[i].before) == isnan(ev[i].after)
+        if (!m || isnan(ev[i].control) || !(ev[i].control > ONE_SIDED_CONTRAST*match)
             || !(2.0*ev[i].texture > ONE_SIDED_CONTRAST*match))
             continue;
         cost = isnan(ev[i].before) ? ev[i].after : ev[i].before;
-        wrong = 2.0*ev[i].texture;
-        r = (cost - match)/(wrong - match);
-        if (r <= ONE_SIDED_MATCH)
-            other = wrong;
-        else if (r >= ONE_SIDED_MISMATCH)
+        q = (cost - match)/(ev[i].control - match);
+        if (q <= ONE_SIDED_MATCH)
+            other = ev[i].control;
+        else if (q >= ONE_SIDED_MISMATCH)
             other = match;
         else
             continue;
