@@ -277,6 +277,19 @@ frame_pair_stripe_truth(const FramePair *pair, gint n, gdouble *dx, gdouble *dy)
     }
 }
 
+void
+frame_pair_stripe_centre_truth(const FramePair *pair, gint n, gdouble *dx, gdouble *dy)
+{
+    gint s, first, last;
+
+    for (s = 0; s < n; s++) {
+        first = (gint)(((gint64)s*pair->yres)/n);
+        last = (gint)(((gint64)(s + 1)*pair->yres)/n) - 1;
+        dx[s] = 0.5*(pair->row_dx[(first + last)/2] + pair->row_dx[(first + last + 1)/2]);
+        dy[s] = 0.5*(pair->row_dy[(first + last)/2] + pair->row_dy[(first + last + 1)/2]);
+    }
+}
+
 guint32
 frame_pair_test_seed(const gchar *program)
 {

@@ -71,6 +71,13 @@ void        frame_pair_add_undulation(FramePair *pair, gdouble size,
 void        frame_pair_stripe_truth(const FramePair *pair, gint n,
                                     gdouble *dx, gdouble *dy);
 
+/* The true drift at each of n stripes' centre rows, (first + last)/2,
+ * between two rows for an even height: what a registered stripe's shift
+ * stands for (StripeShift), the mean only where the drift changes
+ * linearly over the stripe. */
+void        frame_pair_stripe_centre_truth(const FramePair *pair, gint n,
+                                           gdouble *dx, gdouble *dy);
+
 /* The seed of a test: LOCALSCAN_TEST_SEED if set, else a fresh one; printed. */
 guint32     frame_pair_test_seed   (const gchar *program);
 
