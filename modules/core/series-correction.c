@@ -920,7 +920,8 @@ typedef struct {
     gdouble before, after;   /* mean mismatches; NAN where not seen */
     gboolean two_sided;
     gdouble control;         /* one-sided only; NAN where not seen */
-    gdouble texture;         /* the line's mean square after its quadratic */
+    gdouble texture;         /* one-sided only: the line's mean square after
+                                its quadratic; NAN otherwise */
 } LineEvidence;
 
 /* How well line r of frame k matches the frames near it (those not
@@ -978,9 +979,13 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     ev->before = count ? sb/count : (nb ? ob/nb : NAN);
     ev->after = count ? sa/count : (na ? oa/na : NAN);
     ev->control = (count || (nb && na)) ? NAN : (nb ? cb/nb : (na ? ca/na : NAN));
-    for (j = 0; j < xres; j++)
-        line[j] = 0.0;
-    ev->texture = line_mismatch(row, line, xres, u, d);
+    /* Only a one-sided line is judged by its texture. */
+    ev->texture = NAN;
+    if (!isnan(ev->control)) {
+        for (j = 0; j < xres; j++)
+            line[j] = 0.0;
+        ev->texture = line_mismatch(row, line, xres, u, d);
+    }
 }
 
 /* A one-sided line's cost is placed on the scale from the typical cost of
