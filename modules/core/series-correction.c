@@ -11,6 +11,7 @@
 #include <libprocess/gwyprocess.h>
 #include "coprime-step.h"
 #include "json-values.h"
+#include "jump-votes.h"
 #include "continuous-compensate.h"
 #include "drift-trajectory.h"
 #include "localscan-channel.h"
@@ -909,20 +910,6 @@ line_mismatch(const gdouble *data, const gdouble *pred, gint n, gdouble *u,
     return sdd/m;
 }
 
-/* What the frames near a line tell of which side of the jump it lies on:
- * its mean mismatch under the drift without the step and with it over the
- * frames that show its content under both (two_sided), else over those
- * that show it under one of them only (a line at a frame's edge, whose
- * content the step takes out of every other frame), with the mismatch of
- * that one side's content displaced by the step once more (control): what
- * being a step off costs this line's content. */
-typedef struct {
-    gdouble before, after;   /* mean mismatches; NAN where not seen */
-    gboolean two_sided;
-    gdouble control;         /* one-sided only; NAN where not seen */
-    gdouble texture;         /* one-sided only: the line's mean square after
-                                its quadratic; NAN otherwise */
-} LineEvidence;
 
 /* How well line r of frame k matches the frames near it (those not
  * flagged, up to JUMP_PARTNER_REACH away: the next frame may be flagged,
@@ -988,72 +975,6 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     }
 }
 
-/* A one-sided line's cost is placed on the scale from the typical cost of
- * a line under its right drift (match: noise and interpolation) to its
- * control, the cost of its content a step off.  Under the right drift the
- * cost is about the match level and the control a step's displacement;
- * under the wrong one the cost is a step's displacement and the control
- * two, which costs at most four times as much (displacements small beside
- * the content's features cost as their square): above a fifth of the
- * scale the side is wrong, below a tenth right, in between the line tells
- * nothing.  And only a line whose own texture and control both stand
- * well above the match level is judged at all: a featureless line, or one
- * whose features a step hardly moves, costs about the same under either
- * drift, and a featureless line matches featureless content a step off
- * as well as its own while its control may meet a particle (seed 21). */
-#define ONE_SIDED_MATCH 0.1
-#define ONE_SIDED_MISMATCH 0.2
-#define ONE_SIDED_CONTRAST 8.0
-
-/* Costs without and with the step of each line, as steady_votes() weighs
- * them (0 and 0: no evidence).  A line seen under one drift only is given
- * a cost under the other: where its content matches, that of a step off
- * (its control); where it does not, the typical match of the two-sided
- * lines.  Without this, the lines after a jump of a few rows at the end of
- * a frame followed by a flagged one, whose content the step takes out of
- * every later frame, told nothing, and the jump was placed in the flagged
- * frame: 5.4 px on those lines (test-series-correction seed 310000476).
- * Judged against unrelated content instead of the control, a line 3 px
- * off matched well enough to pull a jump out of the flagged frame into
- * the end of the one before (seed 350000212).  Without two-sided lines
- * there is no match level and no one-sided line is judged; a line that
- * some frames show under one drift only and others under the other only
- * is not judged either (its two costs come from different frames). */
-static void
-evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
-{
-    gdouble *right = g_new(gdouble, MAX(n, 1)), match, cost, other, q;
-    gint i, m = 0;
-
-    for (i = 0; i < n; i++) {
-        if (ev[i].two_sided)
-            right[m++] = MIN(ev[i].before, ev[i].after);
-    }
-    match = m ? median_in_place(right, m) : NAN;
-    g_free(right);
-    for (i = 0; i < n; i++) {
-        before[i] = after[i] = 0.0;
-        if (ev[i].two_sided) {
-            before[i] = ev[i].before;
-            after[i] = ev[i].after;
-            continue;
-        }
-        if (!m || isnan(ev[i].control) || !(ev[i].control > ONE_SIDED_CONTRAST*match)
-            || !(2.0*ev[i].texture > ONE_SIDED_CONTRAST*match))
-            continue;
-        cost = isnan(ev[i].before) ? ev[i].after : ev[i].before;
-        q = (cost - match)/(ev[i].control - match);
-        if (q <= ONE_SIDED_MATCH)
-            other = ev[i].control;
-        else if (q >= ONE_SIDED_MISMATCH)
-            other = match;
-        else
-            continue;
-        before[i] = isnan(ev[i].before) ? other : cost;
-        after[i] = isnan(ev[i].before) ? cost : other;
-    }
-}
-
 /* Where the lines are looked at: window on either side of the fitted time,
  * and when that time falls into a flagged frame or a gap between frames,
  * as far as window into the frames not flagged on either side (the jump
@@ -1104,81 +1025,6 @@ jump_within_ties(gdouble fitted, const gdouble *when, const gdouble *ends,
     return CLAMP(fitted, lo, hi);
 }
 
-/* Evidence below this fraction of a typical line's is weak. */
-#define JUMP_WEAK_EVIDENCE 0.1
-
-/* The median of the vote of line i and its neighbours in the same frame.
- * A frame's first or last line has one neighbour: the two count only when
- * they agree, by the weaker of them. */
-static gdouble
-median_vote(const gdouble *raw, const gint *frame, gint n, gint i)
-{
-    gdouble v[3];
-    gint j, m = 0;
-
-    for (j = MAX(i - 1, 0); j <= MIN(i + 1, n - 1); j++) {
-        if (frame[j] == frame[i])
-            v[m++] = raw[j];
-    }
-    if (m == 3)
-        return gwy_math_median(3, v);
-    if (m == 2)
-        return (v[0]*v[1] > 0.0) ? (fabs(v[0]) < fabs(v[1]) ? v[0] : v[1]) : 0.0;
-    return v[0];
-}
-
-/* The evidence of each line, its cost without the step minus its cost
- * with it (positive: the line lies after the jump).  A line with the
- * evidence of a typical line (a tenth of the median over the lines with
- * any) speaks for itself: the one line after a jump before a frame's
- * unseen last lines must count (seed 5000182).  A weak line, nearly
- * featureless, counts by the median of itself and its neighbours in the
- * frame: alone against the lines around it, it must not move a jump
- * across a frame boundary (seed 3000021), while a run of weak lines that
- * agree still counts (seed 2000427). */
-static void
-steady_votes(const gdouble *before, const gdouble *after, const gint *frame,
-             gint n, gdouble *votes)
-{
-    gdouble *raw = g_new(gdouble, 2*MAX(n, 1)), *strength = raw + MAX(n, 1);
-    gdouble strong;
-    gint i, m = 0;
-
-    for (i = 0; i < n; i++) {
-        raw[i] = before[i] - after[i];
-        if (before[i] + after[i] > 0.0)
-            strength[m++] = fabs(raw[i]);
-    }
-    strong = m ? JUMP_WEAK_EVIDENCE*gwy_math_median(m, strength) : 0.0;
-    for (i = 0; i < n; i++)
-        votes[i] = (fabs(raw[i]) >= strong) ? raw[i] : median_vote(raw, frame, n, i);
-    g_free(raw);
-}
-
-/* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it; the best
- * splits are first .. last.  Costs are in the data's squared units: splits
- * tie within a tiny fraction of all of them. */
-static void
-best_split(const gdouble *votes, gint n, gint *first, gint *last)
-{
-    gdouble total = 0.0, lowest = 0.0, tie = 0.0;
-    gint i;
-
-    for (i = 0; i < n; i++)
-        tie += fabs(votes[i]);
-    tie *= 1e-9;
-    *first = *last = 0;
-    for (i = 0; i < n; i++) {
-        total += votes[i];
-        if (total < lowest - tie) {
-            lowest = total;
-            *first = *last = i + 1;
-        }
-        else if (total <= lowest + tie && *last == i)
-            *last = i + 1;
-    }
-}
-
 /* The fit places a jump within a block or so (blocks straddling it register
  * to either side).  Line by line, against a neighbouring frame, the lines
  * before the jump match the drift without the step and those after it the
@@ -1191,7 +1037,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
 {
     DriftFit *fit = correction->fit.fits + correction->fit.chosen;
     gint nf = series->n_frames, k, r, i, n = 0, first, last, most = 0;
-    gdouble *line, *after, *before, *when, *ends, *votes, t, t_lo, t_hi;
+    gdouble *line, *when, *ends, t, t_lo, t_hi;
     LineEvidence *evidence;
     gint *frame;
 
@@ -1202,11 +1048,8 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
     line = g_new(gdouble, 3*series->frames[0].timing.xres);
-    after = g_new(gdouble, 5*most);
-    before = after + most;
-    when = before + most;
+    when = g_new(gdouble, 2*most);
     ends = when + most;
-    votes = ends + most;
     frame = g_new(gint, most);
     evidence = g_new(LineEvidence, most);
     /* The lines around the jump in the order they were scanned. */
@@ -1226,16 +1069,13 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
             n++;
         }
     }
-    evidence_costs(evidence, n, before, after);
-    steady_votes(before, after, frame, n, votes);
-    best_split(votes, n, &first, &last);
-    if (n >= 2 && last > 0 && first < n)
+    if (jump_votes_split(evidence, frame, n, &first, &last))
         fit->nonlinear = jump_within_ties(fit->nonlinear, when, ends, n,
                                           first, last, t_lo, t_hi);
     g_free(evidence);
     g_free(frame);
     g_free(line);
-    g_free(after);
+    g_free(when);
 }
 
 /* Blocks straddling the jump pull the fitted time and with it the step and

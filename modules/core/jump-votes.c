@@ -1,0 +1,183 @@
+/*
+ *  Where the scan lines put a jump: from each line's evidence to the split
+ *  of the lines that the evidence favours.  docs/series.md, step 5.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <math.h>
+#include <libgwyddion/gwyddion.h>
+#include "jump-votes.h"
+#include "median.h"
+
+/* A one-sided line's cost is placed on the scale from the typical cost of
+ * a line under its right drift (match: noise and interpolation) to its
+ * control, the cost of its content a step off.  Under the right drift the
+ * cost is about the match level and the control a step's displacement;
+ * under the wrong one the cost is a step's displacement and the control
+ * two, which costs at most four times as much (displacements small beside
+ * the content's features cost as their square): above a fifth of the
+ * scale the side is wrong, below a tenth right, in between the line tells
+ * nothing.  And only a line whose own texture and control both stand
+ * well above the match level is judged at all: a featureless line, or one
+ * whose features a step hardly moves, costs about the same under either
+ * drift, and a featureless line matches featureless content a step off
+ * as well as its own while its control may meet a particle (seed 21). */
+#define ONE_SIDED_MATCH 0.1
+#define ONE_SIDED_MISMATCH 0.2
+#define ONE_SIDED_CONTRAST 8.0
+
+/* Costs without and with the step of each line, as steady_votes() weighs
+ * them (0 and 0: no evidence).  A line seen under one drift only is given
+ * a cost under the other: where its content matches, that of a step off
+ * (its control); where it does not, the typical match of the two-sided
+ * lines.  Without this, the lines after a jump of a few rows at the end of
+ * a frame followed by a flagged one, whose content the step takes out of
+ * every later frame, told nothing, and the jump was placed in the flagged
+ * frame: 5.4 px on those lines (test-series-correction seed 310000476).
+ * Judged against unrelated content instead of the control, a line 3 px
+ * off matched well enough to pull a jump out of the flagged frame into
+ * the end of the one before (seed 350000212).  Without two-sided lines
+ * there is no match level and no one-sided line is judged; a line that
+ * some frames show under one drift only and others under the other only
+ * is not judged either (its two costs come from different frames). */
+static gdouble
+evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
+{
+    gdouble *right = g_new(gdouble, MAX(n, 1)), match, cost, other, q;
+    gint i, m = 0;
+
+    for (i = 0; i < n; i++) {
+        if (ev[i].two_sided)
+            right[m++] = MIN(ev[i].before, ev[i].after);
+    }
+    match = m ? median_in_place(right, m) : NAN;
+    g_free(right);
+    for (i = 0; i < n; i++) {
+        before[i] = after[i] = 0.0;
+        if (ev[i].two_sided) {
+            before[i] = ev[i].before;
+            after[i] = ev[i].after;
+            continue;
+        }
+        if (!m || isnan(ev[i].control) || !(ev[i].control > ONE_SIDED_CONTRAST*match)
+            || !(2.0*ev[i].texture > ONE_SIDED_CONTRAST*match))
+            continue;
+        cost = isnan(ev[i].before) ? ev[i].after : ev[i].before;
+        q = (cost - match)/(ev[i].control - match);
+        if (q <= ONE_SIDED_MATCH)
+            other = ev[i].control;
+        else if (q >= ONE_SIDED_MISMATCH)
+            other = match;
+        else
+            continue;
+        before[i] = isnan(ev[i].before) ? other : cost;
+        after[i] = isnan(ev[i].before) ? cost : other;
+    }
+    return match;
+}
+
+/* Evidence below this fraction of a typical line's is weak; so is that of
+ * a line whose worse cost stays below this many times the match level. */
+#define JUMP_WEAK_EVIDENCE 0.1
+#define JUMP_CLEAR_CONTRAST 4.0
+
+/* The median of the vote of line i and its neighbours in the same frame.
+ * A frame's first or last line has one neighbour: the two count only when
+ * they agree, by the weaker of them. */
+static gdouble
+median_vote(const gdouble *raw, const gint *frame, gint n, gint i)
+{
+    gdouble v[3];
+    gint j, m = 0;
+
+    for (j = MAX(i - 1, 0); j <= MIN(i + 1, n - 1); j++) {
+        if (frame[j] == frame[i])
+            v[m++] = raw[j];
+    }
+    if (m == 3)
+        return gwy_math_median(3, v);
+    if (m == 2)
+        return (v[0]*v[1] > 0.0) ? (fabs(v[0]) < fabs(v[1]) ? v[0] : v[1]) : 0.0;
+    return v[0];
+}
+
+/* The evidence of each line, its cost without the step minus its cost
+ * with it (positive: the line lies after the jump).  A line with the
+ * evidence of a typical line (a tenth of the median over the lines with
+ * any) speaks for itself: the one line after a jump before a frame's
+ * unseen last lines must count (seed 5000182).  A weak line, nearly
+ * featureless, counts by the median of itself and its neighbours in the
+ * frame: alone against the lines around it, it must not move a jump
+ * across a frame boundary (seed 3000021), while a run of weak lines that
+ * agree still counts (seed 2000427).  So does a line whose costs both lie
+ * within the reach of a right match (below JUMP_CLEAR_CONTRAST times the
+ * match level): a nearly featureless line at a particle's edge, which the
+ * other frame shows a fraction of a pixel off under the right drift,
+ * costs twice the match level there and nothing under the wrong drift
+ * that moves the particle away; counted by itself, against a run of
+ * featureless lines that leaned the other way, it moved a jump 7 lines
+ * late (test-series-correction seed 370001572, case 3: 4.4 px on those
+ * lines). */
+static void
+steady_votes(const gdouble *before, const gdouble *after, const gint *frame,
+             gint n, gdouble match, gdouble *votes)
+{
+    gdouble *raw = g_new(gdouble, 2*MAX(n, 1)), *strength = raw + MAX(n, 1);
+    gdouble strong;
+    gint i, m = 0;
+
+    for (i = 0; i < n; i++) {
+        raw[i] = before[i] - after[i];
+        if (before[i] + after[i] > 0.0)
+            strength[m++] = fabs(raw[i]);
+    }
+    strong = m ? JUMP_WEAK_EVIDENCE*gwy_math_median(m, strength) : 0.0;
+    for (i = 0; i < n; i++) {
+        if (fabs(raw[i]) >= strong
+            && !(MAX(before[i], after[i]) <= JUMP_CLEAR_CONTRAST*match))
+            votes[i] = raw[i];
+        else
+            votes[i] = median_vote(raw, frame, n, i);
+    }
+    g_free(raw);
+}
+
+/* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it; the best
+ * splits are first .. last.  Costs are in the data's squared units: splits
+ * tie within a tiny fraction of all of them. */
+static void
+best_split(const gdouble *votes, gint n, gint *first, gint *last)
+{
+    gdouble total = 0.0, lowest = 0.0, tie = 0.0;
+    gint i;
+
+    for (i = 0; i < n; i++)
+        tie += fabs(votes[i]);
+    tie *= 1e-9;
+    *first = *last = 0;
+    for (i = 0; i < n; i++) {
+        total += votes[i];
+        if (total < lowest - tie) {
+            lowest = total;
+            *first = *last = i + 1;
+        }
+        else if (total <= lowest + tie && *last == i)
+            *last = i + 1;
+    }
+}
+
+
+gboolean
+jump_votes_split(const LineEvidence *evidence, const gint *frame, gint n,
+                 gint *first, gint *last)
+{
+    gdouble *costs = g_new(gdouble, 3*MAX(n, 1)), *before = costs;
+    gdouble *after = costs + MAX(n, 1), *votes = after + MAX(n, 1), match;
+
+    match = evidence_costs(evidence, n, before, after);
+    steady_votes(before, after, frame, n, match, votes);
+    best_split(votes, n, first, last);
+    g_free(costs);
+    return n >= 2 && *last > 0 && *first < n;
+}

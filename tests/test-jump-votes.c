@@ -1,0 +1,206 @@
+/*
+ *  Where the scan lines put a jump (modules/core/jump-votes.h), on line
+ *  evidence drawn at random (seeded) in the shape the series correction
+ *  meets: lines that cut particles cost little under their right drift and
+ *  much under the wrong one, featureless lines cost the noise under
+ *  either, and a featureless line at a particle's edge may cost a few
+ *  times the typical match under its right drift and nothing under the
+ *  wrong one.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <math.h>
+#include <check.h>
+#include "jump-votes.h"
+#include "test-common.h"
+
+/* Draws per run of each test. */
+#define N_DRAWS 25
+
+static guint32 base_seed;
+
+/* A line seen under both drifts with these mismatches. */
+static void
+two_sided(LineEvidence *ev, gdouble before, gdouble after)
+{
+    ev->before = before;
+    ev->after = after;
+    ev->two_sided = TRUE;
+    ev->control = ev->texture = NAN;
+}
+
+/* A line cutting particles: about the typical match m (a few times the
+ * noise) under its right drift, contrast times it under the wrong one,
+ * contrast drawn from 5 to 60 (a line that cuts a particle's edge only)
+ * or from 10 to 100. */
+static void
+textured_line(LineEvidence *ev, GRand *rng, gdouble m, gboolean is_after,
+              gboolean faint)
+{
+    gdouble right = m*g_rand_double_range(rng, 0.5, 2.0);
+    gdouble wrong = m*(faint ? g_rand_double_range(rng, 5.0, 60.0)
+                       : g_rand_double_range(rng, 10.0, 100.0));
+
+    two_sided(ev, is_after ? wrong : right, is_after ? right : wrong);
+}
+
+/* A featureless line: noise under either drift, one side (lean > 0:
+ * after the jump) by the factor 1 + |lean| cheaper: interpolation smooths
+ * the other frame's noise by its sub-pixel phase, which differs between
+ * the two drifts but hardly between neighbouring lines. */
+static void
+featureless_line(LineEvidence *ev, GRand *rng, gdouble noise, gdouble lean)
+{
+    gdouble cost = noise*g_rand_double_range(rng, 0.5, 2.0);
+
+    if (lean > 0.0)
+        two_sided(ev, cost*(1.0 + lean), cost);
+    else
+        two_sided(ev, cost, cost*(1.0 - lean));
+}
+
+/* Lines a .. b-1 of a clear jump at split j: textured before j, after it
+ * from j on. */
+static void
+textured_run(LineEvidence *ev, GRand *rng, gdouble m, gint a, gint b, gint j,
+             gboolean faint)
+{
+    gint i;
+
+    for (i = a; i < b; i++)
+        textured_line(ev + i, rng, m, i >= j, faint);
+}
+
+/* Lines that all cut particles: the split falls exactly at the jump. */
+START_TEST(test_clear_jump_to_the_line)
+{
+    GRand *rng = test_rand_salted(base_seed, 1);
+    LineEvidence ev[48];
+    gint frame[48] = { 0 }, d, n, j, first, last;
+    gdouble noise, m;
+
+    for (d = 0; d < N_DRAWS; d++) {
+        n = g_rand_int_range(rng, 12, 49);
+        j = g_rand_int_range(rng, 1, n);
+        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
+        m = noise*g_rand_double_range(rng, 5.0, 40.0);
+        textured_run(ev, rng, m, 0, n, j, FALSE);
+        ck_assert_msg(jump_votes_split(ev, frame, n, &first, &last),
+                      "seed %u draw %d: no split", base_seed, d);
+        ck_assert_msg(first == j && last == j,
+                      "seed %u draw %d: split %d..%d, the jump at %d",
+                      base_seed, d, first, last, j);
+    }
+    g_rand_free(rng);
+}
+END_TEST
+
+/* A run of featureless lines holds the jump, and the first line after it
+ * that the other frames show a particle's edge on is nearly featureless
+ * itself: under the right drift (after the jump) the other frame shows
+ * the edge a fraction of a pixel off, 1 to 2 times a textured line's
+ * typical match (1.3 times in seed 370001572);
+ * under the wrong drift the step moves the particle away and the line
+ * matches to the noise.  Textured lines are at least two thirds of the
+ * window, as around a jump in a sample with particles.  The featureless
+ * lines tell nothing of the jump, but all lean to one side: the split
+ * goes to the far end of the run, and the edge line's weak evidence must
+ * not move it to the other end.  Counted by itself, that line moved a
+ * jump 7 lines late (test-series-correction seed 370001572). */
+START_TEST(test_edge_line_needs_its_neighbours)
+{
+    GRand *rng = test_rand_salted(base_seed, 2);
+    LineEvidence ev[80];
+    gint frame[80] = { 0 }, d, i, n_before, n_flat, n_after, edge, n;
+    gint first, last, textured;
+    gdouble noise, m, lean;
+
+    for (d = 0; d < N_DRAWS; d++) {
+        n_flat = g_rand_int_range(rng, 3, 11);
+        n_before = g_rand_int_range(rng, 6, 21);
+        textured = 2*(n_flat + 1);
+        n_after = g_rand_int_range(rng, MAX(textured - n_before, 6), 21);
+        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
+        m = noise*g_rand_double_range(rng, 10.0, 40.0);
+        lean = g_rand_double_range(rng, 0.2, 1.0)*(g_rand_boolean(rng) ? 1.0 : -1.0);
+        textured_run(ev, rng, m, 0, n_before, n_before, TRUE);
+        for (i = n_before; i < n_before + n_flat; i++)
+            featureless_line(ev + i, rng, noise, lean);
+        edge = n_before + n_flat;
+        two_sided(ev + edge, noise*g_rand_double_range(rng, 0.8, 1.2),
+                  m*g_rand_double_range(rng, 1.0, 2.0));
+        n = edge + 1 + n_after;
+        textured_run(ev, rng, m, edge + 1, n, edge + 1, TRUE);
+        ck_assert_msg(jump_votes_split(ev, frame, n, &first, &last),
+                      "seed %u draw %d: no split", base_seed, d);
+        if (lean > 0.0)
+            ck_assert_msg(first == n_before && last == n_before,
+                          "seed %u draw %d: split %d..%d, featureless lines "
+                          "%d..%d leaning after the jump", base_seed, d,
+                          first, last, n_before, edge - 1);
+        else
+            ck_assert_msg(first >= edge && last <= edge + 1,
+                          "seed %u draw %d: split %d..%d, featureless lines "
+                          "%d..%d leaning before the jump", base_seed, d,
+                          first, last, n_before, edge - 1);
+    }
+    g_rand_free(rng);
+}
+END_TEST
+
+/* The same edge line in a window of textured lines only, next to the
+ * jump: one line of weak contrary evidence does not move a clear jump. */
+START_TEST(test_edge_line_beside_clear_jump)
+{
+    GRand *rng = test_rand_salted(base_seed, 3);
+    LineEvidence ev[48];
+    gint frame[48] = { 0 }, d, n, j, first, last;
+    gdouble noise, m;
+
+    for (d = 0; d < N_DRAWS; d++) {
+        n = g_rand_int_range(rng, 16, 49);
+        j = g_rand_int_range(rng, 4, n - 4);
+        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
+        m = noise*g_rand_double_range(rng, 10.0, 40.0);
+        textured_run(ev, rng, m, 0, n, j, TRUE);
+        two_sided(ev + j, noise*g_rand_double_range(rng, 0.8, 1.2),
+                  m*g_rand_double_range(rng, 1.0, 2.0));
+        ck_assert(jump_votes_split(ev, frame, n, &first, &last));
+        ck_assert_msg(first >= j && last <= j + 1,
+                      "seed %u draw %d: split %d..%d, the jump at %d",
+                      base_seed, d, first, last, j);
+    }
+    g_rand_free(rng);
+}
+END_TEST
+
+/* Lines all on one side, or fewer than two, place no jump. */
+START_TEST(test_no_jump_without_both_sides)
+{
+    GRand *rng = test_rand_salted(base_seed, 4);
+    LineEvidence ev[24];
+    gint frame[24] = { 0 }, first, last;
+
+    textured_run(ev, rng, 1e-18, 0, 24, 24, FALSE);
+    ck_assert(!jump_votes_split(ev, frame, 24, &first, &last));
+    textured_run(ev, rng, 1e-18, 0, 24, 0, FALSE);
+    ck_assert(!jump_votes_split(ev, frame, 24, &first, &last));
+    ck_assert(!jump_votes_split(ev, frame, 1, &first, &last));
+    g_rand_free(rng);
+}
+END_TEST
+
+int
+main(void)
+{
+    TCase *tc;
+    Suite *s = test_suite_new("jump-votes", "split", &tc);
+
+    base_seed = test_seed_from_env("test-jump-votes");
+    tcase_add_test(tc, test_clear_jump_to_the_line);
+    tcase_add_test(tc, test_edge_line_needs_its_neighbours);
+    tcase_add_test(tc, test_edge_line_beside_clear_jump);
+    tcase_add_test(tc, test_no_jump_without_both_sides);
+    return test_run_suite(s);
+}
