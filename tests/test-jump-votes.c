@@ -72,6 +72,21 @@ textured_run(LineEvidence *ev, GRand *rng, gdouble m, gint a, gint b, gint j,
         textured_line(ev + i, rng, m, i >= j, faint);
 }
 
+/* A window of n (min_n to 48) textured lines with a clear jump at split j
+ * (margin lines or more from either end); the noise and the typical match
+ * m of its lines in *noise and *m (match 5-40 or, faint, 10-40 times the
+ * noise). */
+static void
+clear_jump_window(LineEvidence *ev, GRand *rng, gint min_n, gint margin,
+                  gboolean faint, gint *n, gint *j, gdouble *noise, gdouble *m)
+{
+    *n = g_rand_int_range(rng, min_n, 49);
+    *j = g_rand_int_range(rng, margin, *n - margin + 1);
+    *noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
+    *m = *noise*g_rand_double_range(rng, faint ? 10.0 : 5.0, 40.0);
+    textured_run(ev, rng, *m, 0, *n, *j, faint);
+}
+
 /* Lines that all cut particles: the split falls exactly at the jump. */
 START_TEST(test_clear_jump_to_the_line)
 {
@@ -81,11 +96,7 @@ START_TEST(test_clear_jump_to_the_line)
     gdouble noise, m;
 
     for (d = 0; d < N_DRAWS; d++) {
-        n = g_rand_int_range(rng, 12, 49);
-        j = g_rand_int_range(rng, 1, n);
-        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
-        m = noise*g_rand_double_range(rng, 5.0, 40.0);
-        textured_run(ev, rng, m, 0, n, j, FALSE);
+        clear_jump_window(ev, rng, 12, 1, FALSE, &n, &j, &noise, &m);
         ck_assert_msg(jump_votes_split(ev, frame, n, &first, &last),
                       "seed %u draw %d: no split", base_seed, d);
         ck_assert_msg(first == j && last == j,
@@ -159,11 +170,7 @@ START_TEST(test_edge_line_beside_clear_jump)
     gdouble noise, m;
 
     for (d = 0; d < N_DRAWS; d++) {
-        n = g_rand_int_range(rng, 16, 49);
-        j = g_rand_int_range(rng, 4, n - 4);
-        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
-        m = noise*g_rand_double_range(rng, 10.0, 40.0);
-        textured_run(ev, rng, m, 0, n, j, TRUE);
+        clear_jump_window(ev, rng, 16, 4, TRUE, &n, &j, &noise, &m);
         two_sided(ev + j, noise*g_rand_double_range(rng, 0.8, 1.2),
                   m*g_rand_double_range(rng, 1.0, 2.0));
         ck_assert(jump_votes_split(ev, frame, n, &first, &last));
