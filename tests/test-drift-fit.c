@@ -23,15 +23,16 @@
 static guint32 test_seed;
 
 static DriftMeasurement*
-sample_model(const DriftModel *model, gdouble noise_nm, guint32 seed, gint *n)
+sample_frames(const DriftModel *model, gint n_frames, gdouble noise_nm,
+              guint32 seed, gint *n)
 {
     DriftMeasurement *meas = g_new0(DriftMeasurement,
-                                    N_FRAMES*N_FRAMES*N_BLOCKS);
+                                    n_frames*n_frames*N_BLOCKS);
     SimRandom rng;
     gint k, j, b, m = 0;
 
     sim_random_init(&rng, seed, 7);
-    for (k = 1; k < N_FRAMES; k++) {
+    for (k = 1; k < n_frames; k++) {
         for (j = 0; j < k; j++) {
             for (b = 0; b < N_BLOCKS; b++) {
                 DriftMeasurement *d = meas + m++;
@@ -52,6 +53,12 @@ sample_model(const DriftModel *model, gdouble noise_nm, guint32 seed, gint *n)
     }
     *n = m;
     return meas;
+}
+
+static DriftMeasurement*
+sample_model(const DriftModel *model, gdouble noise_nm, guint32 seed, gint *n)
+{
+    return sample_frames(model, N_FRAMES, noise_nm, seed, n);
 }
 
 static const DriftFit*
@@ -273,16 +280,19 @@ START_TEST(test_outlier_dropped)
 END_TEST
 
 /* A fast settling (time constant 15-30 s, blocks of 6.25 s; 3-6 px of
- * travel at 7.8 nm/px)
- * measured with failed registrations among the blocks (2-5 % of them,
- * 20-80 nm off in any direction).  Fitted to everything, the failures
- * make another model the best (a settling's time constant at the end of
- * its range, a constant acceleration instead), and cut against that
- * model the good blocks of the first seconds went as outliers with the
- * failures: the settling fitted to the rest read its travel short
+ * travel at 7.8 nm/px) over five frames (160 blocks, as a short series
+ * measures them) with failed registrations among the blocks (3-8 % of
+ * them, 20-80 nm off in any direction).  Fitted to everything, the
+ * failures make another model the best (a settling's time constant at
+ * the end of its range, a constant acceleration instead), and cut against
+ * that model the good blocks of the first seconds went as outliers with
+ * the failures: the settling fitted to the rest read its travel short
  * (test-series-correction seed 370000064).  The trajectory over the first
  * frame must come back within 0.3 px RMS (0.2 px typically; the first
- * 3 s, before the first block's time, are extrapolated). */
+ * 3 s, before the first block's time, are extrapolated).  Over three
+ * frames (48 blocks, of which the cut may take 12) the same failures
+ * still leave too few good early blocks at times: seeds 240, 342 and
+ * 430001456 read the settling 5-11 px wrong or not at all. */
 START_TEST(test_fast_settling_beside_failures)
 {
     GRand *rng = test_rand_salted(test_seed, 300 + _i);
@@ -302,8 +312,8 @@ START_TEST(test_fast_settling_beside_failures)
     model.u[1] = travel/model.tau*sin(angle);
     model.v[0] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
     model.v[1] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
-    meas = sample_model(&model, 0.3, g_rand_int(rng), &n);
-    fail = g_rand_double_range(rng, 0.02, 0.05);
+    meas = sample_frames(&model, 5, 0.3, g_rand_int(rng), &n);
+    fail = g_rand_double_range(rng, 0.03, 0.08);
     for (i = 0; i < n; i++) {
         if (g_rand_double(rng) < fail) {
             angle = g_rand_double_range(rng, 0.0, 2.0*G_PI);
