@@ -115,9 +115,11 @@ END_TEST
  * under the wrong drift the step moves the particle away and the line
  * matches to the noise.  Textured lines are at least two thirds of the
  * window, as around a jump in a sample with particles.  The featureless
- * lines tell nothing of the jump, but all lean to one side: the split
- * goes to the far end of the run, and the edge line's weak evidence must
- * not move it to the other end.  Counted by itself, that line moved a
+ * lines tell nothing of the jump, but all lean to one side: leaning after
+ * the jump, the split must go to the start of the run, where the edge
+ * line's weak evidence, counted alone, moved it past the run's end;
+ * leaning before it, the split goes to the run's end, the edge line on
+ * either side of it.  Counted by itself, that line moved a
  * jump 7 lines late (test-series-correction seed 370001572). */
 START_TEST(test_edge_line_needs_its_neighbours)
 {
@@ -160,8 +162,10 @@ START_TEST(test_edge_line_needs_its_neighbours)
 }
 END_TEST
 
-/* The same edge line in a window of textured lines only, next to the
- * jump: one line of weak contrary evidence does not move a clear jump. */
+/* The same edge line in a window of textured lines only, as the first
+ * line after a clear jump: its weak contrary evidence, alone or by the
+ * median with its neighbours (which is its own vote there), moves the
+ * split by that one line at most. */
 START_TEST(test_edge_line_beside_clear_jump)
 {
     GRand *rng = test_rand_salted(base_seed, 3);

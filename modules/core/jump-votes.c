@@ -110,9 +110,11 @@ median_vote(const gdouble *raw, const gint *frame, gint n, gint i)
  * featureless, counts by the median of itself and its neighbours in the
  * frame: alone against the lines around it, it must not move a jump
  * across a frame boundary (seed 3000021), while a run of weak lines that
- * agree still counts (seed 2000427).  So does a line whose costs both lie
- * within the reach of a right match (below JUMP_CLEAR_CONTRAST times the
- * match level): a nearly featureless line at a particle's edge, which the
+ * agree still counts (seed 2000427).  So does a line seen under both
+ * drifts whose costs both lie within the reach of a right match (below
+ * JUMP_CLEAR_CONTRAST times the match level; a one-sided line was judged
+ * against its control already, and its made-up other cost is no such
+ * measure): a nearly featureless line at a particle's edge, which the
  * other frame shows a fraction of a pixel off under the right drift,
  * costs twice the match level there and nothing under the wrong drift
  * that moves the particle away; counted by itself, against a run of
@@ -120,8 +122,9 @@ median_vote(const gdouble *raw, const gint *frame, gint n, gint i)
  * late (test-series-correction seed 370001572, case 3: 4.4 px on those
  * lines). */
 static void
-steady_votes(const gdouble *before, const gdouble *after, const gint *frame,
-             gint n, gdouble match, gdouble *votes)
+steady_votes(const gdouble *before, const gdouble *after,
+             const LineEvidence *ev, const gint *frame, gint n, gdouble match,
+             gdouble *votes)
 {
     gdouble *raw = g_new(gdouble, 2*MAX(n, 1)), *strength = raw + MAX(n, 1);
     gdouble strong;
@@ -135,7 +138,8 @@ steady_votes(const gdouble *before, const gdouble *after, const gint *frame,
     strong = m ? JUMP_WEAK_EVIDENCE*gwy_math_median(m, strength) : 0.0;
     for (i = 0; i < n; i++) {
         if (fabs(raw[i]) >= strong
-            && !(MAX(before[i], after[i]) <= JUMP_CLEAR_CONTRAST*match))
+            && !(ev[i].two_sided
+                 && MAX(before[i], after[i]) <= JUMP_CLEAR_CONTRAST*match))
             votes[i] = raw[i];
         else
             votes[i] = median_vote(raw, frame, n, i);
@@ -176,7 +180,7 @@ jump_votes_split(const LineEvidence *evidence, const gint *frame, gint n,
     gdouble *after = costs + MAX(n, 1), *votes = after + MAX(n, 1), match;
 
     match = evidence_costs(evidence, n, before, after);
-    steady_votes(before, after, frame, n, match, votes);
+    steady_votes(before, after, evidence, frame, n, match, votes);
     best_split(votes, n, first, last);
     g_free(costs);
     return n >= 2 && *last > 0 && *first < n;
