@@ -434,6 +434,7 @@ typedef struct {
     gdouble agreeing;     /* the fraction of its blocks that agree with the
                              others' fit */
     gint n_params;        /* of the model the others chose */
+    DriftFit fit;         /* that model */
 } LeftOut;
 
 /* The mean residual (px) of the registered blocks between frames neither k
@@ -517,6 +518,7 @@ fit_leaving_out(const SeriesCorrection *correction, const FramePairs *pairs,
     chosen = drift_fit_select(work, report->n_meas, &options, fits);
     chosen = plausible_choice(correction, fits, report->n_fits, chosen, FALSE);
     if (chosen >= 0) {
+        result->fit = fits[chosen];
         result->n_params = fits[chosen].n_params;
         result->residual = frame_residual(correction, fits + chosen, pairs,
                                           k, registered, &n_pairs, values);
@@ -603,7 +605,8 @@ pick_left_out(const LeftOut *cand, gint n, gint n_frames)
  * fitting, but not all their pairs (seed 2034865279: frame 3 slipped,
  * typical 0.12 px with it and 0.08 px without, spread 0.10 px without it;
  * frame 2 was flagged in its place, 3.3 px).  The rest are then judged
- * again without it. */
+ * again without it, against the fit of the others of that round (the fit
+ * of all still bends towards the flagged frame). */
 static void
 flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
 {
@@ -614,7 +617,7 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
     gdouble agreement = correction->typical_px;
     gdouble *in_all = g_new(gdouble, MAX(nf, 1));
     LeftOut *cand = g_new(LeftOut, MAX(nf, 1)), c;
-    const DriftFit *all = report->fits + report->chosen;
+    DriftFit reference = report->fits[report->chosen];
     gdouble spread;
     FramePairs pairs;
 
@@ -634,7 +637,7 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
                 || !fit_leaving_out(correction, &pairs, k, registered, work,
                                     values, &c))
                 continue;
-            spread = others_spread(correction, all, k, registered, values);
+            spread = others_spread(correction, &reference, k, registered, values);
             if (beyond_limit(c.residual, c.typical)
                 && ((!is_end_frame(k, nf)
                      && (agreement > LEAVE_OUT_GAIN*c.typical
@@ -647,6 +650,7 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
         c = cand[best];
         flag_frame(correction->frames + c.frame, c.residual, c.typical);
         agreement = c.typical;
+        reference = c.fit;
     }
     frame_pairs_clear(&pairs);
     g_free(cand);
