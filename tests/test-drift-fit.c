@@ -291,8 +291,8 @@ END_TEST
  * frame must come back within 0.3 px RMS (0.2 px typically; the first
  * 3 s, before the first block's time, are extrapolated).  Without the
  * second cut 3 of seeds 1-20 fail; with it seeds 1-400 pass.  More
- * failures still defeat the cut at times (docs/validation.md): over three
- * frames' 48 blocks with 3-8 % (seeds 240, 342, 430001456: the settling
+ * failures still defeat the cut at times (docs/series.md, step 3):
+ * over three frames' 48 blocks with 3-8 % (seeds 240, 342, 430001456: the settling
  * 5-11 px wrong or not named), and over five frames with 3-8 % (seed
  * 470000944: cut against a jump, the settling's first blocks went and
  * constant drift was chosen). */
