@@ -171,7 +171,6 @@ best_split(const gdouble *votes, gint n, gint *first, gint *last)
     }
 }
 
-
 gboolean
 jump_votes_split(const LineEvidence *evidence, const gint *frame, gint n,
                  gint *first, gint *last)

@@ -618,7 +618,6 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
     gdouble *in_all = g_new(gdouble, MAX(nf, 1));
     LeftOut *cand = g_new(LeftOut, MAX(nf, 1)), c;
     DriftFit reference = report->fits[report->chosen];
-    gdouble spread;
     FramePairs pairs;
 
     frame_pairs_init(&pairs, report, nf);
@@ -637,11 +636,11 @@ flag_by_leaving_out(SeriesCorrection *correction, const gdouble *registered)
                 || !fit_leaving_out(correction, &pairs, k, registered, work,
                                     values, &c))
                 continue;
-            spread = others_spread(correction, &reference, k, registered, values);
             if (beyond_limit(c.residual, c.typical)
                 && ((!is_end_frame(k, nf)
                      && (agreement > LEAVE_OUT_GAIN*c.typical
-                         || spread > LEAVE_OUT_GAIN*c.spread))
+                         || others_spread(correction, &reference, k, registered,
+                                          values) > LEAVE_OUT_GAIN*c.spread))
                     || beyond_limit(in_all[k], agreement)))
                 cand[n++] = c;
         }
