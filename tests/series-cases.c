@@ -26,6 +26,10 @@
 /* Raw-channel artefacts relative to the particles' height. */
 #define RAW_SIZE 3.0
 
+/* The disturbed frame slipped by this much (px) and came back. */
+#define SLIP_X 6.0
+#define SLIP_Y -4.0
+
 /* Stripes of lines the corrected frames are judged in. */
 #define JUDGE_STRIPES 8
 
@@ -79,8 +83,8 @@ series_case_scan(guint32 base_seed, gint i, const DriftModel *model,
         sp.noise_seed = base_seed + 1000*i + k;
         drift_model_copy(&slipped, model);
         if (k == options->disturbed) {
-            slipped.p0[0] += SERIES_CASE_SLIP_X*FIELD/RES;
-            slipped.p0[1] += SERIES_CASE_SLIP_Y*FIELD/RES;
+            slipped.p0[0] += SLIP_X*FIELD/RES;
+            slipped.p0[1] += SLIP_Y*FIELD/RES;
         }
         field = sim_scan_frame(sample, &slipped, &sp);
         drift_model_clear(&slipped);

@@ -18,9 +18,6 @@ G_BEGIN_DECLS
 
 #define SERIES_CASE_FRAMES 5
 #define SERIES_CASE_EFFECTS HIDDEN_CASE_EFFECTS
-/* The disturbed frame slipped by this much (px) and came back. */
-#define SERIES_CASE_SLIP_X 6.0
-#define SERIES_CASE_SLIP_Y -4.0
 
 typedef struct {
     gboolean raw;           /* raw-channel artefacts on every frame */

@@ -72,21 +72,6 @@ textured_run(LineEvidence *ev, GRand *rng, gdouble m, gint a, gint b, gint j,
         textured_line(ev + i, rng, m, i >= j, faint);
 }
 
-/* A window of n (min_n to 48) textured lines with a clear jump at split j
- * (margin lines or more from either end); the noise and the typical match
- * m of its lines in *noise and *m (match 5-40 or, faint, 10-40 times the
- * noise). */
-static void
-clear_jump_window(LineEvidence *ev, GRand *rng, gint min_n, gint margin,
-                  gboolean faint, gint *n, gint *j, gdouble *noise, gdouble *m)
-{
-    *n = g_rand_int_range(rng, min_n, 49);
-    *j = g_rand_int_range(rng, margin, *n - margin + 1);
-    *noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
-    *m = *noise*g_rand_double_range(rng, faint ? 10.0 : 5.0, 40.0);
-    textured_run(ev, rng, *m, 0, *n, *j, faint);
-}
-
 /* Lines that all cut particles: the split falls exactly at the jump. */
 START_TEST(test_clear_jump_to_the_line)
 {
@@ -96,7 +81,11 @@ START_TEST(test_clear_jump_to_the_line)
     gdouble noise, m;
 
     for (d = 0; d < N_DRAWS; d++) {
-        clear_jump_window(ev, rng, 12, 1, FALSE, &n, &j, &noise, &m);
+        n = g_rand_int_range(rng, 12, 49);
+        j = g_rand_int_range(rng, 1, n);
+        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
+        m = noise*g_rand_double_range(rng, 5.0, 40.0);
+        textured_run(ev, rng, m, 0, n, j, FALSE);
         ck_assert_msg(jump_votes_split(ev, frame, n, &first, &last),
                       "seed %u draw %d: no split", base_seed, d);
         ck_assert_msg(first == j && last == j,
@@ -162,30 +151,6 @@ START_TEST(test_edge_line_needs_its_neighbours)
 }
 END_TEST
 
-/* The same edge line in a window of textured lines only, as the first
- * line after a clear jump: its weak contrary evidence, alone or by the
- * median with its neighbours (which is its own vote there), moves the
- * split by that one line at most. */
-START_TEST(test_edge_line_beside_clear_jump)
-{
-    GRand *rng = test_rand_salted(base_seed, 3);
-    LineEvidence ev[48];
-    gint frame[48] = { 0 }, d, n, j, first, last;
-    gdouble noise, m;
-
-    for (d = 0; d < N_DRAWS; d++) {
-        clear_jump_window(ev, rng, 16, 4, TRUE, &n, &j, &noise, &m);
-        two_sided(ev + j, noise*g_rand_double_range(rng, 0.8, 1.2),
-                  m*g_rand_double_range(rng, 1.0, 2.0));
-        ck_assert(jump_votes_split(ev, frame, n, &first, &last));
-        ck_assert_msg(first >= j && last <= j + 1,
-                      "seed %u draw %d: split %d..%d, the jump at %d",
-                      base_seed, d, first, last, j);
-    }
-    g_rand_free(rng);
-}
-END_TEST
-
 /* Lines all on one side, or fewer than two, place no jump. */
 START_TEST(test_no_jump_without_both_sides)
 {
@@ -211,7 +176,6 @@ main(void)
     base_seed = test_seed_from_env("test-jump-votes");
     tcase_add_test(tc, test_clear_jump_to_the_line);
     tcase_add_test(tc, test_edge_line_needs_its_neighbours);
-    tcase_add_test(tc, test_edge_line_beside_clear_jump);
     tcase_add_test(tc, test_no_jump_without_both_sides);
     return test_run_suite(s);
 }
