@@ -890,6 +890,331 @@ registration_triangle(const SeriesSpec *spec, const gchar *measured,
     return TRUE;
 }
 
+/* ---- The FastScan residual against the measurement noise ---- */
+
+/* The channels of one FastScan frame are recorded on the same scan lines,
+ * so they share one drift.  Where two channels both measure a block of a
+ * pair (and their fits both keep it), each block's residual against its
+ * channel's fit splits into what the two channels share (their mean
+ * product: drift the model does not explain, or content that changed
+ * alike in every channel) and what they do not (half the mean square of
+ * their difference: the registration's own error).  A residual that is
+ * all of the second kind is measurement noise. */
+typedef struct {
+    const gchar *channels[2];
+    gint n_matched;           /* blocks kept in both channels */
+    gdouble residual_nm[2];   /* RMS of each channel's residuals there */
+    gdouble noise_nm;         /* sqrt(mean |r1 - r2|^2 / 2) */
+    gdouble shared_nm;        /* sqrt(max(mean r1 . r2, 0)) */
+    gdouble shared_raw;       /* mean r1 . r2, nm^2 (may be negative) */
+} ChannelAgreement;
+
+/* The same block of the same pair: the series' measurements come in the
+ * same order whatever the channel (displacement-measure.c), their times
+ * not quite (a block's time is that of its detail, which differs between
+ * channels). */
+static gboolean
+same_block(const DriftMeasurement *a, const DriftMeasurement *b)
+{
+    return (a->frame_a == b->frame_a && a->frame_b == b->frame_b
+            && a->group == b->group);
+}
+
+static void
+block_residual(const FitReport *rep, const DriftMeasurement *m, gdouble *r)
+{
+    gdouble px, py;
+
+    drift_fit_predict(rep->fits + rep->chosen, m, &px, &py);
+    r[0] = 1e9*(m->dx - px);
+    r[1] = 1e9*(m->dy - py);
+}
+
+static void
+channel_agreement(const FitReport *rep1, const FitReport *rep2,
+                  ChannelAgreement *ca)
+{
+    gdouble r1[2], r2[2], s1 = 0.0, s2 = 0.0, sd = 0.0, sx = 0.0;
+    gint i, n = 0;
+
+    for (i = 0; i < MIN(rep1->n_meas, rep2->n_meas); i++) {
+        const DriftMeasurement *a = rep1->meas + i, *b = rep2->meas + i;
+
+        if (a->weight > 0.0 && b->weight > 0.0 && same_block(a, b)) {
+            block_residual(rep1, a, r1);
+            block_residual(rep2, b, r2);
+            s1 += r1[0]*r1[0] + r1[1]*r1[1];
+            s2 += r2[0]*r2[0] + r2[1]*r2[1];
+            sd += (r1[0] - r2[0])*(r1[0] - r2[0]) + (r1[1] - r2[1])*(r1[1] - r2[1]);
+            sx += r1[0]*r2[0] + r1[1]*r2[1];
+            n++;
+        }
+    }
+    ca->n_matched = n;
+    ca->residual_nm[0] = n ? sqrt(s1/n) : NAN;
+    ca->residual_nm[1] = n ? sqrt(s2/n) : NAN;
+    ca->noise_nm = n ? sqrt(0.5*sd/n) : NAN;
+    ca->shared_raw = n ? sx/n : NAN;
+    ca->shared_nm = n ? sqrt(MAX(sx/n, 0.0)) : NAN;
+}
+
+/* The part the channels share, block by block (the mean of the residuals
+ * of the channels that keep the block, where at least two do), against
+ * the block's place in the frame: a drift that repeats in every frame, or
+ * a scanner that misplaces lines along the slow axis, shows as a residual
+ * that changes with the row, the same way in every pair, where a
+ * trajectory in time alone has nothing to fit it with.  Each pair gets an
+ * offset of its own (a pair's mean residual is the trajectory's business),
+ * all pairs one slope per axis. */
+typedef struct {
+    gint n;                   /* blocks kept in two channels or more */
+    gint n_pairs;
+    gdouble rms_nm;           /* RMS of the shared residual */
+    gdouble rms_centred_nm;   /* without each pair's mean */
+    gdouble rms_detrended_nm; /* and without the slope along the rows */
+    gdouble slope_nm[2];      /* per block of lines, x and y */
+    gdouble slope_se_nm[2];   /* their standard errors */
+} SharedTrend;
+
+#define MAX_PAIRS 64
+
+static void
+shared_trend(const FitReport *rep, gint nc, SharedTrend *st)
+{
+    gint n_meas = rep[0].n_meas, i, c, k, ax, used, pair;
+    gint pair_of[MAX_PAIRS][2], count[MAX_PAIRS];
+    gdouble *s[2], *g, *mean_s[2], mean_g[MAX_PAIRS], r[2], sum[2];
+    gdouble sgg = 0.0, sgs[2] = { 0.0, 0.0 }, ss0 = 0.0, ss1 = 0.0, ss2 = 0.0, res;
+    gint *pid;
+
+    memset(st, 0, sizeof(SharedTrend));
+    for (c = 1; c < nc; c++)
+        n_meas = MIN(n_meas, rep[c].n_meas);
+    s[0] = g_new0(gdouble, 2*MAX(n_meas, 1));
+    s[1] = s[0] + MAX(n_meas, 1);
+    g = g_new0(gdouble, MAX(n_meas, 1));
+    pid = g_new0(gint, MAX(n_meas, 1));
+    mean_s[0] = g_new0(gdouble, 2*MAX_PAIRS);
+    mean_s[1] = mean_s[0] + MAX_PAIRS;
+    memset(mean_g, 0, sizeof(mean_g));
+    memset(count, 0, sizeof(count));
+    for (i = 0; i < n_meas; i++) {
+        const DriftMeasurement *m = rep[0].meas + i;
+
+        sum[0] = sum[1] = 0.0;
+        for (c = used = 0; c < nc; c++) {
+            if (!(rep[c].meas[i].weight > 0.0) || !same_block(m, rep[c].meas + i))
+                continue;
+            block_residual(rep + c, rep[c].meas + i, r);
+            sum[0] += r[0];
+            sum[1] += r[1];
+            used++;
+        }
+        if (used < 2)
+            continue;
+        for (pair = 0; pair < st->n_pairs; pair++) {
+            if (pair_of[pair][0] == m->frame_a && pair_of[pair][1] == m->frame_b)
+                break;
+        }
+        if (pair == st->n_pairs) {
+            if (pair == MAX_PAIRS)
+                continue;
+            pair_of[pair][0] = m->frame_a;
+            pair_of[pair][1] = m->frame_b;
+            st->n_pairs++;
+        }
+        k = st->n++;
+        pid[k] = pair;
+        g[k] = m->group;
+        for (ax = 0; ax < 2; ax++) {
+            s[ax][k] = sum[ax]/used;
+            mean_s[ax][pair] += s[ax][k];
+        }
+        mean_g[pair] += g[k];
+        count[pair]++;
+    }
+    for (pair = 0; pair < st->n_pairs; pair++) {
+        mean_g[pair] /= count[pair];
+        mean_s[0][pair] /= count[pair];
+        mean_s[1][pair] /= count[pair];
+    }
+    for (k = 0; k < st->n; k++) {
+        gdouble dg = g[k] - mean_g[pid[k]];
+
+        sgg += dg*dg;
+        for (ax = 0; ax < 2; ax++) {
+            gdouble ds = s[ax][k] - mean_s[ax][pid[k]];
+
+            sgs[ax] += dg*ds;
+            ss0 += s[ax][k]*s[ax][k];
+            ss1 += ds*ds;
+        }
+    }
+    for (ax = 0; ax < 2; ax++)
+        st->slope_nm[ax] = (sgg > 0.0) ? sgs[ax]/sgg : NAN;
+    for (k = 0; k < st->n && sgg > 0.0; k++) {
+        gdouble dg = g[k] - mean_g[pid[k]];
+
+        for (ax = 0; ax < 2; ax++) {
+            res = s[ax][k] - mean_s[ax][pid[k]] - st->slope_nm[ax]*dg;
+            ss2 += res*res;
+        }
+    }
+    st->rms_nm = st->n ? sqrt(ss0/st->n) : NAN;
+    st->rms_centred_nm = st->n ? sqrt(ss1/st->n) : NAN;
+    st->rms_detrended_nm = st->n ? sqrt(ss2/st->n) : NAN;
+    for (ax = 0; ax < 2; ax++) {
+        gint dof = st->n - st->n_pairs - 2;
+
+        st->slope_se_nm[ax] = (sgg > 0.0 && dof > 0) ? sqrt(0.5*ss2/dof/sgg) : NAN;
+    }
+    g_free(s[0]);
+    g_free(g);
+    g_free(pid);
+    g_free(mean_s[0]);
+}
+
+/* Every pair of the channels, each measured and fitted as the study
+ * measures and fits a series; FALSE when a channel cannot be loaded. */
+static gboolean
+channel_agreements(const SeriesSpec *spec, const gchar *measured,
+                   const gchar *const *channels, gint n,
+                   ChannelAgreement *ca, gdouble *fit_rms, SharedTrend *st,
+                   GError **error)
+{
+    FitReport *rep = g_new0(FitReport, n);
+    FrameSeries *series;
+    DisplacementOptions dopt;
+    DriftFitOptions fopt;
+    gint c, d, k = 0;
+    gboolean ok = TRUE;
+
+    for (c = 0; c < n && ok; c++) {
+        if (!(series = load_measured_series(spec, measured, channels[c], error)))
+            ok = FALSE;
+        else {
+            study_options(series->frames, &dopt, &fopt);
+            ok = fit_report_compute(series, &dopt, &fopt, rep + c);
+            fit_rms[c] = ok ? rep[c].fits[rep[c].chosen].rms_nm : NAN;
+            frame_series_free(series);
+            if (!ok)
+                g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                            "%s: no fit", channels[c]);
+        }
+    }
+    for (c = 0; c < n && ok; c++) {
+        for (d = c + 1; d < n; d++, k++) {
+            ca[k].channels[0] = channels[c];
+            ca[k].channels[1] = channels[d];
+            channel_agreement(rep + c, rep + d, ca + k);
+        }
+    }
+    if (ok)
+        shared_trend(rep, n, st);
+    for (c = 0; c < n; c++)
+        fit_report_clear(rep + c);
+    g_free(rep);
+    return ok;
+}
+
+static void
+write_shared_trend(GString *md, const SharedTrend *st, gint block_lines)
+{
+    gdouble z = MAX(fabs(st->slope_nm[0])/st->slope_se_nm[0],
+                    fabs(st->slope_nm[1])/st->slope_se_nm[1]);
+
+    if (st->n < st->n_pairs + 3) {
+        g_string_append(md, "  Too few blocks kept in two channels to look "
+                        "for a trend along the rows.\n");
+        return;
+    }
+    g_string_append_printf(md, "\nThe shared part block by block (the mean "
+        "of the residuals of the channels that keep a block, %d blocks of "
+        "%d pairs): RMS %.3f nm, %.3f nm without each pair's mean, %.3f nm "
+        "without also one slope along the rows common to all pairs: "
+        "%.3f ± %.3f nm in x and %.3f ± %.3f nm in y per block of %d lines.",
+        st->n, st->n_pairs, st->rms_nm, st->rms_centred_nm,
+        st->rms_detrended_nm, st->slope_nm[0], st->slope_se_nm[0],
+        st->slope_nm[1], st->slope_se_nm[1], block_lines);
+    if (z >= 3.0)
+        g_string_append(md, "  The residual changes with the row within the "
+            "frame (the slope common to the pairs lies beyond 3 standard "
+            "errors): "
+            "drift that repeats in every frame (creep after each fly-back, "
+            "seen because the content lies some rows apart in the two "
+            "frames) or a slow axis that misplaces lines; a trajectory in "
+            "time alone cannot fit it, and the series correction leaves it.\n");
+    else
+        g_string_append(md, "  No trend along the rows stands out (within 3 "
+            "standard errors): the shared part is not a drift that repeats "
+            "with the row.\n");
+}
+
+static void
+write_channel_agreements(GString *md, const gchar *const *channels, gint n,
+                         const ChannelAgreement *ca, const gdouble *fit_rms)
+{
+    gdouble noise2 = 0.0, shared2 = 0.0, resid2 = 0.0;
+    gint c, k, pairs = n*(n - 1)/2, blocks = 0;
+
+    g_string_append(md, "\n**Residual against the measurement noise "
+        "(fastscan-series).**  The channels of a FastScan frame are recorded "
+        "on the same scan lines and share one drift.  Each channel is "
+        "measured and fitted as above; where two channels' fits both keep a "
+        "block, its residuals against the two fits split into what the "
+        "channels share (mean product: drift no model explains, or content "
+        "that changed alike in every channel) and what they do not (half "
+        "the mean square of their difference: the registration's own "
+        "error).  RMS in nm:\n\n| channels | blocks kept in both | "
+        "residual RMS (each) | not shared (noise) | shared |\n"
+        "|---|---|---|---|---|\n");
+    for (k = 0; k < pairs; k++) {
+        g_string_append_printf(md, "| %s, %s | %d | %.3f, %.3f | %.3f | "
+                               "%.3f (mean product %.3f nm^2) |\n",
+                               ca[k].channels[0], ca[k].channels[1],
+                               ca[k].n_matched, ca[k].residual_nm[0],
+                               ca[k].residual_nm[1], ca[k].noise_nm,
+                               ca[k].shared_nm, ca[k].shared_raw);
+        if (ca[k].n_matched) {
+            noise2 += ca[k].n_matched*ca[k].noise_nm*ca[k].noise_nm;
+            shared2 += ca[k].n_matched*ca[k].shared_raw;
+            resid2 += 0.5*ca[k].n_matched*(ca[k].residual_nm[0]*ca[k].residual_nm[0]
+                                            + ca[k].residual_nm[1]*ca[k].residual_nm[1]);
+            blocks += ca[k].n_matched;
+        }
+    }
+    g_string_append(md, "\nEach channel's own fit (all blocks it keeps), "
+                    "weighted RMS residual:");
+    for (c = 0; c < n; c++)
+        g_string_append_printf(md, " %s %.3f nm%s", channels[c], fit_rms[c],
+                               c + 1 < n ? ";" : ".");
+    if (!blocks) {
+        g_string_append(md, "  No block is kept by two channels: the "
+                        "residual cannot be split.\n");
+        return;
+    }
+    noise2 /= blocks;
+    shared2 /= blocks;
+    resid2 /= blocks;
+    g_string_append_printf(md, "  Over the %d blocks kept in two channels, "
+        "the residual's mean square %.3f nm^2 is %.3f not shared and %.3f "
+        "shared (%.0f %% noise).", blocks, resid2, noise2, shared2,
+        100.0*noise2/MAX(noise2 + MAX(shared2, 0.0), 1e-300));
+    if (shared2 <= 0.25*noise2)
+        g_string_append(md, "  The residual is the registration's own "
+                        "error: what the model leaves is noise, not drift.\n");
+    else if (shared2 <= noise2)
+        g_string_append(md, "  Most of the residual is the registration's "
+                        "own error; a shared part of the same order remains, "
+                        "drift no model explains or content that changed "
+                        "alike in every channel.\n");
+    else
+        g_string_append(md, "  Most of the residual is shared by the "
+                        "channels: drift no model explains, or content that "
+                        "changed alike in every channel, not registration "
+                        "noise.\n");
+}
+
 /* ---- A simulated series on the measured particle film ---- */
 
 #define SIM_FILE "particles-film/PTO_110_Virgin0001.gwy"
@@ -1719,6 +2044,10 @@ int
 main(int argc, char **argv)
 {
     static const gchar *triangle_channels[] = { "ZSensor", "Phase" };
+    static const gchar *const agreement_channels[] = { "ZSensor", "AmplitudeActual", "Phase" };
+    ChannelAgreement agreement[3];
+    gdouble agreement_rms[3];
+    SharedTrend trend;
     const gchar *measured = argc > 1 ? argv[1] : "../shared/data/measured";
     const gchar *docdir = argc > 2 ? argv[2] : "docs";
     gchar *figdir = g_build_filename(docdir, "figures", NULL);
@@ -1801,6 +2130,20 @@ main(int argc, char **argv)
         }
     }
     write_triangles(md, tri, G_N_ELEMENTS(triangle_channels));
+    if (channel_agreements(specs + 0, measured, agreement_channels,
+                           G_N_ELEMENTS(agreement_channels), agreement,
+                           agreement_rms, &trend, &error)) {
+        write_channel_agreements(md, agreement_channels,
+                                 G_N_ELEMENTS(agreement_channels), agreement,
+                                 agreement_rms);
+        if (results[0].series)
+            write_shared_trend(md, &trend,
+                               results[0].series->frames[0].timing.yres/N_BLOCKS);
+    }
+    else {
+        g_printerr("validation-study: channel agreement: %s\n", error->message);
+        g_clear_error(&error);
+    }
     g_string_append(md, "\n## Effects hidden in simulated series "
                     "(bench/bench-effect-confusion)\n\n");
     g_string_append(md, confusion);
