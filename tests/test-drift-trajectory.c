@@ -902,6 +902,10 @@ START_TEST(test_table_errors)
     static const gchar bad_time[] =
         "stripe,dx,dy,t_local\n0,1,1,10\n1,2,2,soon\n";
     static const gchar all_blank[] = "stripe,dx,dy\n0,,\n1,,\n";
+    static const gchar huge_exact[] =
+        "stripe,dx,dy,dx_exact,dy_exact\n0,1,0,1e300,0\n1,2,0,2,0\n";
+    static const gchar huge_time[] =
+        "stripe,dx,dy,t_image\n0,1,0,5\n1,2,0,-1e12\n";
     ScanTiming timing;
     DriftTable *table;
     GError *error = NULL;
@@ -915,6 +919,27 @@ START_TEST(test_table_errors)
                               DRIFT_TRAJECTORY_ERROR_VALUE));
     ck_assert_str_eq(error->message,
                      "drift.csv:3: t_local is not a finite number");
+    g_clear_error(&error);
+    drift_table_free(table);
+
+    /* Each column's range in its own unit: an exact drift is in pixels
+     * (it was reported as seconds). */
+    table = drift_table_parse(huge_exact, -1, "exact.csv", &error);
+    ck_assert_msg(table, "%s", error ? error->message : "");
+    ck_assert(!drift_trajectory_new_from_table(table, 1.0, 1.0, &timing,
+                                               &error));
+    ck_assert(g_error_matches(error, DRIFT_TRAJECTORY_ERROR,
+                              DRIFT_TRAJECTORY_ERROR_VALUE));
+    ck_assert_str_eq(error->message, "exact.csv:2: dx_exact = 1e+300 px is "
+                     "out of range (from -1e+09 to 1e+09 px)");
+    g_clear_error(&error);
+    drift_table_free(table);
+    table = drift_table_parse(huge_time, -1, "time.csv", &error);
+    ck_assert_msg(table, "%s", error ? error->message : "");
+    ck_assert(!drift_trajectory_new_from_table(table, 1.0, 1.0, &timing,
+                                               &error));
+    ck_assert_str_eq(error->message, "time.csv:3: t_image = -1e+12 s is "
+                     "out of range (from -1e+10 to 1e+10 s)");
     g_clear_error(&error);
     drift_table_free(table);
 

@@ -10,6 +10,7 @@
 #include "config.h"
 #include <math.h>
 #include <string.h>
+#include <errno.h>
 #include <unistd.h>
 #include <sys/wait.h>
 #include <glib/gstdio.h>
@@ -303,6 +304,49 @@ START_TEST(test_sweep)
 }
 END_TEST
 
+/* An output name near the longest a file name may be still gets its
+ * temporary beside it: the temporary's name carries the output's cut
+ * short (a 235-character output name was refused with "File name too
+ * long"), and the sweep finds a dead run's temporary by the same cut. */
+START_TEST(test_long_output_name)
+{
+    gchar *dir = g_strdup(TEST_BUILDDIR "/tests/scratch-hostile-core-XXXXXX");
+    gchar *base, *target, *mine, *dead, *cut;
+    const gchar *argv[] = { "true", NULL };
+    gint status, fd;
+    GPid pid;
+
+    ck_assert_ptr_nonnull(g_mkdtemp(dir));
+    base = g_strnfill(251, 'x');
+    memcpy(base + 247, ".gwy", 4);
+    target = g_build_filename(dir, base, NULL);
+    ck_assert(g_spawn_async(NULL, (gchar**)argv, NULL, G_SPAWN_SEARCH_PATH | G_SPAWN_DO_NOT_REAP_CHILD,
+                            NULL, NULL, &pid, NULL));
+    waitpid(pid, &status, 0);
+    mine = safe_output_temp_new(target, "old.", &fd);
+    ck_assert_msg(mine != NULL, "no temporary beside a 251-byte name: %s", g_strerror(errno));
+    close(fd);
+    ck_assert_int_le(strlen(strrchr(mine, '/') + 1), 255);
+    ck_assert(safe_output_is_temp_name(strrchr(mine, '/') + 1));
+    /* A dead run's temporary, named with the same cut, is swept. */
+    cut = g_strndup(strrchr(mine, '/') + 2, strchr(strrchr(mine, '/') + 2, '.') - (strrchr(mine, '/') + 2));
+    ck_assert(g_str_has_prefix(base, cut) && strlen(cut) >= 150);
+    dead = g_strdup_printf("%s/.%s.%d.aBcDeF" SAFE_OUTPUT_SUFFIX, dir, cut, (gint)pid);
+    ck_assert(g_file_set_contents(dead, "x", 1, NULL));
+    safe_output_sweep(target);
+    ck_assert(!g_file_test(dead, G_FILE_TEST_EXISTS));
+    safe_output_discard(mine);
+    ck_assert(!g_file_test(mine, G_FILE_TEST_EXISTS));
+    g_rmdir(dir);
+    g_free(dead);
+    g_free(cut);
+    g_free(mine);
+    g_free(target);
+    g_free(base);
+    g_free(dir);
+}
+END_TEST
+
 static Suite*
 hostile_core_suite(void)
 {
@@ -316,6 +360,7 @@ hostile_core_suite(void)
     tcase_add_test(tc, test_excerpts);
     tcase_add_test(tc, test_screening_truncations);
     tcase_add_test(tc, test_sweep);
+    tcase_add_test(tc, test_long_output_name);
     return suite;
 }
 

@@ -1094,26 +1094,28 @@ check_timing(const DriftTable *table, const ScanTiming *timing,
 
 /* Table times, s: a date in seconds since 1970 fits, 1e308 does not. */
 #define DRIFT_TRAJECTORY_TIME_MAX 1e10
+/* Exact drifts, px: the bound of the table's own dx and dy. */
+#define DRIFT_TRAJECTORY_PX_MAX 1e9
 
 /* The value of an extra column, or fallback when the column is blank or
- * absent; FALSE when it holds anything but a finite number (a time, one
- * within DRIFT_TRAJECTORY_TIME_MAX). */
+ * absent; FALSE when it holds anything but a finite number within
+ * [-most, most] of the unit (s for a time, px for an exact drift). */
 static gboolean
 extra_or_default(const DriftTable *table, gint s, const gchar *name,
-                 gdouble fallback, gdouble *value, GError **error)
+                 gdouble fallback, gdouble most, const gchar *unit,
+                 gdouble *value, GError **error)
 {
     gint j = drift_table_find_column(table, name);
 
     if (drift_table_get_extra(table, s, name, value) && isfinite(*value)) {
         /* Times beyond centuries are no clock's: 1e308 s would overflow the
-         * trajectory's arithmetic into NaN. */
-        if (fabs(*value) <= DRIFT_TRAJECTORY_TIME_MAX)
+         * trajectory's arithmetic into NaN; so would such a drift. */
+        if (fabs(*value) <= most)
             return TRUE;
         g_set_error(error, DRIFT_TRAJECTORY_ERROR, DRIFT_TRAJECTORY_ERROR_VALUE,
-                    _("%s:%d: %s = %g s is out of range (from %g to %g s)"),
+                    _("%s:%d: %s = %g %s is out of range (from %g to %g %s)"),
                     table->source_name ? table->source_name : _("drift table"),
-                    table->rows[s].line, name, *value, -DRIFT_TRAJECTORY_TIME_MAX,
-                    DRIFT_TRAJECTORY_TIME_MAX);
+                    table->rows[s].line, name, *value, unit, -most, most, unit);
         return FALSE;
     }
     if (j < 0 || !*table->extra_values[s*table->n_extra + j]) {
@@ -1158,13 +1160,13 @@ drift_trajectory_measurements_from_table(const DriftTable *table,
         t_centre = scan_timing_rows_time(timing,
                                          stripe_first_row(s, n, yres),
                                          stripe_end_row(s, n, yres));
-        ok = (extra_or_default(table, s, "t_image", t_centre,
+        ok = (extra_or_default(table, s, "t_image", t_centre, DRIFT_TRAJECTORY_TIME_MAX, "s",
                                &meas[count].t_a, error)
-              && extra_or_default(table, s, "t_local", t_end,
+              && extra_or_default(table, s, "t_local", t_end, DRIFT_TRAJECTORY_TIME_MAX, "s",
                                   &meas[count].t_b, error)
-              && extra_or_default(table, s, "dx_exact", dx_px[s],
+              && extra_or_default(table, s, "dx_exact", dx_px[s], DRIFT_TRAJECTORY_PX_MAX, "px",
                                   &dx_exact, error)
-              && extra_or_default(table, s, "dy_exact", dy_px[s],
+              && extra_or_default(table, s, "dy_exact", dy_px[s], DRIFT_TRAJECTORY_PX_MAX, "px",
                                   &dy_exact, error));
         meas[count].dx = dx_exact;
         meas[count].dy = dy_exact;

@@ -20,7 +20,7 @@
 static gchar *volatile registered[MAX_REGISTERED];
 static gboolean handlers_installed = FALSE;
 
-static const int caught_signals[] = { SIGTERM, SIGINT, SIGHUP };
+static const int caught_signals[] = { SIGTERM, SIGINT, SIGHUP, SIGQUIT };
 
 /* Only async-signal-safe calls: unlink, rmdir, signal, raise. */
 static void
@@ -160,10 +160,37 @@ run_is_dead(pid_t pid)
     return pid != getpid() && kill(pid, 0) != 0 && errno == ESRCH;
 }
 
+/* A file name's longest length in bytes on the file systems in use. */
+#define NAME_MAX_BYTES 255
+/* What a temporary's name adds to the target's base name at most: the
+ * dots, the longest role (the tools' are a few letters), the PID, the
+ * random part and the suffix. */
+#define TEMP_NAME_EXTRA (3 + 16 + 20 + 7 + sizeof(SAFE_OUTPUT_SUFFIX))
+
+/* The target's base name as its temporaries carry it: cut (at a character
+ * boundary) where the whole temporary's name would exceed a file name's
+ * length, which a valid output name of 230 bytes did ("File name too
+ * long"). */
+static gchar*
+temp_base(const gchar *target)
+{
+    gchar *base = g_path_get_basename(target);
+    gsize most = NAME_MAX_BYTES - TEMP_NAME_EXTRA;
+
+    if (strlen(base) > most) {
+        const gchar *end = base + most;
+
+        if (g_utf8_validate(base, -1, NULL))
+            end = g_utf8_find_prev_char(base, end + 1);
+        base[end - base] = '\0';
+    }
+    return base;
+}
+
 guint
 safe_output_sweep(const gchar *target)
 {
-    gchar *dirname = g_path_get_dirname(target), *base = g_path_get_basename(target);
+    gchar *dirname = g_path_get_dirname(target), *base = temp_base(target);
     gchar *prefix = g_strconcat(".", base, ".", NULL), *path;
     const gchar *name;
     guint swept = 0;
@@ -189,7 +216,7 @@ safe_output_sweep(const gchar *target)
 gchar*
 safe_output_temp_new(const gchar *target, const gchar *role, gint *fd)
 {
-    gchar *dir = g_path_get_dirname(target), *base = g_path_get_basename(target);
+    gchar *dir = g_path_get_dirname(target), *base = temp_base(target);
     gchar *name = g_strdup_printf("%s%c.%s.%s%ld.XXXXXX%s", dir, G_DIR_SEPARATOR, base,
                                   role ? role : "", (glong)getpid(), SAFE_OUTPUT_SUFFIX);
     gint saved_errno, tmpfd;
