@@ -1123,6 +1123,17 @@ static const ErrorCase error_cases[] = {
       "gwy-localscan: cannot read @IN.missing: no such file" },
     { "input is a directory", GOOD_TABLE, NULL, { "-o", "@OUT", "@OUTDIR", }, 1,
       "gwy-localscan: cannot read @OUTDIR: it is a directory" },
+    /* Names given empty and an output that is a folder are slips of the
+     * command line (exit 2, as `series` says them), not files that failed
+     * ("cannot write : No such file or directory", exit 1). */
+    { "empty -o", GOOD_TABLE, NULL, { "-o", "", "@IN", }, 2,
+      "gwy-localscan: -o: the file name is empty" },
+    { "empty -d", GOOD_TABLE, NULL, { "-d", "", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: -d: the file name is empty" },
+    { "empty input", GOOD_TABLE, NULL, { "-o", "@OUT", "", }, 2,
+      "gwy-localscan: INPUT: the file name is empty" },
+    { "output is a folder", GOOD_TABLE, NULL, { "-o", "@OUTDIR", "@IN", }, 2,
+      "gwy-localscan: cannot write @OUTDIR: it is a folder" },
     { "reference is a directory", GOOD_TABLE, NULL, { "--reference", "@OUTDIR", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: cannot read @OUTDIR: it is a directory" },
     { "input not SPM data", NULL, "just some text\n", { "-o", "@OUT", "@CSV", }, 1,
@@ -1372,12 +1383,14 @@ START_TEST(test_error_output_not_writable)
 END_TEST
 
 /* A --write-drift that cannot be written (its folder missing: no temporary
- * file; a folder at its name: refused before anything is written) leaves
- * an older OUT as it was, and nothing else behind. */
+ * file; a folder at its name: refused with the command line, exit 2, as
+ * `series` refuses it) leaves an older OUT as it was, and nothing else
+ * behind. */
 START_TEST(test_write_drift_failure_keeps_old_output)
 {
     static const gchar *const targets[2] = { "nowhere/used.csv", "adir" };
     static const gchar *const reasons[2] = { "No such file or directory", "it is a folder" };
+    static const gint statuses[2] = { 1, 2 };
     gchar *input = simple_input(GOOD_TABLE), *output = out_path("out.gwy"), *adir = out_path("adir");
     gchar *used, *contents, *message, *listing;
     ToolRun run;
@@ -1390,7 +1403,7 @@ START_TEST(test_write_drift_failure_keeps_old_output)
         run_tool(&run, (const gchar *const[]){ "-o", output, "--write-drift", used, input, NULL });
         message = g_strdup_printf("gwy-localscan: cannot write %s: %s\n", used, reasons[i]);
         printf("write-drift failure %u: %s", i, run.err);
-        ck_assert_int_eq(run.status, 1);
+        ck_assert_int_eq(run.status, statuses[i]);
         ck_assert_str_eq(run.err, message);
         ck_assert(g_file_get_contents(output, &contents, NULL, NULL));
         ck_assert_str_eq(contents, "an older result\n");

@@ -115,6 +115,13 @@ bad_case 2 "needs one file per frame" $timing --all-channels -o "$tmp/bad.gwy" "
 bad_case 2 "--line-time must be a number of seconds" --line-time 0 --frame-times 0,64,128 -o "$tmp/bad.gwy" $frames
 bad_case 2 "unknown direction" --line-time 1 --frame-times 0,64,128 --direction sideways -o "$tmp/bad.gwy" $frames
 bad_case 2 "f0.gwy" $timing -o "$tmp/f0.gwy" $frames
+# A frame named twice (also through a link), a channel given empty, an
+# output that is a folder: slips of the command line.
+bad_case 2 "f0.gwy is given twice, as frames 1 and 3" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/f1.gwy" "$tmp/f0.gwy"
+mkdir "$tmp/outdir"
+bad_case 2 "it is a folder" $timing -o "$tmp/outdir" $frames
+rmdir "$tmp/outdir"
+bad_case 2 "is empty" $timing -c "" -o "$tmp/bad.gwy" $frames
 bad_case 1 "3 frames" --line-time 0.5 --frame-times 0,64 -o "$tmp/bad.gwy" $frames
 bad_case 1 "at least two" --line-time 0.5 --frame-times 0 --channels 0 -o "$tmp/bad.gwy" "$tmp/f0.gwy"
 bad_case 1 "nosuch.gwy" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/nosuch.gwy"

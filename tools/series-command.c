@@ -148,21 +148,40 @@ parse_interpolation(const gchar *name, GwyInterpolationType *interpolation,
     return FALSE;
 }
 
-/* An output that exists must be a regular file: a device or a fifo would
- * be renamed over. */
+/* A file named twice as a frame: one scan cannot be two frames, and a
+ * list of thousands of copies cost time quadratic in the copies (each
+ * compared with the others as a duplicate channel) and an output file of
+ * every copy.  Files are told apart by device and inode, so a link to a
+ * frame is the frame. */
 static gboolean
-check_output_kind(const gchar *filename, GError **error)
+check_frames_distinct(gchar **files, gint n, GError **error)
 {
+    GHashTable *seen = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
     GStatBuf st;
-    gchar *message;
+    gchar *key, *message;
+    gpointer first;
+    gboolean ok = TRUE;
+    gint i;
 
-    if (!filename || g_stat(filename, &st) != 0 || S_ISREG(st.st_mode))
-        return TRUE;
-    message = g_strdup_printf(_("cannot write %s: it is not a regular file"),
-                              filename);
-    refuse_usage(error, message);
-    g_free(message);
-    return FALSE;
+    for (i = 0; i < n && ok; i++) {
+        if (g_stat(files[i], &st) != 0)
+            continue;
+        key = g_strdup_printf("%" G_GUINT64_FORMAT ":%" G_GUINT64_FORMAT,
+                              (guint64)st.st_dev, (guint64)st.st_ino);
+        if (g_hash_table_lookup_extended(seen, key, NULL, &first)) {
+            message = g_strdup_printf(_("%s is given twice, as frames %d and %d: "
+                                        "one scan cannot be two frames"),
+                                      files[i], GPOINTER_TO_INT(first) + 1, i + 1);
+            refuse_usage(error, message);
+            g_free(message);
+            g_free(key);
+            ok = FALSE;
+        }
+        else
+            g_hash_table_insert(seen, key, GINT_TO_POINTER(i));
+    }
+    g_hash_table_destroy(seen);
+    return ok;
 }
 
 static gboolean
@@ -180,14 +199,16 @@ check_args(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
     if (!n_files)
         return refuse_usage(error, _("no frames given (several files, or "
                                      "one file with a channel per frame)"));
+    if (!check_frames_distinct(args->files, n_files, error))
+        return FALSE;
     run->crop = FALSE;
     if (args->crop && g_ascii_strcasecmp(args->crop, "common") == 0)
         run->crop = TRUE;
     else if (args->crop && g_ascii_strcasecmp(args->crop, "none") != 0)
         return refuse_usage(error, _("--crop must be common or none"));
-    if (!check_output_kind(args->output, error)
-        || !check_output_kind(args->trajectory, error)
-        || !check_output_kind(args->json, error))
+    if (!output_files_check_kind(args->output, error)
+        || !output_files_check_kind(args->trajectory, error)
+        || !output_files_check_kind(args->json, error))
         return FALSE;
     if (args->series.channels && n_files > 1)
         return refuse_usage(error, _("--channels names the channels of one "

@@ -197,6 +197,10 @@ series_args_to_options(const SeriesArgs *args, FrameSeriesOptions *options,
         return FALSE;
     if (args->channels && !parse_channels(args->channels, options, error))
         return FALSE;
+    /* An empty title matches no channel: said as such, not as a frame's
+     * missing channel. */
+    if (args->channel && !*args->channel)
+        return refuse("channel", args->channel, _("is empty: give a channel's id or title"), error);
     if (args->channel && parse_channel_id(args->channel, &id)) {
         if (args->channels)
             return refuse("channel", args->channel,

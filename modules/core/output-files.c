@@ -75,6 +75,21 @@ output_files_same(const gchar *a, const gchar *b)
     return same;
 }
 
+gboolean
+output_files_check_kind(const gchar *filename, GError **error)
+{
+    GStatBuf st;
+
+    if (!filename || g_stat(filename, &st) != 0 || S_ISREG(st.st_mode))
+        return TRUE;
+    g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_ISDIR,
+                S_ISDIR(st.st_mode)
+                ? _("cannot write %s: it is a folder")
+                : _("cannot write %s: it is not a regular file"),
+                filename);
+    return FALSE;
+}
+
 static void
 refuse_same(const OutputFilesRole *output, const OutputFilesRole *other,
             GError **error)
@@ -174,17 +189,7 @@ check_new_target(OutputFiles *files, const gchar *filename, GError **error)
 static gboolean
 check_target(OutputFiles *files, const gchar *filename, GError **error)
 {
-    GStatBuf st;
-
-    if (g_stat(filename, &st) == 0 && !S_ISREG(st.st_mode)) {
-        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_ISDIR,
-                    S_ISDIR(st.st_mode)
-                    ? _("cannot write %s: it is a folder")
-                    : _("cannot write %s: it is not a regular file"),
-                    filename);
-        return FALSE;
-    }
-    return check_new_target(files, filename, error);
+    return output_files_check_kind(filename, error) && check_new_target(files, filename, error);
 }
 
 /* Adds filename to the set with a new temporary file beside it, open as

@@ -28,6 +28,12 @@ typedef struct {
 gboolean      output_files_same         (const gchar *a,
                                          const gchar *b);
 
+/* An output that exists must be a regular file: a folder, a device or a
+ * fifo would be renamed over.  For checking a command line before the
+ * work (output_files_add() refuses the same, after it). */
+gboolean      output_files_check_kind   (const gchar *filename,
+                                         GError **error);
+
 /* Refuses (one line naming both) an output that is the same file as an
  * input or as another output.  Inputs may repeat. */
 gboolean      output_files_check_roles  (const OutputFilesRole *roles,
