@@ -130,6 +130,10 @@ bad_case 1 "notes.txt" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/notes.txt"
 # simscan starts every frame at 0 s: the metadata's times cannot order them.
 bad_case 1 "time order" --line-time 0.5 -o "$tmp/bad.gwy" $frames
 bad_case 1 "time order" --line-time 0.5 --frame-times 0,128,64 -o "$tmp/bad.gwy" $frames
+# Frames of 64 s started 10 s apart, or of 1280 s (a wrong line time) 64 s
+# apart, overlap by most of a frame: no clock's rounding explains that.
+bad_case 1 "cannot overlap" --line-time 0.5 --frame-times 0,10,20 -o "$tmp/bad.gwy" $frames
+bad_case 1 "cannot overlap" --line-time 10 --frame-times 0,64,128 -o "$tmp/bad.gwy" $frames
 
 # The measured series, as a user runs them.
 measured=${LOCALSCAN_MEASURED_DIR:-}

@@ -152,6 +152,10 @@ fields_alike(GwyDataField *a, GwyDataField *b)
                                  gwy_data_field_get_si_unit_xy(b)));
 }
 
+/* Frames overlapping by more than this fraction of a frame are refused:
+ * a clock's rounding (a second of a 209 s FastScan frame) explains less. */
+#define MAX_OVERLAP_FRACTION 0.5
+
 /* Pixels of a usable size: finite, positive, and not so unlike along the
  * two axes that a blur of one physical size is meaningless.  A file may
  * say anything (a NaN width crashed the blur). */
@@ -537,7 +541,19 @@ assign_start_times(FrameSeries *series, const MetaTiming *mts,
                         prev->label, prev->timing.frame_start);
             return FALSE;
         }
-        /* Time stamps rounded or taken a little early: tolerated, said. */
+        /* Time stamps rounded or taken a little early: tolerated, said.
+         * Beyond half a frame no rounding explains it: the times or the
+         * line time are wrong (0,10,20 s given for frames of 64 s). */
+        if (overlap > MAX_OVERLAP_FRACTION*(scan_timing_frame_end(&prev->timing)
+                                            - prev->timing.frame_start)) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                        _("%s starts %.3g s before %s ends, which takes "
+                          "%.3g s to scan: frames of one scanner cannot "
+                          "overlap; check the frame times and the line time"),
+                        frame->label, overlap, prev->label,
+                        scan_timing_frame_end(&prev->timing) - prev->timing.frame_start);
+            return FALSE;
+        }
         if (overlap > 1e-3*prev->timing.line_time)
             g_ptr_array_add(series->notes,
                             g_strdup_printf(_("%s starts %.3g s before %s "
