@@ -14,6 +14,7 @@
 #include <unistd.h>
 #include <sys/wait.h>
 #include <glib/gstdio.h>
+#include <gio/gio.h>
 #include <libgwyddion/gwyddion.h>
 #include <libprocess/gwyprocess.h>
 #include "stripe-geometry.h"
@@ -264,6 +265,43 @@ START_TEST(test_screening_truncations)
 }
 END_TEST
 
+/* Compressed input (a .axz is gzipped XML) passes whole, and every cut
+ * of it is refused: a loader read what it could of a cut .axz and the
+ * tools corrected part of its channels as if it were the file. */
+START_TEST(test_screening_gzip_truncations)
+{
+    GConverter *deflater = G_CONVERTER(g_zlib_compressor_new(G_ZLIB_COMPRESSOR_FORMAT_GZIP, 6));
+    GRand *rng = g_rand_new_with_seed(seed ^ 5);
+    GString *text = g_string_new("<?xml version=\"1.0\"?><Document>");
+    GError *error = NULL;
+    gsize nread, nwritten, cap, len;
+    guint8 *packed;
+    guint i;
+
+    for (i = 0; i < 4000; i++)
+        g_string_append_printf(text, "<v>%u</v>", g_rand_int(rng));
+    g_string_append(text, "</Document>");
+    cap = text->len + 1024;
+    packed = g_malloc(cap);
+    ck_assert_int_eq(g_converter_convert(deflater, text->str, text->len, packed, cap,
+                                         G_CONVERTER_INPUT_AT_END, &nread, &nwritten, NULL),
+                     G_CONVERTER_FINISHED);
+    ck_assert(file_screening_check_bytes("film.axz", packed, nwritten, NULL));
+    for (i = 0; i < 200; i++) {
+        len = (i < 20) ? 2 + i : (gsize)g_rand_int_range(rng, 2, nwritten);
+        ck_assert_msg(!file_screening_check_bytes("film.axz", packed, len, &error),
+                      "a %" G_GSIZE_FORMAT " of %" G_GSIZE_FORMAT " byte prefix passed", len, nwritten);
+        ck_assert_str_eq(error->message, "film.axz: truncated or corrupt: its compressed data do "
+                         "not decompress to their end");
+        g_clear_error(&error);
+    }
+    g_free(packed);
+    g_string_free(text, TRUE);
+    g_rand_free(rng);
+    g_object_unref(deflater);
+}
+END_TEST
+
 /* A dead run's temporary is swept, a live run's and other files stay. */
 START_TEST(test_sweep)
 {
@@ -359,6 +397,7 @@ hostile_core_suite(void)
     tcase_add_test(tc, test_missing_refused_past_half);
     tcase_add_test(tc, test_excerpts);
     tcase_add_test(tc, test_screening_truncations);
+    tcase_add_test(tc, test_screening_gzip_truncations);
     tcase_add_test(tc, test_sweep);
     tcase_add_test(tc, test_long_output_name);
     return suite;

@@ -8,6 +8,7 @@
 #include <string.h>
 #include <unistd.h>
 #include <glib/gstdio.h>
+#include <gio/gio.h>
 #include "file-screening.h"
 #include "localscan-intl.h"
 
@@ -263,6 +264,46 @@ has_magic(const guchar *bytes, gsize length, const gchar *magic)
     return length >= GWY_MAGIC_SIZE && memcmp(bytes, magic, GWY_MAGIC_SIZE) == 0;
 }
 
+/* A gzip stream (Anasys .axz, any .gz a loader unpacks) must decompress
+ * to its end: a loader reads what it can of a cut one and hands on part
+ * of the file's channels (a .axz cut at 1 MB of 3.5 MB was read, and
+ * corrected, as if whole).  The data are inflated and dropped, at most
+ * FILE_SCREENING_MAX_BYTES of them. */
+static gboolean
+check_gzip(const gchar *name, const guchar *bytes, gsize length, GError **error)
+{
+    GConverter *inflater = G_CONVERTER(g_zlib_decompressor_new(G_ZLIB_COMPRESSOR_FORMAT_GZIP));
+    GConverterResult result = G_CONVERTER_ERROR;
+    GError *err = NULL;
+    guchar *out = g_malloc(1 << 16);
+    gsize pos = 0, nread, nwritten;
+    guint64 total = 0;
+    gchar *msg = NULL;
+
+    do {
+        result = g_converter_convert(inflater, bytes + pos, length - pos, out, 1 << 16,
+                                     G_CONVERTER_INPUT_AT_END, &nread, &nwritten, &err);
+        pos += nread;
+        total += nwritten;
+        if (result == G_CONVERTER_CONVERTED && !nread && !nwritten)
+            result = G_CONVERTER_ERROR;
+    } while (result == G_CONVERTER_CONVERTED && total <= (guint64)FILE_SCREENING_MAX_BYTES);
+    if (total > (guint64)FILE_SCREENING_MAX_BYTES)
+        msg = g_strdup_printf(_("larger than %d GiB once decompressed: refused"),
+                              (gint)(FILE_SCREENING_MAX_BYTES >> 30));
+    else if (result != G_CONVERTER_FINISHED)
+        msg = g_strdup(_("truncated or corrupt: its compressed data do not decompress to their end"));
+    g_clear_error(&err);
+    g_free(out);
+    g_object_unref(inflater);
+    if (!msg)
+        return TRUE;
+    screening_error(error, total > (guint64)FILE_SCREENING_MAX_BYTES
+                    ? FILE_SCREENING_ERROR_SIZE : FILE_SCREENING_ERROR_CORRUPT, name, msg);
+    g_free(msg);
+    return FALSE;
+}
+
 gboolean
 file_screening_check_bytes(const gchar *name, const guchar *bytes, gsize length, GError **error)
 {
@@ -281,6 +322,8 @@ file_screening_check_bytes(const gchar *name, const guchar *bytes, gsize length,
         return screening_error(error, FILE_SCREENING_ERROR_TYPE, name,
                                _("not a Gwyddion file although named .gwy (it does not start "
                                  "with GWYP)"));
+    if (length >= 2 && bytes[0] == 0x1f && bytes[1] == 0x8b)
+        return check_gzip(name, bytes, length, error);
     /* Other formats are left to Gwyddion's detection; a loader's complaint
      * is kept from the user by library-log.h. */
     return TRUE;
