@@ -122,7 +122,7 @@ static GOptionEntry option_table[] = {
          "include (only masked pixels are data) or ignore"), N_("MODE") },
     { "accept-partial", 0, 0, G_OPTION_ARG_NONE, &options.accept_partial,
       N_("With --reference: use the stripes measured even when they cannot support the result "
-         "(fewer than two, or fewer than half of those whose content lies in the reference); "
+         "(fewer than two, none with --stripes 1, or fewer than half of those whose content lies in the reference); "
          "without it such a registration is refused"), NULL },
     { "line-time", 0, 0, G_OPTION_ARG_STRING, &options.line_time_arg,
       N_("Continuous mode: seconds per scan line, trace and retrace, where the "
