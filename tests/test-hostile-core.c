@@ -225,6 +225,19 @@ START_TEST(test_excerpts)
 }
 END_TEST
 
+/* Where needle first occurs in haystack, NULL if nowhere. */
+static guint8*
+find_bytes(guint8 *haystack, gsize len, const guint8 *needle, gsize n)
+{
+    gsize i;
+
+    for (i = 0; i + n <= len; i++) {
+        if (memcmp(haystack + i, needle, n) == 0)
+            return haystack + i;
+    }
+    return NULL;
+}
+
 /* A real .gwy passes; every shorter prefix of it is refused, and random
  * damage is refused or passed without reading outside the bytes. */
 START_TEST(test_screening_truncations)
@@ -254,6 +267,21 @@ START_TEST(test_screening_truncations)
         copy = g_memdup2(bytes->data, bytes->len);
         copy[g_rand_int_range(rng, 4, bytes->len)] = (guint8)g_rand_int_range(rng, 0, 256);
         file_screening_check_bytes("x.gwy", copy, bytes->len, NULL);
+        g_free(copy);
+    }
+    /* A width of 0, less or NaN, which Gwyddion would take for 1 m. */
+    for (i = 0; i < 3; i++) {
+        static const gdouble widths[3] = { 0.0, -5e-9, NAN };
+        guint8 *at;
+
+        copy = g_memdup2(bytes->data, bytes->len);
+        at = find_bytes(copy, bytes->len, (const guint8*)"xreal\0d", 7);
+        ck_assert(at != NULL);
+        memcpy(at + 7, widths + i, sizeof(gdouble));
+        ck_assert(!file_screening_check_bytes("x.gwy", copy, bytes->len, &error));
+        ck_assert_msg(strstr(error->message, "physical width or height is not a positive number"),
+                      "%s", error->message);
+        g_clear_error(&error);
         g_free(copy);
     }
     ck_assert(!file_screening_check_bytes("x.gwy", (const guint8*)"not gwy", 7, NULL));

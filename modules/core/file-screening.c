@@ -5,6 +5,7 @@
  */
 #include "config.h"
 #include <errno.h>
+#include <math.h>
 #include <string.h>
 #include <unistd.h>
 #include <glib/gstdio.h>
@@ -40,6 +41,7 @@ typedef struct {
 typedef struct {
     gint64 xres, yres, res;
     gint64 n_data;           /* -1: no data array */
+    gdouble xreal, yreal;    /* physical size; 1 when not stated */
 } FieldShape;
 
 static gboolean
@@ -83,6 +85,20 @@ walk_skip(GwyWalk *w, gsize end, guint64 n)
     if (end - w->pos < n)
         return walk_fail(w, N_("truncated: a value runs past the end of its object"));
     w->pos += n;
+    return TRUE;
+}
+
+static gboolean
+walk_double(GwyWalk *w, gsize end, gdouble *value)
+{
+    guint64 v;
+
+    if (end - w->pos < sizeof(v))
+        return walk_fail(w, N_("truncated: a value runs past the end of its object"));
+    memcpy(&v, w->bytes + w->pos, sizeof(v));
+    v = GUINT64_FROM_LE(v);
+    memcpy(value, &v, sizeof(v));
+    w->pos += sizeof(v);
     return TRUE;
 }
 
@@ -141,6 +157,8 @@ walk_value(GwyWalk *w, gsize end, gchar type, const gchar *name, guint depth, Fi
         *(name[0] == 'x' ? &shape->xres : name[0] == 'y' ? &shape->yres : &shape->res) = v;
         return TRUE;
     }
+    if (type == 'd' && (g_str_equal(name, "xreal") || g_str_equal(name, "yreal")))
+        return walk_double(w, end, name[0] == 'x' ? &shape->xreal : &shape->yreal);
     if (type == 's')
         return walk_string(w, end, &s);
     if (type == 'o')
@@ -175,6 +193,12 @@ check_shape(GwyWalk *w, const gchar *type, const FieldShape *shape)
         if (shape->xres < 1 || shape->yres < 1 || shape->n_data < 0
             || shape->xres*shape->yres != shape->n_data)
             return walk_fail(w, N_("an image whose size does not match its data"));
+        /* Gwyddion takes a width of 0 or less for 1 m: a table in nm then
+         * rounded to 0 px without a word. */
+        if (!(shape->xreal > 0.0 && shape->yreal > 0.0)
+            || !isfinite(shape->xreal) || !isfinite(shape->yreal))
+            return walk_fail(w, N_("an image whose physical width or height is not a positive "
+                                   "number"));
     }
     else if (g_str_equal(type, "GwyDataLine")) {
         if (shape->res < 1 || shape->n_data != shape->res)
@@ -188,7 +212,7 @@ check_shape(GwyWalk *w, const gchar *type, const FieldShape *shape)
 static gboolean
 walk_object(GwyWalk *w, gsize end, guint depth, const gchar **type)
 {
-    FieldShape shape = { 0, 0, 0, -1 };
+    FieldShape shape = { 0, 0, 0, -1, 1.0, 1.0 };
     const gchar *name;
     gsize object_end;
     guint32 size;
