@@ -323,6 +323,28 @@ START_TEST(test_screening_gzip_truncations)
                          "not decompress to their end");
         g_clear_error(&error);
     }
+    /* Several members (bgzip, pigz) pass, as does zero padding after the
+     * last; a cut second member or anything else after one does not. */
+    {
+        guint8 *two = g_malloc(2*nwritten + 16);
+        static const gchar *const tails[] = { "", "\0\0\0\0", "junk" };
+
+        memcpy(two, packed, nwritten);
+        memcpy(two + nwritten, packed, nwritten);
+        ck_assert(file_screening_check_bytes("film.axz", two, 2*nwritten, NULL));
+        ck_assert(!file_screening_check_bytes("film.axz", two, 2*nwritten - 9, &error));
+        ck_assert(strstr(error->message, "truncated or corrupt"));
+        g_clear_error(&error);
+        for (i = 1; i < G_N_ELEMENTS(tails); i++) {
+            memcpy(two + nwritten, tails[i], 4);
+            ck_assert(file_screening_check_bytes("film.axz", two, nwritten + 4, &error) == (i == 1));
+            if (i == 2)
+                ck_assert_str_eq(error->message, "film.axz: corrupt: something else than "
+                                 "compressed data follows them");
+            g_clear_error(&error);
+        }
+        g_free(two);
+    }
     g_free(packed);
     g_string_free(text, TRUE);
     g_rand_free(rng);

@@ -148,13 +148,13 @@ parse_interpolation(const gchar *name, GwyInterpolationType *interpolation,
     return FALSE;
 }
 
-/* A file named twice as a frame: one scan cannot be two frames, and a
- * list of thousands of copies cost time quadratic in the copies (each
- * compared with the others as a duplicate channel) and an output file of
- * every copy.  Files are told apart by device and inode, so a link to a
- * frame is the frame. */
+/* Frames' files named empty or twice are refused.  One scan cannot be
+ * two frames, and a list of thousands of copies cost time quadratic in
+ * the copies (each compared with the others as a duplicate channel) and
+ * an output file of every copy.  Files are told apart by device and
+ * inode, so a link to a frame is the frame. */
 static gboolean
-check_frames_distinct(gchar **files, gint n, GError **error)
+check_frame_files(gchar **files, gint n, GError **error)
 {
     GHashTable *seen = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
     GStatBuf st;
@@ -164,6 +164,13 @@ check_frames_distinct(gchar **files, gint n, GError **error)
     gint i;
 
     for (i = 0; i < n && ok; i++) {
+        if (!*files[i]) {
+            message = g_strdup_printf(_("frame %d: the file name is empty"), i + 1);
+            refuse_usage(error, message);
+            g_free(message);
+            ok = FALSE;
+            continue;
+        }
         if (g_stat(files[i], &st) != 0)
             continue;
         key = g_strdup_printf("%" G_GUINT64_FORMAT ":%" G_GUINT64_FORMAT,
@@ -193,13 +200,16 @@ check_args(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
 
     if (!args->output)
         return refuse_usage(error, _("-o OUT.gwy is required"));
-    if (!*args->output || (args->trajectory && !*args->trajectory)
-        || (args->json && !*args->json))
-        return refuse_usage(error, _("an output file name is empty"));
+    if (!*args->output)
+        return refuse_usage(error, _("-o: the file name is empty"));
+    if (args->trajectory && !*args->trajectory)
+        return refuse_usage(error, _("--trajectory: the file name is empty"));
+    if (args->json && !*args->json)
+        return refuse_usage(error, _("--json: the file name is empty"));
     if (!n_files)
         return refuse_usage(error, _("no frames given (several files, or "
                                      "one file with a channel per frame)"));
-    if (!check_frames_distinct(args->files, n_files, error))
+    if (!check_frame_files(args->files, n_files, error))
         return FALSE;
     run->crop = FALSE;
     if (args->crop && g_ascii_strcasecmp(args->crop, "common") == 0)

@@ -15,9 +15,6 @@
 #include "stripe-geometry.h"
 #include "localscan-intl.h"
 
-/* A drift beyond this many pixels is nonsense for any image; refusing it lets
- * callers cast pixel drift to gint safely. */
-#define MAX_DRIFT_PIXELS 1e9
 
 /* Whole-pixel tolerance for px tables: values written by other tools may
  * carry a last-digit error, but a real fraction is a wrong table. */
@@ -923,11 +920,11 @@ convert_value(const DriftTable *table, const DriftTableRow *row,
 
     if (table->unit != DRIFT_UNIT_PX)
         v = value*unit_metres(table->unit)/pixel_size;
-    if (!(fabs(v) <= MAX_DRIFT_PIXELS)) {
+    if (!(fabs(v) <= DRIFT_TABLE_MAX_PIXELS)) {
         set_line_error(error, DRIFT_TABLE_ERROR_VALUE,
                        table_source_name(table), row->line,
                        _("%s = %s %s is more than %g pixels"), name,
-                       format_number(buf, value), unit, MAX_DRIFT_PIXELS);
+                       format_number(buf, value), unit, DRIFT_TABLE_MAX_PIXELS);
         return FALSE;
     }
     if (whole_pixels) {

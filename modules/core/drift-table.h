@@ -18,6 +18,10 @@ G_BEGIN_DECLS
  * (the metadata browser). */
 #define DRIFT_TABLE_META_KEY "Local-scan drift table"
 
+/* A drift beyond this many pixels is nonsense for any image; refusing it lets
+ * callers cast pixel drift to gint safely. */
+#define DRIFT_TABLE_MAX_PIXELS 1e9
+
 #define DRIFT_TABLE_ERROR drift_table_error_quark()
 
 typedef enum {

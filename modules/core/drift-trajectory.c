@@ -1094,8 +1094,6 @@ check_timing(const DriftTable *table, const ScanTiming *timing,
 
 /* Table times, s: a date in seconds since 1970 fits, 1e308 does not. */
 #define DRIFT_TRAJECTORY_TIME_MAX 1e10
-/* Exact drifts, px: the bound of the table's own dx and dy. */
-#define DRIFT_TRAJECTORY_PX_MAX 1e9
 
 /* The value of an extra column, or fallback when the column is blank or
  * absent; FALSE when it holds anything but a finite number within
@@ -1164,9 +1162,9 @@ drift_trajectory_measurements_from_table(const DriftTable *table,
                                &meas[count].t_a, error)
               && extra_or_default(table, s, "t_local", t_end, DRIFT_TRAJECTORY_TIME_MAX, "s",
                                   &meas[count].t_b, error)
-              && extra_or_default(table, s, "dx_exact", dx_px[s], DRIFT_TRAJECTORY_PX_MAX, "px",
+              && extra_or_default(table, s, "dx_exact", dx_px[s], DRIFT_TABLE_MAX_PIXELS, "px",
                                   &dx_exact, error)
-              && extra_or_default(table, s, "dy_exact", dy_px[s], DRIFT_TRAJECTORY_PX_MAX, "px",
+              && extra_or_default(table, s, "dy_exact", dy_px[s], DRIFT_TABLE_MAX_PIXELS, "px",
                                   &dy_exact, error));
         meas[count].dx = dx_exact;
         meas[count].dy = dy_exact;

@@ -291,41 +291,56 @@ has_magic(const guchar *bytes, gsize length, const gchar *magic)
 /* A gzip stream (Anasys .axz, any .gz a loader unpacks) must decompress
  * to its end: a loader reads what it can of a cut one and hands on part
  * of the file's channels (a .axz cut at 1 MB of 3.5 MB was read, and
- * corrected, as if whole).  The data are inflated and dropped, at most
- * FILE_SCREENING_MAX_BYTES of them. */
-static gboolean
-check_gzip(const gchar *name, const guchar *bytes, gsize length, GError **error)
+ * corrected, as if whole).  Every member is inflated (a file may hold
+ * several, as bgzip and pigz write them) and the data dropped, at most
+ * FILE_SCREENING_MAX_BYTES of them; after the last member only zero
+ * padding may follow. */
+/* The message below names the limit. */
+G_STATIC_ASSERT(FILE_SCREENING_MAX_BYTES == ((gint64)4 << 30));
+
+static const gchar*
+gzip_problem(const guchar *bytes, gsize length)
 {
     GConverter *inflater = G_CONVERTER(g_zlib_decompressor_new(G_ZLIB_COMPRESSOR_FORMAT_GZIP));
-    GConverterResult result = G_CONVERTER_ERROR;
-    GError *err = NULL;
+    GConverterResult result;
     guchar *out = g_malloc(1 << 16);
     gsize pos = 0, nread, nwritten;
     guint64 total = 0;
-    gchar *msg = NULL;
+    const gchar *problem = NULL;
 
-    do {
+    while (!problem) {
         result = g_converter_convert(inflater, bytes + pos, length - pos, out, 1 << 16,
-                                     G_CONVERTER_INPUT_AT_END, &nread, &nwritten, &err);
+                                     G_CONVERTER_INPUT_AT_END, &nread, &nwritten, NULL);
         pos += nread;
         total += nwritten;
-        if (result == G_CONVERTER_CONVERTED && !nread && !nwritten)
-            result = G_CONVERTER_ERROR;
-    } while (result == G_CONVERTER_CONVERTED && total <= (guint64)FILE_SCREENING_MAX_BYTES);
-    if (total > (guint64)FILE_SCREENING_MAX_BYTES)
-        msg = g_strdup_printf(_("larger than %d GiB once decompressed: refused"),
-                              (gint)(FILE_SCREENING_MAX_BYTES >> 30));
-    else if (result != G_CONVERTER_FINISHED)
-        msg = g_strdup(_("truncated or corrupt: its compressed data do not decompress to their end"));
-    g_clear_error(&err);
+        if (total > (guint64)FILE_SCREENING_MAX_BYTES)
+            problem = N_("larger than 4 GiB once decompressed: refused");
+        else if (result == G_CONVERTER_ERROR || (result == G_CONVERTER_CONVERTED && !nread && !nwritten))
+            problem = N_("truncated or corrupt: its compressed data do not decompress to their end");
+        else if (result == G_CONVERTER_FINISHED) {
+            while (pos < length && !bytes[pos])
+                pos++;
+            if (pos == length)
+                break;
+            if (length - pos < 2 || bytes[pos] != 0x1f || bytes[pos+1] != 0x8b)
+                problem = N_("corrupt: something else than compressed data follows them");
+            g_converter_reset(inflater);
+        }
+    }
     g_free(out);
     g_object_unref(inflater);
-    if (!msg)
+    return problem;
+}
+
+static gboolean
+check_gzip(const gchar *name, const guchar *bytes, gsize length, GError **error)
+{
+    const gchar *problem = gzip_problem(bytes, length);
+
+    if (!problem)
         return TRUE;
-    screening_error(error, total > (guint64)FILE_SCREENING_MAX_BYTES
-                    ? FILE_SCREENING_ERROR_SIZE : FILE_SCREENING_ERROR_CORRUPT, name, msg);
-    g_free(msg);
-    return FALSE;
+    return screening_error(error, g_str_has_prefix(problem, "larger")
+                           ? FILE_SCREENING_ERROR_SIZE : FILE_SCREENING_ERROR_CORRUPT, name, _(problem));
 }
 
 gboolean

@@ -152,10 +152,6 @@ fields_alike(GwyDataField *a, GwyDataField *b)
                                  gwy_data_field_get_si_unit_xy(b)));
 }
 
-/* Frames overlapping by more than this fraction of a frame are refused:
- * a clock's rounding (a second of a 209 s FastScan frame) explains less. */
-#define MAX_OVERLAP_FRACTION 0.5
-
 /* Pixels of a usable size: finite, positive, and not so unlike along the
  * two axes that a blur of one physical size is meaningless.  A file may
  * say anything (a NaN width crashed the blur). */
@@ -478,6 +474,10 @@ check_one_clock(const FrameSeries *series, GError **error)
                 last - first);
     return FALSE;
 }
+
+/* Frames overlapping by more than this fraction of a frame are refused:
+ * a clock's rounding (a second of a 209 s FastScan frame) explains less. */
+#define MAX_OVERLAP_FRACTION 0.5
 
 static gboolean
 assign_start_times(FrameSeries *series, const MetaTiming *mts,

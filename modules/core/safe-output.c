@@ -169,7 +169,7 @@ run_is_dead(pid_t pid)
 
 /* The target's base name as its temporaries carry it: cut (at a character
  * boundary) where the whole temporary's name would exceed a file name's
- * length, which a valid output name of 230 bytes did ("File name too
+ * length, which a valid output name of 235 bytes did ("File name too
  * long"). */
 static gchar*
 temp_base(const gchar *target)
