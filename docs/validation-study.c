@@ -893,26 +893,38 @@ registration_triangle(const SeriesSpec *spec, const gchar *measured,
 /* ---- The FastScan residual against the measurement noise ---- */
 
 /* The channels of one FastScan frame are recorded on the same scan lines,
- * so they share one drift.  Where two channels both measure a block of a
- * pair (and their fits both keep it), each block's residual against its
- * channel's fit splits into what the two channels share (their mean
- * product: drift the model does not explain, or content that changed
- * alike in every channel) and what they do not (half the mean square of
- * their difference: the registration's own error).  A residual that is
- * all of the second kind is measurement noise. */
+ * so they share one drift.  Each channel is measured and fitted as the
+ * study fits a series; where two channels or more keep a block of a pair,
+ * its residuals against one model (the same type for every channel) split
+ * into what the channels share (the mean product of two channels'
+ * residuals: drift the model leaves, content that changed alike in every
+ * channel, or registration error the channels have in common) and what
+ * they do not (half the mean square of their difference: registration
+ * error of one channel alone, a lower bound of the registration's error). */
+#define AGREEMENT_CHANNELS 3
+#define MAX_PAIRS 64
+
 typedef struct {
-    const gchar *channels[2];
-    gint n_matched;           /* blocks kept in both channels */
-    gdouble residual_nm[2];   /* RMS of each channel's residuals there */
-    gdouble noise_nm;         /* sqrt(mean |r1 - r2|^2 / 2) */
-    gdouble shared_nm;        /* sqrt(max(mean r1 . r2, 0)) */
-    gdouble shared_raw;       /* mean r1 . r2, nm^2 (may be negative) */
-} ChannelAgreement;
+    gint pair;                /* index of (frame_a, frame_b) among the pairs */
+    gint group;               /* the block's place in the frame */
+    gint n;                   /* channels that keep the block */
+    gdouble r[AGREEMENT_CHANNELS][2];
+} BlockResidual;
+
+typedef struct {
+    DriftModelType type;      /* the model the residuals are taken against */
+    gint n_blocks, n_pairs;   /* blocks kept by two channels or more */
+    gdouble residual2;        /* mean square of the residuals, nm^2 */
+    gdouble noise2;           /* not shared */
+    gdouble shared2;          /* shared (may come out negative) */
+    gdouble slope[2];         /* the shared part's slope along the rows, nm
+                                 per block of lines, x and y */
+    gdouble slope_se[2];
+} ResidualSplit;
 
 /* The same block of the same pair: the series' measurements come in the
  * same order whatever the channel (displacement-measure.c), their times
- * not quite (a block's time is that of its detail, which differs between
- * channels). */
+ * not quite (a block's time is that of its detail). */
 static gboolean
 same_block(const DriftMeasurement *a, const DriftMeasurement *b)
 {
@@ -920,299 +932,280 @@ same_block(const DriftMeasurement *a, const DriftMeasurement *b)
             && a->group == b->group);
 }
 
-static void
-block_residual(const FitReport *rep, const DriftMeasurement *m, gdouble *r)
+static gint
+pair_index(gint (*pairs)[2], gint *n_pairs, const DriftMeasurement *m)
 {
+    gint p;
+
+    for (p = 0; p < *n_pairs; p++) {
+        if (pairs[p][0] == m->frame_a && pairs[p][1] == m->frame_b)
+            return p;
+    }
+    if (*n_pairs == MAX_PAIRS)
+        return -1;
+    pairs[*n_pairs][0] = m->frame_a;
+    pairs[*n_pairs][1] = m->frame_b;
+    return (*n_pairs)++;
+}
+
+/* The blocks kept by two channels or more, with their residuals (nm)
+ * against fit number model of each channel's report. */
+static BlockResidual*
+collect_block_residuals(const FitReport *rep, gint nc, gint model, gint *n,
+                        gint *n_pairs)
+{
+    gint pairs[MAX_PAIRS][2], n_meas = rep[0].n_meas, i, c;
+    BlockResidual *blocks, *b;
     gdouble px, py;
 
-    drift_fit_predict(rep->fits + rep->chosen, m, &px, &py);
-    r[0] = 1e9*(m->dx - px);
-    r[1] = 1e9*(m->dy - py);
-}
-
-static void
-channel_agreement(const FitReport *rep1, const FitReport *rep2,
-                  ChannelAgreement *ca)
-{
-    gdouble r1[2], r2[2], s1 = 0.0, s2 = 0.0, sd = 0.0, sx = 0.0;
-    gint i, n = 0;
-
-    for (i = 0; i < MIN(rep1->n_meas, rep2->n_meas); i++) {
-        const DriftMeasurement *a = rep1->meas + i, *b = rep2->meas + i;
-
-        if (a->weight > 0.0 && b->weight > 0.0 && same_block(a, b)) {
-            block_residual(rep1, a, r1);
-            block_residual(rep2, b, r2);
-            s1 += r1[0]*r1[0] + r1[1]*r1[1];
-            s2 += r2[0]*r2[0] + r2[1]*r2[1];
-            sd += (r1[0] - r2[0])*(r1[0] - r2[0]) + (r1[1] - r2[1])*(r1[1] - r2[1]);
-            sx += r1[0]*r2[0] + r1[1]*r2[1];
-            n++;
-        }
-    }
-    ca->n_matched = n;
-    ca->residual_nm[0] = n ? sqrt(s1/n) : NAN;
-    ca->residual_nm[1] = n ? sqrt(s2/n) : NAN;
-    ca->noise_nm = n ? sqrt(0.5*sd/n) : NAN;
-    ca->shared_raw = n ? sx/n : NAN;
-    ca->shared_nm = n ? sqrt(MAX(sx/n, 0.0)) : NAN;
-}
-
-/* The part the channels share, block by block (the mean of the residuals
- * of the channels that keep the block, where at least two do), against
- * the block's place in the frame: a drift that repeats in every frame, or
- * a scanner that misplaces lines along the slow axis, shows as a residual
- * that changes with the row, the same way in every pair, where a
- * trajectory in time alone has nothing to fit it with.  Each pair gets an
- * offset of its own (a pair's mean residual is the trajectory's business),
- * all pairs one slope per axis. */
-typedef struct {
-    gint n;                   /* blocks kept in two channels or more */
-    gint n_pairs;
-    gdouble rms_nm;           /* RMS of the shared residual */
-    gdouble rms_centred_nm;   /* without each pair's mean */
-    gdouble rms_detrended_nm; /* and without the slope along the rows */
-    gdouble slope_nm[2];      /* per block of lines, x and y */
-    gdouble slope_se_nm[2];   /* their standard errors */
-} SharedTrend;
-
-#define MAX_PAIRS 64
-
-static void
-shared_trend(const FitReport *rep, gint nc, SharedTrend *st)
-{
-    gint n_meas = rep[0].n_meas, i, c, k, ax, used, pair;
-    gint pair_of[MAX_PAIRS][2], count[MAX_PAIRS];
-    gdouble *s[2], *g, *mean_s[2], mean_g[MAX_PAIRS], r[2], sum[2];
-    gdouble sgg = 0.0, sgs[2] = { 0.0, 0.0 }, ss0 = 0.0, ss1 = 0.0, ss2 = 0.0, res;
-    gint *pid;
-
-    memset(st, 0, sizeof(SharedTrend));
     for (c = 1; c < nc; c++)
         n_meas = MIN(n_meas, rep[c].n_meas);
-    s[0] = g_new0(gdouble, 2*MAX(n_meas, 1));
-    s[1] = s[0] + MAX(n_meas, 1);
-    g = g_new0(gdouble, MAX(n_meas, 1));
-    pid = g_new0(gint, MAX(n_meas, 1));
-    mean_s[0] = g_new0(gdouble, 2*MAX_PAIRS);
-    mean_s[1] = mean_s[0] + MAX_PAIRS;
-    memset(mean_g, 0, sizeof(mean_g));
-    memset(count, 0, sizeof(count));
+    blocks = g_new0(BlockResidual, MAX(n_meas, 1));
+    *n = *n_pairs = 0;
     for (i = 0; i < n_meas; i++) {
-        const DriftMeasurement *m = rep[0].meas + i;
+        b = blocks + *n;
+        b->n = 0;
+        for (c = 0; c < nc; c++) {
+            const DriftMeasurement *m = rep[c].meas + i;
 
-        sum[0] = sum[1] = 0.0;
-        for (c = used = 0; c < nc; c++) {
-            if (!(rep[c].meas[i].weight > 0.0) || !same_block(m, rep[c].meas + i))
+            if (!(m->weight > 0.0) || !same_block(rep[0].meas + i, m))
                 continue;
-            block_residual(rep + c, rep[c].meas + i, r);
-            sum[0] += r[0];
-            sum[1] += r[1];
-            used++;
+            drift_fit_predict(rep[c].fits + model, m, &px, &py);
+            b->r[b->n][0] = 1e9*(m->dx - px);
+            b->r[b->n][1] = 1e9*(m->dy - py);
+            b->n++;
         }
-        if (used < 2)
+        if (b->n < 2 || (b->pair = pair_index(pairs, n_pairs, rep[0].meas + i)) < 0)
             continue;
-        for (pair = 0; pair < st->n_pairs; pair++) {
-            if (pair_of[pair][0] == m->frame_a && pair_of[pair][1] == m->frame_b)
-                break;
-        }
-        if (pair == st->n_pairs) {
-            if (pair == MAX_PAIRS)
-                continue;
-            pair_of[pair][0] = m->frame_a;
-            pair_of[pair][1] = m->frame_b;
-            st->n_pairs++;
-        }
-        k = st->n++;
-        pid[k] = pair;
-        g[k] = m->group;
-        for (ax = 0; ax < 2; ax++) {
-            s[ax][k] = sum[ax]/used;
-            mean_s[ax][pair] += s[ax][k];
-        }
-        mean_g[pair] += g[k];
-        count[pair]++;
+        b->group = rep[0].meas[i].group;
+        (*n)++;
     }
-    for (pair = 0; pair < st->n_pairs; pair++) {
-        mean_g[pair] /= count[pair];
-        mean_s[0][pair] /= count[pair];
-        mean_s[1][pair] /= count[pair];
-    }
-    for (k = 0; k < st->n; k++) {
-        gdouble dg = g[k] - mean_g[pid[k]];
+    return blocks;
+}
 
+/* The residual's mean square split into what the block's channels share
+ * and what they do not, averaged over the blocks. */
+static void
+split_mean_squares(const BlockResidual *blocks, gint n, ResidualSplit *rs)
+{
+    gdouble r2, d2, x, np;
+    gint k, c, d;
+
+    for (k = 0; k < n; k++) {
+        const BlockResidual *b = blocks + k;
+
+        r2 = d2 = x = 0.0;
+        np = 0.5*b->n*(b->n - 1);
+        for (c = 0; c < b->n; c++) {
+            r2 += b->r[c][0]*b->r[c][0] + b->r[c][1]*b->r[c][1];
+            for (d = c + 1; d < b->n; d++) {
+                d2 += ((b->r[c][0] - b->r[d][0])*(b->r[c][0] - b->r[d][0])
+                       + (b->r[c][1] - b->r[d][1])*(b->r[c][1] - b->r[d][1]));
+                x += b->r[c][0]*b->r[d][0] + b->r[c][1]*b->r[d][1];
+            }
+        }
+        rs->residual2 += r2/b->n/n;
+        rs->noise2 += 0.5*d2/np/n;
+        rs->shared2 += x/np/n;
+    }
+}
+
+/* The shared part of each block (the mean of its channels' residuals)
+ * against the block's place in the frame, one slope per axis common to
+ * the pairs, an offset per pair (a pair's mean residual is the
+ * trajectory's business).  A drift that repeats in every frame, or a
+ * slow axis that misplaces lines, shows as such a slope; so does a drift
+ * the model leaves that grows with time, such as an acceleration left to
+ * a constant velocity. */
+static void
+shared_row_trend(const BlockResidual *blocks, gint n, gint n_pairs, ResidualSplit *rs)
+{
+    gdouble mean_g[MAX_PAIRS] = { 0 }, mean_s[2][MAX_PAIRS] = { { 0 } }, s[2], dg, sgg = 0.0;
+    gdouble sgs[2] = { 0.0, 0.0 }, rss[2] = { 0.0, 0.0 }, e;
+    gint count[MAX_PAIRS] = { 0 }, k, c, ax, dof = n - n_pairs - 1;
+
+    for (k = 0; k < n; k++) {
+        const BlockResidual *b = blocks + k;
+
+        for (ax = 0; ax < 2; ax++) {
+            for (c = 0, s[ax] = 0.0; c < b->n; c++)
+                s[ax] += b->r[c][ax]/b->n;
+            mean_s[ax][b->pair] += s[ax];
+        }
+        mean_g[b->pair] += b->group;
+        count[b->pair]++;
+    }
+    for (k = 0; k < n_pairs; k++) {
+        mean_g[k] /= MAX(count[k], 1);
+        mean_s[0][k] /= MAX(count[k], 1);
+        mean_s[1][k] /= MAX(count[k], 1);
+    }
+    for (k = 0; k < n; k++) {
+        dg = blocks[k].group - mean_g[blocks[k].pair];
         sgg += dg*dg;
         for (ax = 0; ax < 2; ax++) {
-            gdouble ds = s[ax][k] - mean_s[ax][pid[k]];
-
-            sgs[ax] += dg*ds;
-            ss0 += s[ax][k]*s[ax][k];
-            ss1 += ds*ds;
+            for (c = 0, s[ax] = 0.0; c < blocks[k].n; c++)
+                s[ax] += blocks[k].r[c][ax]/blocks[k].n;
+            sgs[ax] += dg*(s[ax] - mean_s[ax][blocks[k].pair]);
         }
     }
     for (ax = 0; ax < 2; ax++)
-        st->slope_nm[ax] = (sgg > 0.0) ? sgs[ax]/sgg : NAN;
-    for (k = 0; k < st->n && sgg > 0.0; k++) {
-        gdouble dg = g[k] - mean_g[pid[k]];
-
+        rs->slope[ax] = (sgg > 0.0) ? sgs[ax]/sgg : NAN;
+    for (k = 0; k < n && sgg > 0.0; k++) {
+        dg = blocks[k].group - mean_g[blocks[k].pair];
         for (ax = 0; ax < 2; ax++) {
-            res = s[ax][k] - mean_s[ax][pid[k]] - st->slope_nm[ax]*dg;
-            ss2 += res*res;
+            for (c = 0, s[ax] = 0.0; c < blocks[k].n; c++)
+                s[ax] += blocks[k].r[c][ax]/blocks[k].n;
+            e = s[ax] - mean_s[ax][blocks[k].pair] - rs->slope[ax]*dg;
+            rss[ax] += e*e;
         }
     }
-    st->rms_nm = st->n ? sqrt(ss0/st->n) : NAN;
-    st->rms_centred_nm = st->n ? sqrt(ss1/st->n) : NAN;
-    st->rms_detrended_nm = st->n ? sqrt(ss2/st->n) : NAN;
-    for (ax = 0; ax < 2; ax++) {
-        gint dof = st->n - st->n_pairs - 2;
-
-        st->slope_se_nm[ax] = (sgg > 0.0 && dof > 0) ? sqrt(0.5*ss2/dof/sgg) : NAN;
-    }
-    g_free(s[0]);
-    g_free(g);
-    g_free(pid);
-    g_free(mean_s[0]);
+    for (ax = 0; ax < 2; ax++)
+        rs->slope_se[ax] = (sgg > 0.0 && dof > 0) ? sqrt(rss[ax]/dof/sgg) : NAN;
 }
 
-/* Every pair of the channels, each measured and fitted as the study
- * measures and fits a series; FALSE when a channel cannot be loaded. */
-static gboolean
-channel_agreements(const SeriesSpec *spec, const gchar *measured,
-                   const gchar *const *channels, gint n,
-                   ChannelAgreement *ca, gdouble *fit_rms, SharedTrend *st,
-                   GError **error)
+static void
+split_residuals(const FitReport *rep, gint nc, gint model, ResidualSplit *rs)
 {
-    FitReport *rep = g_new0(FitReport, n);
+    BlockResidual *blocks;
+
+    memset(rs, 0, sizeof(ResidualSplit));
+    blocks = collect_block_residuals(rep, nc, model, &rs->n_blocks, &rs->n_pairs);
+    if (rs->n_blocks) {
+        split_mean_squares(blocks, rs->n_blocks, rs);
+        shared_row_trend(blocks, rs->n_blocks, rs->n_pairs, rs);
+    }
+    g_free(blocks);
+}
+
+/* Every channel measured and fitted as the study does, and the split
+ * against each model type every channel fitted; *chosen gets the index
+ * of the first channel's chosen model.  FALSE when a channel cannot be
+ * loaded or fitted. */
+static gboolean
+channel_agreement(const SeriesSpec *spec, const gchar *measured,
+                  const gchar *const *channels, ResidualSplit *splits,
+                  gboolean *fitted, gint *n_models, gint *chosen, GError **error)
+{
+    FitReport rep[AGREEMENT_CHANNELS];
     FrameSeries *series;
     DisplacementOptions dopt;
     DriftFitOptions fopt;
-    gint c, d, k = 0;
+    gint c, m, done = 0;
     gboolean ok = TRUE;
 
-    for (c = 0; c < n && ok; c++) {
+    memset(rep, 0, sizeof(rep));
+    for (c = 0; c < AGREEMENT_CHANNELS && ok; c++, done++) {
         if (!(series = load_measured_series(spec, measured, channels[c], error)))
             ok = FALSE;
         else {
             study_options(series->frames, &dopt, &fopt);
-            ok = fit_report_compute(series, &dopt, &fopt, rep + c);
-            fit_rms[c] = ok ? rep[c].fits[rep[c].chosen].rms_nm : NAN;
-            frame_series_free(series);
-            if (!ok)
+            if (!(ok = fit_report_compute(series, &dopt, &fopt, rep + c)))
                 g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                             "%s: no fit", channels[c]);
+            frame_series_free(series);
         }
     }
-    for (c = 0; c < n && ok; c++) {
-        for (d = c + 1; d < n; d++, k++) {
-            ca[k].channels[0] = channels[c];
-            ca[k].channels[1] = channels[d];
-            channel_agreement(rep + c, rep + d, ca + k);
+    if (ok) {
+        *n_models = rep[0].n_fits;
+        *chosen = rep[0].chosen;
+        for (m = 0; m < *n_models; m++) {
+            for (c = 0, fitted[m] = TRUE; c < AGREEMENT_CHANNELS; c++)
+                fitted[m] = fitted[m] && rep[c].fits[m].ok;
+            if (fitted[m])
+                split_residuals(rep, AGREEMENT_CHANNELS, m, splits + m);
+            splits[m].type = rep[0].fits[m].type;
         }
     }
-    if (ok)
-        shared_trend(rep, n, st);
-    for (c = 0; c < n; c++)
+    for (c = 0; c < done; c++)
         fit_report_clear(rep + c);
-    g_free(rep);
     return ok;
 }
 
-static void
-write_shared_trend(GString *md, const SharedTrend *st, gint block_lines)
+/* How many standard errors the larger of a split's two slopes lies from 0
+ * (0 where there is none). */
+static gdouble
+slope_z(const ResidualSplit *rs)
 {
-    gdouble z = MAX(fabs(st->slope_nm[0])/st->slope_se_nm[0],
-                    fabs(st->slope_nm[1])/st->slope_se_nm[1]);
+    gdouble z = 0.0;
+    gint ax;
 
-    if (st->n < st->n_pairs + 3) {
-        g_string_append(md, "  Too few blocks kept in two channels to look "
-                        "for a trend along the rows.\n");
-        return;
+    for (ax = 0; ax < 2; ax++) {
+        if (isfinite(rs->slope[ax]) && rs->slope_se[ax] > 0.0)
+            z = MAX(z, fabs(rs->slope[ax])/rs->slope_se[ax]);
     }
-    g_string_append_printf(md, "\nThe shared part block by block (the mean "
-        "of the residuals of the channels that keep a block, %d blocks of "
-        "%d pairs): RMS %.3f nm, %.3f nm without each pair's mean, %.3f nm "
-        "without also one slope along the rows common to all pairs: "
-        "%.3f ± %.3f nm in x and %.3f ± %.3f nm in y per block of %d lines.",
-        st->n, st->n_pairs, st->rms_nm, st->rms_centred_nm,
-        st->rms_detrended_nm, st->slope_nm[0], st->slope_se_nm[0],
-        st->slope_nm[1], st->slope_se_nm[1], block_lines);
-    if (z >= 3.0)
-        g_string_append(md, "  The residual changes with the row within the "
-            "frame (the slope common to the pairs lies beyond 3 standard "
-            "errors): "
-            "drift that repeats in every frame (creep after each fly-back, "
-            "seen because the content lies some rows apart in the two "
-            "frames) or a slow axis that misplaces lines; a trajectory in "
-            "time alone cannot fit it, and the series correction leaves it.\n");
-    else
-        g_string_append(md, "  No trend along the rows stands out (within 3 "
-            "standard errors): the shared part is not a drift that repeats "
-            "with the row.\n");
+    return z;
 }
 
 static void
-write_channel_agreements(GString *md, const gchar *const *channels, gint n,
-                         const ChannelAgreement *ca, const gdouble *fit_rms)
+write_agreement_verdicts(GString *md, const ResidualSplit *splits, const gboolean *fitted,
+                         gint n_models, gint chosen)
 {
-    gdouble noise2 = 0.0, shared2 = 0.0, resid2 = 0.0;
-    gint c, k, pairs = n*(n - 1)/2, blocks = 0;
+    const ResidualSplit *rs = splits + chosen;
+    gint m, flat = -1;
 
-    g_string_append(md, "\n**Residual against the measurement noise "
-        "(fastscan-series).**  The channels of a FastScan frame are recorded "
-        "on the same scan lines and share one drift.  Each channel is "
-        "measured and fitted as above; where two channels' fits both keep a "
-        "block, its residuals against the two fits split into what the "
-        "channels share (mean product: drift no model explains, or content "
-        "that changed alike in every channel) and what they do not (half "
-        "the mean square of their difference: the registration's own "
-        "error).  RMS in nm:\n\n| channels | blocks kept in both | "
-        "residual RMS (each) | not shared (noise) | shared |\n"
-        "|---|---|---|---|---|\n");
-    for (k = 0; k < pairs; k++) {
-        g_string_append_printf(md, "| %s, %s | %d | %.3f, %.3f | %.3f | "
-                               "%.3f (mean product %.3f nm^2) |\n",
-                               ca[k].channels[0], ca[k].channels[1],
-                               ca[k].n_matched, ca[k].residual_nm[0],
-                               ca[k].residual_nm[1], ca[k].noise_nm,
-                               ca[k].shared_nm, ca[k].shared_raw);
-        if (ca[k].n_matched) {
-            noise2 += ca[k].n_matched*ca[k].noise_nm*ca[k].noise_nm;
-            shared2 += ca[k].n_matched*ca[k].shared_raw;
-            resid2 += 0.5*ca[k].n_matched*(ca[k].residual_nm[0]*ca[k].residual_nm[0]
-                                            + ca[k].residual_nm[1]*ca[k].residual_nm[1]);
-            blocks += ca[k].n_matched;
-        }
+    g_string_append_printf(md, "\nAgainst the model `simscan fit` chooses (%s), at least "
+        "%.0f %% of the residual's mean square is the registration's own error (the part "
+        "the channels do not share; errors they share, such as the same rims sampled at "
+        "the same phase, count as shared).",
+        drift_model_type_name(splits[chosen].type),
+        100.0*rs->noise2/MAX(rs->residual2, 1e-300));
+    for (m = 0; m < n_models; m++) {
+        if (fitted[m] && slope_z(splits + m) < 3.0 && (flat < 0 || splits[m].shared2 < splits[flat].shared2))
+            flat = m;
     }
-    g_string_append(md, "\nEach channel's own fit (all blocks it keeps), "
-                    "weighted RMS residual:");
-    for (c = 0; c < n; c++)
-        g_string_append_printf(md, " %s %.3f nm%s", channels[c], fit_rms[c],
-                               c + 1 < n ? ";" : ".");
-    if (!blocks) {
-        g_string_append(md, "  No block is kept by two channels: the "
-                        "residual cannot be split.\n");
+    if (slope_z(rs) < 3.0)
+        g_string_append(md, "  Its shared part shows no slope along the rows beyond 3 standard "
+                        "errors.");
+    else if (flat >= 0)
+        g_string_append_printf(md, "  Its shared part changes with the row (beyond 3 standard "
+            "errors), but not against %s (%.2f standard errors): a drift that grows with "
+            "time, which that model follows, explains the slope as well as a drift that "
+            "repeats in every frame.", drift_model_type_name(splits[flat].type),
+            slope_z(splits + flat));
+    else
+        g_string_append(md, "  Its shared part changes with the row beyond 3 standard errors "
+            "against every model: a drift that repeats in every frame (creep after each "
+            "fly-back, seen because the content lies rows apart in the frames) or a slow "
+            "axis that misplaces lines, which no model of the drift in time follows.");
+    g_string_append(md, "  The slopes' standard errors take the blocks as independent; the "
+                    "pairs share frames, so they are if anything too small.\n");
+}
+
+static void
+write_channel_agreement(GString *md, const gchar *const *channels, const ResidualSplit *splits,
+                        const gboolean *fitted, gint n_models, gint chosen, gint block_lines)
+{
+    gint m;
+
+    g_string_append_printf(md, "\n**Residual against the measurement noise (fastscan-series).**  "
+        "The channels %s, %s and %s of a FastScan frame are recorded on the same scan lines "
+        "and share one drift.  Each is measured and fitted as above; where two channels or "
+        "more keep a block, its residuals against one model (the same for every channel) "
+        "split into what the channels share (the mean product of two channels' residuals) "
+        "and what they do not (half the mean square of their difference).  The shared part "
+        "of each block (the mean of its channels' residuals), with an offset per pair, is "
+        "fitted one slope per axis along the rows (nm per block of %d lines).\n\n"
+        "| model | blocks (pairs) | residual RMS (nm) | not shared (nm) | shared (nm) | "
+        "slope x | slope y |\n|---|---|---|---|---|---|---|\n",
+        channels[0], channels[1], channels[2], block_lines);
+    for (m = 0; m < n_models; m++) {
+        const ResidualSplit *rs = splits + m;
+
+        if (!fitted[m] || !rs->n_blocks)
+            continue;
+        g_string_append_printf(md, "| %s%s | %d (%d) | %.3f | %.3f | %s%.3f | %.3f ± %.3f | "
+                               "%.3f ± %.3f |\n",
+                               drift_model_type_name(rs->type), m == chosen ? " (chosen)" : "",
+                               rs->n_blocks, rs->n_pairs, sqrt(rs->residual2), sqrt(rs->noise2),
+                               rs->shared2 < 0.0 ? "-" : "", sqrt(fabs(rs->shared2)),
+                               rs->slope[0], rs->slope_se[0], rs->slope[1], rs->slope_se[1]);
+    }
+    if (!splits[chosen].n_blocks) {
+        g_string_append(md, "\nNo block is kept by two channels: the residual cannot be split.\n");
         return;
     }
-    noise2 /= blocks;
-    shared2 /= blocks;
-    resid2 /= blocks;
-    g_string_append_printf(md, "  Over the %d blocks kept in two channels, "
-        "the residual's mean square %.3f nm^2 is %.3f not shared and %.3f "
-        "shared (%.0f %% noise).", blocks, resid2, noise2, shared2,
-        100.0*noise2/MAX(noise2 + MAX(shared2, 0.0), 1e-300));
-    if (shared2 <= 0.25*noise2)
-        g_string_append(md, "  The residual is the registration's own "
-                        "error: what the model leaves is noise, not drift.\n");
-    else if (shared2 <= noise2)
-        g_string_append(md, "  Most of the residual is the registration's "
-                        "own error; a shared part of the same order remains, "
-                        "drift no model explains or content that changed "
-                        "alike in every channel.\n");
-    else
-        g_string_append(md, "  Most of the residual is shared by the "
-                        "channels: drift no model explains, or content that "
-                        "changed alike in every channel, not registration "
-                        "noise.\n");
+    write_agreement_verdicts(md, splits, fitted, n_models, chosen);
 }
 
 /* ---- A simulated series on the measured particle film ---- */
@@ -2044,10 +2037,12 @@ int
 main(int argc, char **argv)
 {
     static const gchar *triangle_channels[] = { "ZSensor", "Phase" };
-    static const gchar *const agreement_channels[] = { "ZSensor", "AmplitudeActual", "Phase" };
-    ChannelAgreement agreement[3];
-    gdouble agreement_rms[3];
-    SharedTrend trend;
+    static const gchar *const agreement_channels[AGREEMENT_CHANNELS] = {
+        "ZSensor", "AmplitudeActual", "Phase"
+    };
+    ResidualSplit splits[FIT_REPORT_MAX_MODELS];
+    gboolean split_fitted[FIT_REPORT_MAX_MODELS];
+    gint n_models = 0, chosen = 0;
     const gchar *measured = argc > 1 ? argv[1] : "../shared/data/measured";
     const gchar *docdir = argc > 2 ? argv[2] : "docs";
     gchar *figdir = g_build_filename(docdir, "figures", NULL);
@@ -2130,15 +2125,11 @@ main(int argc, char **argv)
         }
     }
     write_triangles(md, tri, G_N_ELEMENTS(triangle_channels));
-    if (channel_agreements(specs + 0, measured, agreement_channels,
-                           G_N_ELEMENTS(agreement_channels), agreement,
-                           agreement_rms, &trend, &error)) {
-        write_channel_agreements(md, agreement_channels,
-                                 G_N_ELEMENTS(agreement_channels), agreement,
-                                 agreement_rms);
+    if (channel_agreement(specs + 0, measured, agreement_channels, splits, split_fitted,
+                          &n_models, &chosen, &error)) {
         if (results[0].series)
-            write_shared_trend(md, &trend,
-                               results[0].series->frames[0].timing.yres/N_BLOCKS);
+            write_channel_agreement(md, agreement_channels, splits, split_fitted, n_models,
+                                    chosen, results[0].series->frames[0].timing.yres/N_BLOCKS);
     }
     else {
         g_printerr("validation-study: channel agreement: %s\n", error->message);
