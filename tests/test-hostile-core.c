@@ -352,19 +352,30 @@ START_TEST(test_screening_gzip_truncations)
 }
 END_TEST
 
+/* The PID of a process that has run and ended, as a dead run's. */
+static GPid
+dead_pid(void)
+{
+    const gchar *argv[] = { "true", NULL };
+    gint status;
+    GPid pid;
+
+    ck_assert(g_spawn_async(NULL, (gchar**)argv, NULL, G_SPAWN_SEARCH_PATH | G_SPAWN_DO_NOT_REAP_CHILD,
+                            NULL, NULL, &pid, NULL));
+    waitpid(pid, &status, 0);
+    return pid;
+}
+
 /* A dead run's temporary is swept, a live run's and other files stay. */
 START_TEST(test_sweep)
 {
     gchar *dir = g_strdup(TEST_BUILDDIR "/tests/scratch-hostile-core-XXXXXX");
     gchar *target, *dead, *live, *other, *mine;
-    const gchar *argv[] = { "true", NULL };
-    gint status, fd;
+    gint fd;
     GPid pid;
 
     ck_assert_ptr_nonnull(g_mkdtemp(dir));
-    ck_assert(g_spawn_async(NULL, (gchar**)argv, NULL, G_SPAWN_SEARCH_PATH | G_SPAWN_DO_NOT_REAP_CHILD,
-                            NULL, NULL, &pid, NULL));
-    waitpid(pid, &status, 0);
+    pid = dead_pid();
     target = g_build_filename(dir, "out.gwy", NULL);
     dead = g_strdup_printf("%s/.out.gwy.%d.aBcDeF" SAFE_OUTPUT_SUFFIX, dir, (gint)pid);
     live = g_strdup_printf("%s/.out.gwy.%d.gHiJkL" SAFE_OUTPUT_SUFFIX, dir, (gint)getppid());
@@ -400,17 +411,14 @@ START_TEST(test_long_output_name)
 {
     gchar *dir = g_strdup(TEST_BUILDDIR "/tests/scratch-hostile-core-XXXXXX");
     gchar *base, *target, *mine, *dead, *cut;
-    const gchar *argv[] = { "true", NULL };
-    gint status, fd;
+    gint fd;
     GPid pid;
 
     ck_assert_ptr_nonnull(g_mkdtemp(dir));
     base = g_strnfill(251, 'x');
     memcpy(base + 247, ".gwy", 4);
     target = g_build_filename(dir, base, NULL);
-    ck_assert(g_spawn_async(NULL, (gchar**)argv, NULL, G_SPAWN_SEARCH_PATH | G_SPAWN_DO_NOT_REAP_CHILD,
-                            NULL, NULL, &pid, NULL));
-    waitpid(pid, &status, 0);
+    pid = dead_pid();
     mine = safe_output_temp_new(target, "old.", &fd);
     ck_assert_msg(mine != NULL, "no temporary beside a 251-byte name: %s", g_strerror(errno));
     close(fd);
