@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <glib.h>
 #include <glib/gstdio.h>
+#include <sys/wait.h>
 #include <check.h>
 
 /* automake's exit status of a test that could not run. */
@@ -122,6 +123,21 @@ test_remove_tree(const gchar *path)
     }
     else
         g_unlink(path);
+}
+
+/* A PID that ran and is gone (a child that exited): a dead run's, for the
+ * sweeps of stale temporaries. */
+static inline GPid
+test_dead_pid(void)
+{
+    const gchar *argv[] = { "true", NULL };
+    GPid pid;
+    gint status;
+
+    ck_assert(g_spawn_async(NULL, (gchar**)argv, NULL, G_SPAWN_SEARCH_PATH | G_SPAWN_DO_NOT_REAP_CHILD,
+                            NULL, NULL, &pid, NULL));
+    waitpid(pid, &status, 0);
+    return pid;
 }
 
 /* Runs the suite (forking each test unless fork is FALSE); failure when a

@@ -352,20 +352,6 @@ START_TEST(test_screening_gzip_truncations)
 }
 END_TEST
 
-/* The PID of a process that has run and ended, as a dead run's. */
-static GPid
-dead_pid(void)
-{
-    const gchar *argv[] = { "true", NULL };
-    gint status;
-    GPid pid;
-
-    ck_assert(g_spawn_async(NULL, (gchar**)argv, NULL, G_SPAWN_SEARCH_PATH | G_SPAWN_DO_NOT_REAP_CHILD,
-                            NULL, NULL, &pid, NULL));
-    waitpid(pid, &status, 0);
-    return pid;
-}
-
 /* A dead run's temporary is swept, a live run's and other files stay. */
 START_TEST(test_sweep)
 {
@@ -375,7 +361,7 @@ START_TEST(test_sweep)
     GPid pid;
 
     ck_assert_ptr_nonnull(g_mkdtemp(dir));
-    pid = dead_pid();
+    pid = test_dead_pid();
     target = g_build_filename(dir, "out.gwy", NULL);
     dead = g_strdup_printf("%s/.out.gwy.%d.aBcDeF" SAFE_OUTPUT_SUFFIX, dir, (gint)pid);
     live = g_strdup_printf("%s/.out.gwy.%d.gHiJkL" SAFE_OUTPUT_SUFFIX, dir, (gint)getppid());
@@ -418,7 +404,7 @@ START_TEST(test_long_output_name)
     base = g_strnfill(251, 'x');
     memcpy(base + 247, ".gwy", 4);
     target = g_build_filename(dir, base, NULL);
-    pid = dead_pid();
+    pid = test_dead_pid();
     mine = safe_output_temp_new(target, "old.", &fd);
     ck_assert_msg(mine != NULL, "no temporary beside a 251-byte name: %s", g_strerror(errno));
     close(fd);

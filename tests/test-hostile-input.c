@@ -891,20 +891,6 @@ END_TEST
 
 /* Killed runs. */
 
-/* A PID that ran and is gone: a child that exited. */
-static GPid
-dead_pid(void)
-{
-    const gchar *argv[] = { "true", NULL };
-    GPid pid;
-    gint status;
-
-    ck_assert(g_spawn_async(NULL, (gchar**)argv, NULL, G_SPAWN_SEARCH_PATH | G_SPAWN_DO_NOT_REAP_CHILD,
-                            NULL, NULL, &pid, NULL));
-    waitpid(pid, &status, 0);
-    return pid;
-}
-
 static gint
 count_temporaries(const gchar *dirname)
 {
@@ -1007,7 +993,7 @@ START_TEST(test_killed_run_swept)
     g_mkdir(home, 0700);
     hc = slow_case(scratch, rng, 0);
     run_and_signal(hc, home, SIGKILL, g_rand_int_range(rng, 0, 1500000));
-    name = g_strdup_printf(".out.gwy.%d.AbCdEf" SAFE_OUTPUT_SUFFIX, (gint)dead_pid());
+    name = g_strdup_printf(".out.gwy.%d.AbCdEf" SAFE_OUTPUT_SUFFIX, (gint)test_dead_pid());
     stale = case_file(hc, name);
     write_bytes(stale, "half", 4);
     g_free(name);
