@@ -444,8 +444,8 @@ make_bad_table(HostileCase *hc, GRand *rng)
 }
 
 /* Damaged geometry or timing in an otherwise valid file or table: a NaN
- * or infinite pixel size, a line time no instrument has, table times of
- * 1e308 s. */
+ * or infinite physical size (refused when the file is screened), a line
+ * time no instrument has, table times of 1e308 s. */
 static void
 make_bad_geometry(HostileCase *hc, GRand *rng)
 {
@@ -474,7 +474,7 @@ make_bad_geometry(HostileCase *hc, GRand *rng)
     write_bytes(table, text, strlen(text));
     g_ptr_array_add(hc->inputs, g_strdup(table));
     hc->expect = (kind == 1) ? EXPECT_SUCCESS : EXPECT_FAILURE;
-    hc->must_say = (kind == 0) ? "pixel size" : "t.csv";
+    hc->must_say = (kind == 0) ? "physical width or height" : "t.csv";
     add_output(hc, "-o", "out.gwy");
     add_args(hc, "-d", table, "-m", "continuous", input, NULL);
     g_byte_array_free(bytes, TRUE);
