@@ -11,6 +11,7 @@
 #include "config.h"
 #include <math.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -939,11 +940,14 @@ run_and_signal(HostileCase *hc, const gchar *home, gint signum, gulong delay_us)
     return status;
 }
 
-/* SIGTERM or SIGINT at a random moment: the run either finished (all its
- * outputs) or left nothing at all. */
+/* SIGTERM, SIGINT, SIGHUP or SIGQUIT at a random moment: the run either
+ * finished (all its outputs) or left nothing at all (SIGQUIT left its
+ * temporary file before it was caught too).  No core file is written for
+ * SIGQUIT's default action. */
 START_TEST(test_terminated_runs)
 {
-    static const gint signals[] = { SIGTERM, SIGINT, SIGHUP };
+    static const gint signals[] = { SIGTERM, SIGINT, SIGHUP, SIGQUIT };
+    struct rlimit no_core = { 0, 0 };
     gchar *scratch = make_scratch("term"), *home = g_build_filename(scratch, "home", NULL);
     GRand *rng = g_rand_new_with_seed(seed ^ 0x5eed);
     HostileCase *hc;
@@ -952,9 +956,10 @@ START_TEST(test_terminated_runs)
     gchar *what;
 
     g_mkdir(home, 0700);
-    for (i = 0; i < 6; i++) {
+    setrlimit(RLIMIT_CORE, &no_core);
+    for (i = 0; i < 8; i++) {
         hc = slow_case(scratch, rng, i);
-        signum = signals[i % 3];
+        signum = signals[i % G_N_ELEMENTS(signals)];
         status = run_and_signal(hc, home, signum, g_rand_int_range(rng, 0, 1500000));
         what = g_strdup_printf("seed %u, signal %d", seed, signum);
         ck_assert_msg((WIFEXITED(status) && WEXITSTATUS(status) == 0)
@@ -972,7 +977,7 @@ START_TEST(test_terminated_runs)
         g_free(what);
         case_free(hc);
     }
-    printf("test-hostile-input: 6 signalled runs clean (%d had finished first)\n", finished);
+    printf("test-hostile-input: 8 signalled runs clean (%d had finished first)\n", finished);
     g_rand_free(rng);
     test_remove_tree(scratch);
     g_free(home);
