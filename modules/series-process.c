@@ -16,6 +16,7 @@
 #include <libgwydgets/gwydgets.h>
 #include <app/gwyapp.h>
 #include "series-correction.h"
+#include "compensation-marker.h"
 #include "series-graph.h"
 #include "localscan-channel.h"
 #include "series-process.h"
@@ -44,6 +45,7 @@ typedef struct {
     SeriesCorrection correction;
     gboolean computed;
     gboolean timing_assumed;   /* the metadata lacked it: the params' */
+    gchar *timing_reason;      /* why the metadata's timing was not used */
 } SeriesArgs;
 
 typedef struct {
@@ -62,6 +64,8 @@ series_args_reset(SeriesArgs *args)
     frame_series_free(args->series);
     args->series = NULL;
     args->computed = FALSE;
+    g_free(args->timing_reason);
+    args->timing_reason = NULL;
 }
 
 static GwyParamDef*
@@ -97,25 +101,58 @@ define_series_params(void)
     return paramdef;
 }
 
-/* The frames: the current channel and every other scanned like it, in id
- * order. */
+/* A channel's title without its digits: "Height 3" and "Height 12" are
+ * frames of one movie, "ZSensor" and "Phase" two channels of one scan. */
+static gchar*
+title_skeleton(GwyContainer *data, gint id)
+{
+    const gchar *title = localscan_channel_title(data, id);
+    GString *skeleton = g_string_new(NULL);
+
+    for (; title && *title; title++) {
+        if (!g_ascii_isdigit(*title))
+            g_string_append_c(skeleton, *title);
+    }
+    return g_string_free(skeleton, FALSE);
+}
+
+static gboolean
+is_corrected(GwyContainer *data, gint id)
+{
+    GwyContainer *meta = localscan_channel_item(data, id, "meta");
+
+    return ((meta && gwy_container_contains_by_name(meta, SERIES_CORRECTED_META_KEY))
+            || compensation_marker_get(data, id) != NULL);
+}
+
+/* The frames: the current channel and every other scanned like it (the
+ * same pixels and area, a title that differs in its numbers only), in id
+ * order.  Channels a drift correction made are no frames: run again, the
+ * correction took its own results for seven more frames. */
 static GArray*
 frame_ids(GwyContainer *data, gint current)
 {
     GwyDataField *field = localscan_channel_item(data, current, "data");
     GArray *ids = g_array_new(FALSE, FALSE, sizeof(gint));
     gint *all = localscan_channel_ids(data), i;
+    gchar *skeleton = title_skeleton(data, current), *other_skeleton;
 
     for (i = 0; all[i] >= 0; i++) {
         GwyDataField *other = localscan_channel_item(data, all[i], "data");
 
-        if (!gwy_data_field_check_compatibility(field, other,
-                                                GWY_DATA_COMPATIBILITY_RES
-                                                | GWY_DATA_COMPATIBILITY_REAL
-                                                | GWY_DATA_COMPATIBILITY_LATERAL
-                                                | GWY_DATA_COMPATIBILITY_VALUE))
+        if (gwy_data_field_check_compatibility(field, other,
+                                               GWY_DATA_COMPATIBILITY_RES
+                                               | GWY_DATA_COMPATIBILITY_REAL
+                                               | GWY_DATA_COMPATIBILITY_LATERAL
+                                               | GWY_DATA_COMPATIBILITY_VALUE)
+            || is_corrected(data, all[i]))
+            continue;
+        other_skeleton = title_skeleton(data, all[i]);
+        if (g_str_equal(skeleton, other_skeleton))
             g_array_append_val(ids, all[i]);
+        g_free(other_skeleton);
     }
+    g_free(skeleton);
     g_free(all);
     return ids;
 }
@@ -134,16 +171,28 @@ load_series(SeriesArgs *args, GError **error)
     gdouble line_time, interval;
     gint yres, k;
 
+    if (is_corrected(args->data, args->id)) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("This channel is the result of a drift correction: run the series "
+                      "correction on the frames as they were measured."));
+        g_array_free(ids, TRUE);
+        return NULL;
+    }
     gwy_container_gis_string_by_name(args->data, "/filename",
                                      (const guchar**)&filename);
     name = g_strdup(filename ? filename : _("Untitled"));
     frame_series_options_init(&options);
     options.channel_ids = (gint*)ids->data;
     options.n_channel_ids = ids->len;
+    /* Where the metadata gives the timing but not the direction. */
+    options.fallback_direction = gwy_params_get_enum(args->params, PARAM_DIRECTION);
     args->timing_assumed = FALSE;
+    g_free(args->timing_reason);
+    args->timing_reason = NULL;
     series = frame_series_from_files(&args->data, &name, 1, &options, &err);
     if (!series && err->domain == FRAME_SERIES_ERROR
         && err->code == FRAME_SERIES_ERROR_TIMING) {
+        args->timing_reason = g_strdup(err->message);
         g_clear_error(&err);
         line_time = gwy_params_get_double(args->params, PARAM_LINE_TIME);
         interval = gwy_params_get_double(args->params, PARAM_FRAME_INTERVAL);
@@ -185,6 +234,24 @@ execute(SeriesArgs *args, GError **error)
     return TRUE;
 }
 
+/* The marker that keeps a corrected channel out of the frames of a later
+ * run (frame_ids), as the command line's output carries it. */
+static void
+mark_corrected(GwyContainer *data, gint id)
+{
+    gchar key[48];
+    GwyContainer *meta;
+
+    g_snprintf(key, sizeof(key), "/%d/meta", id);
+    if (!gwy_container_gis_object_by_name(data, key, (GObject**)&meta)) {
+        meta = gwy_container_new();
+        gwy_container_set_object_by_name(data, key, meta);
+        g_object_unref(meta);
+    }
+    gwy_container_set_const_string_by_name(meta, SERIES_CORRECTED_META_KEY,
+                                           (const guchar*)"Local Scan Series Drift, line by line");
+}
+
 /* A corrected frame as a new channel: titled after its source, with its
  * palette and metadata, a mask where no data exists. */
 static gint
@@ -204,6 +271,7 @@ add_corrected_channel(SeriesArgs *args, gint k, GwyDataField *result,
     gwy_app_sync_data_items(data, data, source, newid, FALSE,
                             GWY_DATA_ITEM_GRADIENT, GWY_DATA_ITEM_MASK_COLOR,
                             GWY_DATA_ITEM_META, GWY_DATA_ITEM_REAL_SQUARE, 0);
+    mark_corrected(data, newid);
     if (mask && gwy_data_field_get_max(mask) > 0.0)
         gwy_container_set_object(data, gwy_app_get_mask_key_for_id(newid),
                                  mask);
@@ -354,8 +422,9 @@ describe_result(const SeriesArgs *args)
     if (!flagged)
         g_string_append(text, _("\nNo frame flagged."));
     if (args->timing_assumed)
-        g_string_append(text, _("\nTiming from the settings below (the file "
-                                "does not give it)."));
+        g_string_append_printf(text, _("\nTiming from the settings (the file's "
+                                       "metadata: %s)."),
+                               args->timing_reason ? args->timing_reason : _("none"));
     else
         g_string_append(text, _("\nTiming from the file's metadata (the "
                                 "settings below are not used)."));

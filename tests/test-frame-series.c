@@ -69,12 +69,30 @@ START_TEST(test_hsafm_channels_as_frames)
     FrameSeries *series;
     GError *error = NULL;
 
+    FrameSeriesOptions options;
+    guint i, notes;
+
     series = frame_series_load(&file, 1, NULL, &error);
     ck_assert_msg(series != NULL, "%s", error ? error->message : "");
     ck_assert_int_eq(series->n_frames, 7);
     ck_assert(fabs(series->frames[0].timing.line_time - 0.41263/256) < 1e-9);
     ck_assert(fabs(series->frames[1].timing.frame_start - 6.189) < 1e-9);
     ck_assert(fabs(series->frames[6].timing.frame_start - 37.135) < 0.01);
+    /* The file gives the timing but not the direction: down, said. */
+    ck_assert_int_eq(series->frames[3].timing.direction, SCAN_DIRECTION_DOWN);
+    notes = series->notes->len;
+    ck_assert_uint_ge(notes, 1);
+    frame_series_free(series);
+    /* The dialog's direction stands in where the metadata is silent, with
+     * no note (it was ignored there: the frames stayed down). */
+    frame_series_options_init(&options);
+    options.fallback_direction = SCAN_DIRECTION_UP;
+    series = frame_series_load(&file, 1, &options, &error);
+    ck_assert_msg(series != NULL, "%s", error ? error->message : "");
+    for (i = 0; i < 7; i++)
+        ck_assert_int_eq(series->frames[i].timing.direction, SCAN_DIRECTION_UP);
+    ck_assert(fabs(series->frames[1].timing.frame_start - 6.189) < 1e-9);
+    ck_assert_uint_eq(series->notes->len, notes - 1);
     frame_series_free(series);
     g_free(file);
 }

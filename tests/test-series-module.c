@@ -126,6 +126,71 @@ START_TEST(test_series_immediate)
 }
 END_TEST
 
+static gint
+count_channels(GwyContainer *data)
+{
+    gint *ids = gwy_app_data_browser_get_data_ids(data), n;
+
+    for (n = 0; ids[n] >= 0; n++)
+        ;
+    g_free(ids);
+    return n;
+}
+
+/* The frames are the channels scanned like the current one: a channel of
+ * the same size but another title (a simulator's drift-free truth, a
+ * Phase beside a Height) is not one, nor is a channel a correction made.
+ * Run a second time, the correction took its own results for frames too
+ * (14 frames of 7, "(drift corrected) (drift corrected)"); run on a
+ * corrected channel, it is refused. */
+START_TEST(test_series_frames_chosen)
+{
+    DriftModel model;
+    FrameSeries *series;
+    GwyContainer *data;
+    GwyDataField *other;
+    gint n_before, n_first;
+    gchar key[40];
+    GError *error;
+
+    set_timing_settings(0.5, 0.0);
+    data = series_container(0, &model, &series);
+    /* Another channel of frame 0's scan: the same lines, other values. */
+    other = gwy_data_field_duplicate(series->frames[0].field);
+    gwy_data_field_multiply(other, -1.0);
+    g_snprintf(key, sizeof(key), "/%d/data", SERIES_CASE_FRAMES);
+    gwy_container_set_object_by_name(data, key, other);
+    g_snprintf(key, sizeof(key), "/%d/data/title", SERIES_CASE_FRAMES);
+    gwy_container_set_const_string_by_name(data, key, (const guchar*)"Phase");
+    n_before = count_channels(data);
+    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_IMMEDIATE);
+    error = localscan_run_error_take(data);
+    ck_assert_msg(!error, "the run failed: %s", error ? error->message : "");
+    n_first = count_channels(data);
+    ck_assert_int_eq(n_first, n_before + SERIES_CASE_FRAMES);
+
+    gwy_app_data_browser_select_data_field(data, 0);
+    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_IMMEDIATE);
+    error = localscan_run_error_take(data);
+    ck_assert_msg(!error, "the second run failed: %s", error ? error->message : "");
+    ck_assert_int_eq(count_channels(data), n_first + SERIES_CASE_FRAMES);
+
+    gwy_app_data_browser_select_data_field(data, n_before);
+    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_IMMEDIATE);
+    error = localscan_run_error_take(data);
+    ck_assert(error != NULL);
+    printf("corrected channel: %s\n", error->message);
+    ck_assert(strstr(error->message, "result of a drift correction") != NULL);
+    ck_assert_int_eq(count_channels(data), n_first + SERIES_CASE_FRAMES);
+    g_error_free(error);
+    g_object_unref(other);
+    frame_series_free(series);
+    drift_model_clear(&model);
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+}
+END_TEST
+
 /* One channel is no series: nothing added, the reason kept for the caller. */
 START_TEST(test_series_lone_channel)
 {
@@ -173,6 +238,7 @@ main(void)
         return 1;
     }
     tcase_add_loop_test(tc, test_series_immediate, 0, 2);
+    tcase_add_test(tc, test_series_frames_chosen);
     tcase_add_test(tc, test_series_lone_channel);
     tcase_set_timeout(tc, 120);
     return test_run_suite(s);

@@ -317,7 +317,7 @@ corrected_meta(GwyContainer *source, gint source_id, const SeriesRun *run,
     gchar text[64];
 
     meta = meta ? gwy_container_duplicate(meta) : gwy_container_new();
-    gwy_container_set_const_string_by_name(meta, "Drift correction",
+    gwy_container_set_const_string_by_name(meta, SERIES_CORRECTED_META_KEY,
                                            (const guchar*)"gwy-localscan series, line by line");
     gwy_container_set_const_string_by_name(meta, "Drift model",
                                            (const guchar*)drift_model_type_name(fit->type));

@@ -35,6 +35,7 @@ frame_series_options_init(FrameSeriesOptions *options)
     memset(options, 0, sizeof(FrameSeriesOptions));
     options->line_time = -1.0;
     options->direction = -1;
+    options->fallback_direction = -1;
     options->first_id = options->last_id = -1;
 }
 
@@ -424,6 +425,10 @@ assign_line_times(FrameSeries *series, const MetaTiming *mts,
         else if (mts[i].direction >= 0) {
             frame->timing.direction = mts[i].direction;
             frame->direction_source = FRAME_TIME_METADATA;
+        }
+        else if (options->fallback_direction >= 0) {
+            frame->timing.direction = options->fallback_direction;
+            frame->direction_source = FRAME_TIME_OPTION;
         }
         else {
             frame->timing.direction = SCAN_DIRECTION_DOWN;

@@ -58,6 +58,9 @@ typedef struct {
     gdouble *frame_times;         /* s, one per kept frame; NULL: metadata */
     gint n_frame_times;
     gint direction;               /* -1: metadata (else down), or ScanDirection */
+    gint fallback_direction;      /* where the metadata is silent: -1 down,
+                                     with a note; else this ScanDirection
+                                     (a setting the user chose) */
     const gchar *channel;         /* title (exact, or prefix followed by a space
                                      and digits); NULL: see
                                      frame_series_from_files */

@@ -21,6 +21,11 @@
 
 G_BEGIN_DECLS
 
+/* The metadata item that marks a channel corrected by the series
+ * correction (its value says how): such a channel is no frame of a
+ * series to be corrected again. */
+#define SERIES_CORRECTED_META_KEY "Drift correction"
+
 #define SERIES_CORRECTION_ERROR series_correction_error_quark()
 
 typedef enum {
