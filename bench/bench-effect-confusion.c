@@ -15,6 +15,7 @@
 #include <libgwymodule/gwymodule.h>
 #include <app/gwyapp.h>
 #include "hidden-effect-cases.h"
+#include "median.h"
 
 #define N_TYPES HIDDEN_CASE_EFFECTS
 
@@ -67,7 +68,7 @@ median(GArray *a)
 
     if (!a->len)
         return NAN;
-    return gwy_math_median(a->len, v);
+    return median_in_place(v, a->len);
 }
 
 static void

@@ -26,6 +26,7 @@
 #include <app/gwyapp.h>
 #include "stripe-registration.h"
 #include "drift-table.h"
+#include "median.h"
 
 enum { FASTSCAN_CHANNELS = 3, MAX_STRIPES = 16 };
 
@@ -111,8 +112,8 @@ median_shift(const PairResult *r, gint n, gdouble *dx, gdouble *dy)
     }
     if (!m)
         return FALSE;
-    *dx = gwy_math_median(m, xs);
-    *dy = gwy_math_median(m, ys);
+    *dx = median_in_place(xs, m);
+    *dy = median_in_place(ys, m);
     return TRUE;
 }
 
@@ -171,7 +172,7 @@ print_stripe_closure(const gchar *name, gint n, gint yres, const PairResult *r06
         misses[m++] = hypot(ax, ay);
     }
     if (m)
-        printf("; median %.1f px\n", gwy_math_median(m, misses));
+        printf("; median %.1f px\n", median_in_place(misses, m));
     else
         printf(" no stripe measured in both\n");
 }
@@ -236,7 +237,7 @@ fastscan(const gchar *dir)
         ratio = total_in ? (gdouble)total_measured/total_in : 0.0;
         printf("N=%d: %d of %d stripes in the reference measured (%.0f %%); channels measuring the same "
                "stripe: %d pairs, %d within 3 combined sigma, median disagreement %.2f px\n",
-               n, total_measured, total_in, 100.0*ratio, both, agree, m ? gwy_math_median(m, diffs) : 0.0);
+               n, total_measured, total_in, 100.0*ratio, both, agree, m ? median_in_place(diffs, m) : 0.0);
         for (ch = 0; ch < FASTSCAN_CHANNELS; ch++) {
             print_stripe_closure(channel_names[ch], n, gwy_data_field_get_yres(fields[0][ch]),
                                  &results[0][ch], &results[1][ch], &results[2][ch]);

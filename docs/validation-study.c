@@ -25,6 +25,7 @@
 #include "localscan-params.h"
 #include "sample.h"
 #include "scanner.h"
+#include "median.h"
 
 #define N_BLOCKS 16
 #define PLOT_W 1000
@@ -147,7 +148,7 @@ leveled_copy(GwyDataField *field)
 
     for (i = 0; i < yres; i++) {
         memcpy(row, d + i*xres, xres*sizeof(gdouble));
-        med = gwy_math_median(xres, row);
+        med = median_in_place(row, xres);
         for (j = 0; j < xres; j++)
             out[i*xres + j] = d[i*xres + j] - med;
     }
@@ -832,7 +833,7 @@ typedef struct {
 static gdouble
 median_of(gdouble *v, gint n)
 {
-    return n ? gwy_math_median(n, v) : NAN;
+    return n ? median_in_place(v, n) : NAN;
 }
 
 static gboolean

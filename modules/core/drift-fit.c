@@ -9,6 +9,7 @@
 #include <libgwyddion/gwymath.h>
 #include "drift-fit.h"
 #include "parallel-run.h"
+#include "median.h"
 
 #define MAX_BASIS 4
 #define GOLDEN_STEPS 40
@@ -1228,7 +1229,7 @@ cut_outliers(const DriftMeasurement *meas, gint n, const DriftFit *fit,
     }
     if (m) {
         /* The median of a 2-D radial residual is about 1.18 sigma. */
-        limit = MAX(sigmas*MAX(gwy_math_kth_rank(m, sorted, m/2)/1.1774, 1e-6), floor_nm);
+        limit = MAX(sigmas*MAX(median_kth_in_place(sorted, m, m/2)/1.1774, 1e-6), floor_nm);
         cut = MAX(limit, OUTLIER_ROUND*r[worst]);
         for (i = 0; i < n && r[worst] > limit; i++) {
             if (r[i] > cut)

@@ -10,6 +10,7 @@
 #include <libgwyddion/gwymath.h>
 #include "coprime-step.h"
 #include "frame-conditioning.h"
+#include "median.h"
 
 /*
  * Why each step (docs/registration.md has the whole story).
@@ -112,7 +113,7 @@ valid_median(const gdouble *values, const gdouble *weight, gint count, gint stri
     }
     if (!m)
         return FALSE;
-    *median = gwy_math_median(m, buf);
+    *median = median_in_place(buf, m);
     return TRUE;
 }
 
@@ -142,7 +143,7 @@ align_lines_by_median_differences(ConditionedFrame *frame)
         }
         /* A line with nothing in common with the one above keeps its own
          * level; step 3 takes care of what that leaves. */
-        offset = m ? gwy_math_median(m, buf) : 0.0;
+        offset = m ? median_in_place(buf, m) : 0.0;
         for (c = 0; c < xres; c++)
             row[c] -= offset;
     }
@@ -593,7 +594,7 @@ clip_outliers(gdouble *data, const ConditionedFrame *frame)
             buf[m++] = fabs(data[k]);
     }
     /* The values are zero-median already, so the median of |v| is the MAD. */
-    limit = m ? CLIP_SIGMAS*1.4826*gwy_math_median(m, buf) : 0.0;
+    limit = m ? CLIP_SIGMAS*1.4826*median_in_place(buf, m) : 0.0;
     g_free(buf);
     if (!(limit > 0.0))
         return;

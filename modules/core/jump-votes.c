@@ -96,7 +96,7 @@ median_vote(const gdouble *raw, const gint *frame, gint n, gint i)
             v[m++] = raw[j];
     }
     if (m == 3)
-        return gwy_math_median(3, v);
+        return median_in_place(v, 3);
     if (m == 2)
         return (v[0]*v[1] > 0.0) ? (fabs(v[0]) < fabs(v[1]) ? v[0] : v[1]) : 0.0;
     return v[0];
@@ -135,7 +135,7 @@ steady_votes(const gdouble *before, const gdouble *after,
         if (before[i] + after[i] > 0.0)
             strength[m++] = fabs(raw[i]);
     }
-    strong = m ? JUMP_WEAK_EVIDENCE*gwy_math_median(m, strength) : 0.0;
+    strong = m ? JUMP_WEAK_EVIDENCE*median_in_place(strength, m) : 0.0;
     for (i = 0; i < n; i++) {
         if (fabs(raw[i]) >= strong
             && !(ev[i].two_sided

@@ -13,6 +13,7 @@
 #include <libprocess/grains.h>
 #include "stripe-geometry.h"
 #include "particle-detect.h"
+#include "median.h"
 
 /* Automatic threshold on a levelled image: this many noise sigmas ... */
 #define AUTO_NOISE_SIGMAS 10.0
@@ -67,7 +68,7 @@ particle_detect_noise(GwyDataField *field, gdouble median)
 
     for (k = 0; k < n; k++)
         dev[k] = fabs(d[k] - median);
-    mad = gwy_math_median(n, dev);
+    mad = median_in_place(dev, n);
     g_free(dev);
     /* The MAD of a Gaussian is 0.6745 sigma. */
     return mad/0.6745;
@@ -353,7 +354,7 @@ particle_typical_radius(const GArray *particles, gdouble dx, gdouble dy)
     /* The lower quartile, a radius that some particle really has: the
      * search must not step over the smaller particles' tops, and a single
      * speck must not set it. */
-    r = gwy_math_kth_rank(n, radii, (n - 1)/4);
+    r = median_kth_in_place(radii, n, (n - 1)/4);
     g_free(radii);
     return r;
 }

@@ -15,6 +15,7 @@
 #include "stripe-geometry.h"
 #include "stripe-subpixel.h"
 #include "localscan-intl.h"
+#include "median.h"
 
 /*
  * How it works (docs/registration.md tells it with figures).
@@ -520,8 +521,8 @@ predict_from_neighbours(const Peak *peaks, const gboolean *reliable, gint n, gin
     }
     if (count < 2)
         return FALSE;
-    *dy = gwy_math_median(count, ys);
-    *dx = gwy_math_median(count, xs);
+    *dy = median_in_place(ys, count);
+    *dx = median_in_place(xs, count);
     return TRUE;
 }
 
@@ -1397,7 +1398,7 @@ stripe_registration_support(const StripeShift *shifts, gint n, StripeRegistratio
         if (shifts[s].accepted)
             scores[support->measured++] = shifts[s].score;
     }
-    support->median_score = support->measured ? gwy_math_median(support->measured, scores) : 0.0;
+    support->median_score = support->measured ? median_in_place(scores, support->measured) : 0.0;
     /* A large offset that leaves part of the image outside the reference is
      * normal; what cannot be trusted is a registration that measured few
      * of the stripes it could have measured. */
