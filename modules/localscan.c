@@ -23,6 +23,7 @@
 #include "run-description.h"
 #include "preview-field.h"
 #include "series-process.h"
+#include "dialog-tooltips.h"
 
 /* Our strings live in our own domain, not in Gwyddion's. */
 #undef _
@@ -994,119 +995,57 @@ report_error(ModuleArgs *args, const GError *error)
     gtk_widget_destroy(dialog);
 }
 
-/* A label's or button's text as the user reads it: no mnemonic
- * underscore, no colon the parameter table appends. */
-static gchar*
-plain_label(const gchar *text)
-{
-    GString *plain = g_string_new(NULL);
-    const gchar *p;
+/* The tooltip of every setting, keyed by the labels of
+ * define_module_params(). */
+static const DialogTooltip localscan_tooltips[] = {
+    { N_("Table stored with the image"),
+      N_("The drift table in the channel's metadata (item 'Local-scan drift table'), as "
+         "simscan and the local-scan measurement store it") },
+    { N_("Table file (CSV)"),
+      N_("A drift table file: stripe,dx,dy per row, in px, nm, um or m") },
+    { N_("Registration to a reference"),
+      N_("Measure the drift of every stripe by registering it against another scan of "
+         "the same area, made without (or with other) drift") },
+    { N_("Table file"), N_("The CSV drift table to apply") },
+    { N_("Stripes"),
+      N_("How many stripes along the slow axis are registered against the reference") },
+    { N_("Masks in registration"),
+      N_("What the image's and the reference's masks mean to the registration: Exclude "
+         "leaves masked pixels out (Gwyddion's importers mask the pixels a file lacks), "
+         "Include uses only masked pixels, Ignore uses every pixel") },
+    { N_("Paper (whole-pixel stripes)"),
+      N_("Shift every stripe by whole pixels, exactly as the paper does") },
+    { N_("Continuous (line by line)"),
+      N_("Move every scan line back by the drift at its own scan time, from a drift "
+         "trajectory through the stripe measurements") },
+    { N_("Interpolation"),
+      N_("How continuous mode resamples: Round (nearest pixel, the default) keeps "
+         "heights exactly; the sub-pixel kernels place features more exactly but "
+         "change the peaks of small particles (see docs/heights.md)") },
+    { N_("Slow scan direction"),
+      N_("Whether the image was scanned top to bottom or bottom to top; used only when "
+         "the metadata does not say") },
+    { N_("Line time"),
+      N_("Seconds per scan line, trace and retrace; used only when the metadata does "
+         "not say") },
+    { N_("Frame start"),
+      N_("When the frame started, in the clock of the table's t_image and t_local "
+         "columns; used only when the metadata does not say") },
+    { N_("Fill value"),
+      N_("The value of pixels that no stripe covers after the shift (the paper uses "
+         "the image mean)") },
+    { N_("Mask filled pixels"),
+      N_("Add a mask over the filled pixels to the new channel") },
+    { N_("Plot drift graph"),
+      N_("Add a graph of the drift of every stripe (dx and dy against the stripe's "
+         "position) to the file") },
+    { N_("Mask color"), N_("The colour of the mask in the preview and the new channel") },
+    { N_("All channels of the scan"),
+      N_("Apply the same correction, from this channel's drift, to every other channel "
+         "of the same scan (Height, Amplitude, Phase...; same pixels and physical size, "
+         "same file, same scan time) and to their masks") },
+};
 
-    for (p = text; *p; p++) {
-        if (*p != '_')
-            g_string_append_c(plain, *p);
-    }
-    if (plain->len && plain->str[plain->len - 1] == ':')
-        g_string_truncate(plain, plain->len - 1);
-    return g_string_free(plain, FALSE);
-}
-
-static const gchar*
-find_tooltip(const gchar *text)
-{
-    /* Keyed by the labels of define_module_params(), as translated. */
-    static const gchar *const tooltips[][2] = {
-        { N_("Table stored with the image"),
-          N_("The drift table in the channel's metadata (item 'Local-scan drift table'), as "
-             "simscan and the local-scan measurement store it") },
-        { N_("Table file (CSV)"),
-          N_("A drift table file: stripe,dx,dy per row, in px, nm, um or m") },
-        { N_("Registration to a reference"),
-          N_("Measure the drift of every stripe by registering it against another scan of "
-             "the same area, made without (or with other) drift") },
-        { N_("Table file"), N_("The CSV drift table to apply") },
-        { N_("Stripes"),
-          N_("How many stripes along the slow axis are registered against the reference") },
-        { N_("Masks in registration"),
-          N_("What the image's and the reference's masks mean to the registration: Exclude "
-             "leaves masked pixels out (Gwyddion's importers mask the pixels a file lacks), "
-             "Include uses only masked pixels, Ignore uses every pixel") },
-        { N_("Paper (whole-pixel stripes)"),
-          N_("Shift every stripe by whole pixels, exactly as the paper does") },
-        { N_("Continuous (line by line)"),
-          N_("Move every scan line back by the drift at its own scan time, from a drift "
-             "trajectory through the stripe measurements") },
-        { N_("Interpolation"),
-          N_("How continuous mode resamples: Round (nearest pixel, the default) keeps "
-             "heights exactly; the sub-pixel kernels place features more exactly but "
-             "change the peaks of small particles (see docs/heights.md)") },
-        { N_("Slow scan direction"),
-          N_("Whether the image was scanned top to bottom or bottom to top; used only when "
-             "the metadata does not say") },
-        { N_("Line time"),
-          N_("Seconds per scan line, trace and retrace; used only when the metadata does "
-             "not say") },
-        { N_("Frame start"),
-          N_("When the frame started, in the clock of the table's t_image and t_local "
-             "columns; used only when the metadata does not say") },
-        { N_("Fill value"),
-          N_("The value of pixels that no stripe covers after the shift (the paper uses "
-             "the image mean)") },
-        { N_("Mask filled pixels"),
-          N_("Add a mask over the filled pixels to the new channel") },
-        { N_("Plot drift graph"),
-          N_("Add a graph of the drift of every stripe (dx and dy against the stripe's "
-             "position) to the file") },
-        { N_("Mask color"), N_("The colour of the mask in the preview and the new channel") },
-        { N_("All channels of the scan"),
-          N_("Apply the same correction, from this channel's drift, to every other channel "
-             "of the same scan (Height, Amplitude, Phase...; same pixels and physical size, "
-             "same file, same scan time) and to their masks") },
-    };
-    guint i;
-
-    for (i = 0; i < G_N_ELEMENTS(tooltips); i++) {
-        gchar *label = plain_label(_(tooltips[i][0]));
-        gboolean found = gwy_strequal(label, text);
-
-        g_free(label);
-        if (found)
-            return _(tooltips[i][1]);
-    }
-    return NULL;
-}
-
-/* GwyParamTable offers no tooltips; its labels and buttons are found by
- * their text, and a label's tooltip goes to its widget too. */
-static void
-add_tooltips(GtkWidget *widget)
-{
-    const gchar *text = NULL, *tooltip;
-    GtkWidget *target;
-    GList *children, *l;
-    gchar *plain;
-
-    if (GTK_IS_LABEL(widget))
-        text = gtk_label_get_label(GTK_LABEL(widget));
-    else if (GTK_IS_BUTTON(widget))
-        text = gtk_button_get_label(GTK_BUTTON(widget));
-    if (text) {
-        plain = plain_label(text);
-        if ((tooltip = find_tooltip(plain))) {
-            gtk_widget_set_tooltip_text(widget, tooltip);
-            if (GTK_IS_LABEL(widget)
-                && (target = gtk_label_get_mnemonic_widget(GTK_LABEL(widget))))
-                gtk_widget_set_tooltip_text(target, tooltip);
-        }
-        g_free(plain);
-    }
-    if (!GTK_IS_CONTAINER(widget))
-        return;
-    children = gtk_container_get_children(GTK_CONTAINER(widget));
-    for (l = children; l; l = g_list_next(l))
-        add_tooltips(GTK_WIDGET(l->data));
-    g_list_free(children);
-}
 
 static GwyDialogOutcome
 run_gui(ModuleArgs *args)
@@ -1188,7 +1127,8 @@ run_gui(ModuleArgs *args)
     gwy_param_table_append_checkbox(table, PARAM_ALL_CHANNELS);
     gwy_param_table_append_message(table, MESSAGE_STATUS, NULL);
 
-    add_tooltips(gwy_param_table_widget(table));
+    dialog_tooltips_add(gwy_param_table_widget(table), localscan_tooltips,
+                        G_N_ELEMENTS(localscan_tooltips));
     gtk_box_pack_start(GTK_BOX(hbox), gwy_param_table_widget(table), TRUE, TRUE, 0);
     gwy_dialog_add_param_table(dialog, table);
 

@@ -17,6 +17,7 @@
 #include <app/gwyapp.h>
 #include "series-correction.h"
 #include "compensation-marker.h"
+#include "dialog-tooltips.h"
 #include "series-graph.h"
 #include "localscan-channel.h"
 #include "series-process.h"
@@ -91,7 +92,7 @@ define_series_params(void)
                               _("Slow scan _direction"), directions,
                               G_N_ELEMENTS(directions), SCAN_DIRECTION_DOWN);
     gwy_param_def_add_enum(paramdef, PARAM_INTERPOLATION, "interpolation",
-                           NULL, GWY_TYPE_INTERPOLATION_TYPE,
+                           _("_Interpolation"), GWY_TYPE_INTERPOLATION_TYPE,
                            GWY_INTERPOLATION_BSPLINE);
     gwy_param_def_add_boolean(paramdef, PARAM_CROP, "crop",
                               _("C_rop to the area every frame covers"),
@@ -100,6 +101,30 @@ define_series_params(void)
                               _("Add the trajectory _graph"), TRUE);
     return paramdef;
 }
+
+/* The tooltip of every setting, keyed by the labels of
+ * define_series_params(). */
+static const DialogTooltip series_tooltips[] = {
+    { N_("Line time"),
+      N_("Seconds per scan line, trace and retrace; used only where the file's metadata "
+         "does not give the timing") },
+    { N_("Frame interval (0: back to back)"),
+      N_("Seconds from the start of one frame to the start of the next; 0: each frame "
+         "starts when the one before ends.  Used only where the metadata does not give "
+         "the frames' times") },
+    { N_("Slow scan direction"),
+      N_("Whether the frames were scanned top to bottom or bottom to top; used only "
+         "where the metadata does not say") },
+    { N_("Interpolation"),
+      N_("How the corrected frames are resampled when every scan line is moved back by "
+         "the drift at its own scan time") },
+    { N_("Crop to the area every frame covers"),
+      N_("Cut every corrected frame to the part of the sample that all frames show, so "
+         "that no pixel is left without data") },
+    { N_("Add the trajectory graph"),
+      N_("Add a graph of the drift in x and y against time, the measurements with the "
+         "fitted trajectory, to the file") },
+};
 
 /* A channel's title without its digits: "Height 3" and "Height 12" are
  * frames of one movie, "ZSensor" and "Phase" two channels of one scan. */
@@ -557,6 +582,8 @@ run_gui(SeriesArgs *args)
     gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
     gwy_param_table_append_checkbox(table, PARAM_CROP);
     gwy_param_table_append_checkbox(table, PARAM_ADD_GRAPH);
+    dialog_tooltips_add(gwy_param_table_widget(table), series_tooltips,
+                        G_N_ELEMENTS(series_tooltips));
     gtk_box_pack_start(GTK_BOX(hbox), gwy_param_table_widget(table), FALSE,
                        FALSE, 0);
     gwy_dialog_add_param_table(dialog, table);

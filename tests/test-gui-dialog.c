@@ -24,6 +24,7 @@
 #include "paper-compensate.h"
 #include "test-common.h"
 #include "gui-widgets.h"
+#include "series-process.h"
 
 #define SCREENSHOT TEST_BUILDDIR "/tests/gui-dialog.png"
 #define SCREENSHOT_DE TEST_BUILDDIR "/tests/gui-dialog-de.png"
@@ -31,6 +32,7 @@
 #define SCREENSHOT_REFERENCE TEST_BUILDDIR "/tests/gui-reference.png"
 #define SCREENSHOT_LARGE TEST_BUILDDIR "/tests/gui-large-preview.png"
 #define SCREENSHOT_WAIT TEST_BUILDDIR "/tests/gui-cancel-wait.png"
+#define SCREENSHOT_SERIES TEST_BUILDDIR "/tests/gui-series-dialog.png"
 /* A large image: previewed on a reduced copy, made in the wait dialog. */
 #define LARGE_RES 2048
 #define TEST_LOCALEDIR TEST_BUILDDIR "/tests/locale"
@@ -202,19 +204,26 @@ probe_dialog(gpointer user_data)
     return FALSE;
 }
 
+/* Runs the dialog of the process function func on channel id. */
 static void
-run_dialog_on(GwyContainer *data, gint id, DialogProbe *probe)
+run_function_dialog_on(const gchar *func, GwyContainer *data, gint id, DialogProbe *probe)
 {
     guint timeout;
 
     gwy_app_data_browser_select_data_field(data, id);
     probe->texts = g_string_new(NULL);
     timeout = g_timeout_add(TICK_MS, probe_dialog, probe);
-    gwy_process_func_run(LOCALSCAN_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
+    gwy_process_func_run(func, data, GWY_RUN_INTERACTIVE);
     /* The timeout is gone once it answered; a dialog that never came or
      * never got ready leaves it behind. */
     if (!probe->dialog)
         g_source_remove(timeout);
+}
+
+static void
+run_dialog_on(GwyContainer *data, gint id, DialogProbe *probe)
+{
+    run_function_dialog_on(LOCALSCAN_FUNCTION_NAME, data, id, probe);
 }
 
 /* A probe that waits for ready_text, photographs the dialog to
@@ -595,6 +604,45 @@ START_TEST(test_cancel_large_image)
 }
 END_TEST
 
+/* The series dialog, too, says what each of its settings does (it had no
+ * tooltip at all); Cancel adds nothing. */
+START_TEST(test_series_dialog_tooltips)
+{
+    GwyContainer *data = gwy_container_new();
+    GString *missing = g_string_new(NULL);
+    DialogProbe probe;
+    GRand *rng = g_rand_new_with_seed(seed);
+    gchar title[32];
+    gint k;
+
+    init_application();
+    for (k = 0; k < 3; k++) {
+        GwyDataField *field = gwy_data_field_new(XRES, YRES, XRES*1e-9, YRES*1e-9, FALSE);
+
+        gwy_data_field_synth_gaussian_displacement(field, 3.0, 1.0, rng);
+        gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+        gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
+        g_snprintf(title, sizeof(title), "Height %d", k);
+        gwy_container_set_const_string(data, gwy_app_get_data_title_key_for_id(k),
+                                       (const guchar*)title);
+        g_object_unref(field);
+    }
+    g_rand_free(rng);
+    probe_init(&probe, "Interpolation", SCREENSHOT_SERIES, GTK_RESPONSE_CANCEL);
+    probe.missing_tooltips = missing;
+    gwy_app_data_browser_add(data);
+    run_function_dialog_on(LOCALSCAN_SERIES_FUNCTION_NAME, data, 0, &probe);
+    printf("test-gui-dialog: the series dialog shows:\n%s", probe.texts->str);
+    ck_assert_msg(probe.ready, "no series dialog; it shows:\n%s", probe.texts->str);
+    ck_assert_msg(!missing->len, "series settings without a tooltip: %s", missing->str);
+    ck_assert_int_eq(gui_count_channels(data), 3);
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+    g_string_free(missing, TRUE);
+    probe_clear(&probe);
+}
+END_TEST
+
 int
 main(void)
 {
@@ -614,5 +662,6 @@ main(void)
     tcase_add_test(tc, test_no_double_correction);
     tcase_add_test(tc, test_reference_chooser);
     tcase_add_test(tc, test_cancel_large_image);
+    tcase_add_test(tc, test_series_dialog_tooltips);
     return test_run_suite(suite);
 }
