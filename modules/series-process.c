@@ -126,33 +126,26 @@ static const DialogTooltip series_tooltips[] = {
          "fitted trajectory, to the file") },
 };
 
-/* A channel's title without its digits: "Height 3" and "Height 12" are
- * frames of one movie, "ZSensor" and "Phase" two channels of one scan. */
-static gchar*
-title_skeleton(GwyContainer *data, gint id)
-{
-    const gchar *title = localscan_channel_title(data, id);
-    GString *skeleton = g_string_new(NULL);
-
-    for (; title && *title; title++) {
-        if (!g_ascii_isdigit(*title))
-            g_string_append_c(skeleton, *title);
-    }
-    return g_string_free(skeleton, FALSE);
-}
-
+/* A drift correction's result: the series correction's marker (its value
+ * names the tool, so an instrument's own "Drift correction" item does not
+ * count) or the local-scan compensation's. */
 static gboolean
 is_corrected(GwyContainer *data, gint id)
 {
     GwyContainer *meta = localscan_channel_item(data, id, "meta");
+    const guchar *value = NULL;
 
-    return ((meta && gwy_container_contains_by_name(meta, SERIES_CORRECTED_META_KEY))
-            || compensation_marker_get(data, id) != NULL);
+    if (meta && gwy_container_gis_string_by_name(meta, SERIES_CORRECTED_META_KEY, &value)
+        && (g_str_has_prefix((const gchar*)value, SERIES_CORRECTED_BY_TOOL)
+            || g_str_has_prefix((const gchar*)value, SERIES_CORRECTED_BY_DIALOG)))
+        return TRUE;
+    return compensation_marker_get(data, id) != NULL;
 }
 
 /* The frames: the current channel and every other scanned like it (the
- * same pixels and area, a title that differs in its numbers only), in id
- * order.  Channels a drift correction made are no frames: run again, the
+ * same pixels and area, the same title but for a trailing number, as the
+ * command line's -c names frames: "Height", "Height 12"), in id order.
+ * Channels a drift correction made are no frames: run again, the
  * correction took its own results for seven more frames. */
 static GArray*
 frame_ids(GwyContainer *data, gint current)
@@ -160,7 +153,7 @@ frame_ids(GwyContainer *data, gint current)
     GwyDataField *field = localscan_channel_item(data, current, "data");
     GArray *ids = g_array_new(FALSE, FALSE, sizeof(gint));
     gint *all = localscan_channel_ids(data), i;
-    gchar *skeleton = title_skeleton(data, current), *other_skeleton;
+    gchar *base = frame_series_title_base(localscan_channel_title(data, current));
 
     for (i = 0; all[i] >= 0; i++) {
         GwyDataField *other = localscan_channel_item(data, all[i], "data");
@@ -172,12 +165,12 @@ frame_ids(GwyContainer *data, gint current)
                                                | GWY_DATA_COMPATIBILITY_VALUE)
             || is_corrected(data, all[i]))
             continue;
-        other_skeleton = title_skeleton(data, all[i]);
-        if (g_str_equal(skeleton, other_skeleton))
+        /* Untitled channels are alike to an untitled one. */
+        if (frame_series_title_matches(localscan_channel_title(data, all[i]), base)
+            || (!*base && !localscan_channel_title(data, all[i])))
             g_array_append_val(ids, all[i]);
-        g_free(other_skeleton);
     }
-    g_free(skeleton);
+    g_free(base);
     g_free(all);
     return ids;
 }
@@ -274,7 +267,7 @@ mark_corrected(GwyContainer *data, gint id)
         g_object_unref(meta);
     }
     gwy_container_set_const_string_by_name(meta, SERIES_CORRECTED_META_KEY,
-                                           (const guchar*)"Local Scan Series Drift, line by line");
+                                           (const guchar*)SERIES_CORRECTED_BY_DIALOG ", line by line");
 }
 
 /* A corrected frame as a new channel: titled after its source, with its
@@ -424,6 +417,18 @@ describe_effect(GString *text, const DriftFit *fit)
     }
 }
 
+static gboolean
+direction_from_setting(const FrameSeries *series)
+{
+    gint k;
+
+    for (k = 0; k < series->n_frames; k++) {
+        if (series->frames[k].direction_source == FRAME_TIME_OPTION)
+            return TRUE;
+    }
+    return FALSE;
+}
+
 /* The fit, the flagged frames and the warnings, in one text. */
 static gchar*
 describe_result(const SeriesArgs *args)
@@ -450,9 +455,12 @@ describe_result(const SeriesArgs *args)
         g_string_append_printf(text, _("\nTiming from the settings (the file's "
                                        "metadata: %s)."),
                                args->timing_reason ? args->timing_reason : _("none"));
+    else if (direction_from_setting(args->series))
+        g_string_append(text, _("\nTiming from the file's metadata, the slow-scan "
+                                "direction from the setting (the file does not say)."));
     else
         g_string_append(text, _("\nTiming from the file's metadata (the "
-                                "settings below are not used)."));
+                                "settings are not used)."));
     for (i = 0; i < c->warnings->len; i++)
         g_string_append_printf(text, "\n%s",
                                (const gchar*)g_ptr_array_index(c->warnings, i));
@@ -510,10 +518,11 @@ preview(gpointer user_data)
 static void
 param_changed(SeriesGUI *gui, gint id)
 {
-    /* Only the fallback timing changes what is measured. */
+    /* Only the fallback timing changes what is measured; the direction
+     * also stands in where the file gives the rest of the timing. */
     if (id < 0 || id == PARAM_LINE_TIME || id == PARAM_FRAME_INTERVAL
         || id == PARAM_DIRECTION) {
-        if (gui->args->timing_assumed || id < 0)
+        if (gui->args->timing_assumed || id < 0 || id == PARAM_DIRECTION)
             series_args_reset(gui->args);
         gwy_dialog_invalidate(GWY_DIALOG(gui->dialog));
     }

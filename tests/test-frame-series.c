@@ -63,6 +63,31 @@ START_TEST(test_nanoscope_timing)
 }
 END_TEST
 
+/* The frames of one movie share a title but for a trailing number. */
+START_TEST(test_title_base)
+{
+    static const gchar *const cases[][2] = {
+        { "Height 12", "Height" }, { "HS-AFM sample_0 frame 3", "HS-AFM sample_0 frame" },
+        { "Height", "Height" }, { "ZSensor2", "ZSensor2" }, { "12", "12" }, { "Height ", "Height " },
+    };
+    gchar *base;
+    guint i;
+
+    for (i = 0; i < G_N_ELEMENTS(cases); i++) {
+        base = frame_series_title_base(cases[i][0]);
+        ck_assert_str_eq(base, cases[i][1]);
+        ck_assert(frame_series_title_matches(cases[i][0], base));
+        g_free(base);
+    }
+    base = frame_series_title_base(NULL);
+    ck_assert_str_eq(base, "");
+    g_free(base);
+    ck_assert(frame_series_title_matches("Height 7", "Height"));
+    ck_assert(!frame_series_title_matches("Phase 7", "Height"));
+    ck_assert(!frame_series_title_matches("Height (drift corrected)", "Height"));
+}
+END_TEST
+
 START_TEST(test_hsafm_channels_as_frames)
 {
     gchar *file = data_path("hsafm-minicircles/hsafm_sample0_frames50-140.gwy");
@@ -296,6 +321,7 @@ main(void)
         tc = tcase_create("measured");
         tcase_add_test(tc, test_nanoscope_timing);
         tcase_add_test(tc, test_hsafm_channels_as_frames);
+    tcase_add_test(tc, test_title_base);
         tcase_add_test(tc, test_anasys_duplicates_dropped);
         tcase_add_test(tc, test_options_override_and_refusals);
         suite_add_tcase(s, tc);

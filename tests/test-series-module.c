@@ -147,7 +147,7 @@ START_TEST(test_series_frames_chosen)
 {
     DriftModel model;
     FrameSeries *series;
-    GwyContainer *data;
+    GwyContainer *data, *meta;
     GwyDataField *other;
     gint n_before, n_first;
     gchar key[40];
@@ -162,6 +162,11 @@ START_TEST(test_series_frames_chosen)
     gwy_container_set_object_by_name(data, key, other);
     g_snprintf(key, sizeof(key), "/%d/data/title", SERIES_CASE_FRAMES);
     gwy_container_set_const_string_by_name(data, key, (const guchar*)"Phase");
+    /* An instrument's own item of that name is no correction's marker. */
+    meta = gwy_container_new();
+    gwy_container_set_const_string_by_name(meta, "Drift correction", (const guchar*)"closed loop");
+    gwy_container_set_object_by_name(data, "/1/meta", meta);
+    g_object_unref(meta);
     n_before = count_channels(data);
     gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_IMMEDIATE);
     error = localscan_run_error_take(data);

@@ -318,7 +318,7 @@ corrected_meta(GwyContainer *source, gint source_id, const SeriesRun *run,
 
     meta = meta ? gwy_container_duplicate(meta) : gwy_container_new();
     gwy_container_set_const_string_by_name(meta, SERIES_CORRECTED_META_KEY,
-                                           (const guchar*)"gwy-localscan series, line by line");
+                                           (const guchar*)SERIES_CORRECTED_BY_TOOL ", line by line");
     gwy_container_set_const_string_by_name(meta, "Drift model",
                                            (const guchar*)drift_model_type_name(fit->type));
     g_snprintf(text, sizeof(text), "%.6g s",

@@ -119,8 +119,23 @@ read_meta_timing(GwyContainer *meta, gint yres, MetaTiming *mt)
     mt->start_is_end = (found & SCAN_META_FRAME_START) && timing.start_is_end;
 }
 
-static gboolean
-title_matches(const gchar *title, const gchar *wanted)
+gchar*
+frame_series_title_base(const gchar *title)
+{
+    const gchar *end;
+
+    if (!title)
+        return g_strdup("");
+    end = title + strlen(title);
+    while (end > title && g_ascii_isdigit(end[-1]))
+        end--;
+    if (end > title + 1 && end < title + strlen(title) && end[-1] == ' ')
+        return g_strndup(title, end - 1 - title);
+    return g_strdup(title);
+}
+
+gboolean
+frame_series_title_matches(const gchar *title, const gchar *wanted)
 {
     gsize len = strlen(wanted);
     const gchar *p;
@@ -217,7 +232,7 @@ first_channel_id(GwyContainer *data, const gchar *wanted)
 
     for (i = 0; ids[i] >= 0; i++) {
         if ((!wanted
-             || title_matches(localscan_channel_title(data, ids[i]), wanted))
+             || frame_series_title_matches(localscan_channel_title(data, ids[i]), wanted))
             && (found < 0 || ids[i] < found))
             found = ids[i];
     }
@@ -285,7 +300,7 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
         if (options->last_id >= 0 && ids[i] > options->last_id)
             continue;
         if (options->channel
-            && !title_matches(localscan_channel_title(data, ids[i]),
+            && !frame_series_title_matches(localscan_channel_title(data, ids[i]),
                               options->channel))
             continue;
         matched++;

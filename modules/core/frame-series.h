@@ -106,6 +106,15 @@ void          frame_series_free         (FrameSeries *series);
 gdouble       frame_series_dx           (const FrameSeries *series);
 gdouble       frame_series_dy           (const FrameSeries *series);
 
+/* Whether a channel's title is wanted, or wanted followed by a space and
+ * digits ("Height" and "Height 12"): how a channel names the frames of a
+ * series. */
+gboolean      frame_series_title_matches (const gchar *title,
+                                          const gchar *wanted);
+/* The title without a trailing space and digits ("Height 12": "Height";
+ * NULL: ""), newly allocated. */
+gchar*        frame_series_title_base    (const gchar *title);
+
 G_END_DECLS
 
 #endif

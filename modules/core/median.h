@@ -18,7 +18,8 @@ G_BEGIN_DECLS
 gdouble      median_in_place      (gdouble *values,
                                    gint n);
 
-/* The k-th smallest (from 0) of n values, which it reorders. */
+/* The k-th smallest (from 0) of n values (no NaN among them), which it
+ * reorders. */
 gdouble      median_kth_in_place  (gdouble *values,
                                    gint n,
                                    gint k);

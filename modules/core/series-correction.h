@@ -25,6 +25,9 @@ G_BEGIN_DECLS
  * correction (its value says how): such a channel is no frame of a
  * series to be corrected again. */
 #define SERIES_CORRECTED_META_KEY "Drift correction"
+/* How its value begins, by the tool that made the channel. */
+#define SERIES_CORRECTED_BY_TOOL "gwy-localscan series"
+#define SERIES_CORRECTED_BY_DIALOG "Local Scan Series Drift"
 
 #define SERIES_CORRECTION_ERROR series_correction_error_quark()
 
