@@ -370,25 +370,6 @@ check_outputs_distinct(GError **error)
     return ok;
 }
 
-/* A file name given empty ("-o ''") is a slip of the command line, said
- * as such rather than as a file that cannot be opened. */
-static gboolean
-check_names_given(GError **error)
-{
-    const gchar *names[] = { options.output, options.table_file, options.write_drift, options.inputs[0] };
-    const gchar *what[] = { "-o", "-d", "--write-drift", "INPUT" };
-    guint i;
-
-    for (i = 0; i < G_N_ELEMENTS(names); i++) {
-        if (names[i] && !*names[i]) {
-            g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
-                        _("%s: the file name is empty"), what[i]);
-            return FALSE;
-        }
-    }
-    return TRUE;
-}
-
 static gboolean
 parse_timing_options(GError **error)
 {
@@ -435,7 +416,10 @@ check_command_line(GError **error)
                     : _("no INPUT file given"), ninputs);
         return NULL;
     }
-    if (!check_names_given(error))
+    if (!output_files_check_names_given((const gchar *const[]){ "-o", "-d", "--write-drift", "INPUT" },
+                                        (const gchar *const[]){ options.output, options.table_file,
+                                                                options.write_drift, options.inputs[0] },
+                                        4, error))
         return NULL;
     if (options.reference && options.table_file) {
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,

@@ -200,12 +200,11 @@ check_args(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
 
     if (!args->output)
         return refuse_usage(error, _("-o OUT.gwy is required"));
-    if (!*args->output)
-        return refuse_usage(error, _("-o: the file name is empty"));
-    if (args->trajectory && !*args->trajectory)
-        return refuse_usage(error, _("--trajectory: the file name is empty"));
-    if (args->json && !*args->json)
-        return refuse_usage(error, _("--json: the file name is empty"));
+    if (!output_files_check_names_given((const gchar *const[]){ "-o", "--trajectory", "--json" },
+                                        (const gchar *const[]){ args->output, args->trajectory,
+                                                                args->json },
+                                        3, error))
+        return FALSE;
     if (!n_files)
         return refuse_usage(error, _("no frames given (several files, or "
                                      "one file with a channel per frame)"));

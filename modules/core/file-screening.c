@@ -298,8 +298,8 @@ has_magic(const guchar *bytes, gsize length, const gchar *magic)
 /* The message below names the limit. */
 G_STATIC_ASSERT(FILE_SCREENING_MAX_BYTES == ((gint64)4 << 30));
 
-static const gchar*
-gzip_problem(const guchar *bytes, gsize length)
+static gboolean
+check_gzip(const gchar *name, const guchar *bytes, gsize length, GError **error)
 {
     GConverter *inflater = G_CONVERTER(g_zlib_decompressor_new(G_ZLIB_COMPRESSOR_FORMAT_GZIP));
     GConverterResult result;
@@ -307,14 +307,17 @@ gzip_problem(const guchar *bytes, gsize length)
     gsize pos = 0, nread, nwritten;
     guint64 total = 0;
     const gchar *problem = NULL;
+    gint code = FILE_SCREENING_ERROR_CORRUPT;
 
     while (!problem) {
         result = g_converter_convert(inflater, bytes + pos, length - pos, out, 1 << 16,
                                      G_CONVERTER_INPUT_AT_END, &nread, &nwritten, NULL);
         pos += nread;
         total += nwritten;
-        if (total > (guint64)FILE_SCREENING_MAX_BYTES)
+        if (total > (guint64)FILE_SCREENING_MAX_BYTES) {
             problem = N_("larger than 4 GiB once decompressed: refused");
+            code = FILE_SCREENING_ERROR_SIZE;
+        }
         else if (result == G_CONVERTER_ERROR || (result == G_CONVERTER_CONVERTED && !nread && !nwritten))
             problem = N_("truncated or corrupt: its compressed data do not decompress to their end");
         else if (result == G_CONVERTER_FINISHED) {
@@ -329,18 +332,7 @@ gzip_problem(const guchar *bytes, gsize length)
     }
     g_free(out);
     g_object_unref(inflater);
-    return problem;
-}
-
-static gboolean
-check_gzip(const gchar *name, const guchar *bytes, gsize length, GError **error)
-{
-    const gchar *problem = gzip_problem(bytes, length);
-
-    if (!problem)
-        return TRUE;
-    return screening_error(error, g_str_has_prefix(problem, "larger")
-                           ? FILE_SCREENING_ERROR_SIZE : FILE_SCREENING_ERROR_CORRUPT, name, _(problem));
+    return !problem || screening_error(error, code, name, _(problem));
 }
 
 gboolean

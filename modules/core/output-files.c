@@ -76,6 +76,22 @@ output_files_same(const gchar *a, const gchar *b)
 }
 
 gboolean
+output_files_check_names_given(const gchar *const *what, const gchar *const *names, guint n,
+                               GError **error)
+{
+    guint i;
+
+    for (i = 0; i < n; i++) {
+        if (names[i] && !*names[i]) {
+            g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_INVAL,
+                        _("%s: the file name is empty"), what[i]);
+            return FALSE;
+        }
+    }
+    return TRUE;
+}
+
+gboolean
 output_files_check_kind(const gchar *filename, GError **error)
 {
     GStatBuf st;

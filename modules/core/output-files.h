@@ -28,6 +28,14 @@ typedef struct {
 gboolean      output_files_same         (const gchar *a,
                                          const gchar *b);
 
+/* Refuses, naming what[i], a file name names[i] given empty ("-o ''"): a
+ * slip of the command line, not a file that cannot be opened.  NULL
+ * names were not given. */
+gboolean      output_files_check_names_given (const gchar *const *what,
+                                              const gchar *const *names,
+                                              guint n,
+                                              GError **error);
+
 /* An output that exists must be a regular file: a folder, a device or a
  * fifo would be renamed over.  For checking a command line before the
  * work (output_files_add() refuses the same, after it). */
