@@ -151,6 +151,81 @@ START_TEST(test_edge_line_needs_its_neighbours)
 }
 END_TEST
 
+/* A line seen under one drift only: cost under it (NAN under the
+ * other), its control and its texture. */
+static void
+one_sided(LineEvidence *ev, gboolean seen_after, gdouble cost,
+          gdouble control, gdouble texture)
+{
+    ev->two_sided = FALSE;
+    ev->before = seen_after ? NAN : cost;
+    ev->after = seen_after ? cost : NAN;
+    ev->control = control;
+    ev->texture = texture;
+}
+
+/* The last lines of a frame whose content the step takes out of every
+ * later frame but one, as before a flagged frame: textured lines seen
+ * under both drifts before the jump, then lines seen after it only:
+ * featureless ones (no evidence), one that cuts particles but costs
+ * between a match and a mismatch of its scale (0.1 to 0.2: it tells
+ * nothing by itself), more featureless ones and the frame's last line, a
+ * clear match after the jump.  The votes tie from the first featureless
+ * line to the last line; the in-between line leans to its side and must
+ * narrow the tie: seen after the jump, the split goes no later than it;
+ * seen before it (its content under the drift without the step), no
+ * earlier than the line after it.  The tie ran to the frame's end and
+ * the blocks' guess put a jump 2 lines late, 5.6 px on a textured line
+ * (test-series-correction seed 560100016). */
+START_TEST(test_tie_narrowed_by_leaning_line)
+{
+    GRand *rng = test_rand_salted(base_seed, 3);
+    LineEvidence ev[40];
+    gint frame[40] = { 0 }, d, i, n_before, n_flat, n_flat2, mid, n;
+    gint first, last;
+    gdouble noise, m, control, q;
+    gboolean mid_after;
+
+    for (d = 0; d < N_DRAWS; d++) {
+        n_before = g_rand_int_range(rng, 8, 21);
+        n_flat = g_rand_int_range(rng, 0, 4);
+        n_flat2 = g_rand_int_range(rng, 0, 4);
+        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
+        m = noise*g_rand_double_range(rng, 10.0, 40.0);
+        textured_run(ev, rng, m, 0, n_before, n_before, FALSE);
+        for (i = n_before; i < n_before + n_flat; i++)
+            one_sided(ev + i, TRUE, noise, 2.0*noise, noise);
+        mid = n_before + n_flat;
+        mid_after = g_rand_boolean(rng);
+        control = m*g_rand_double_range(rng, 15.0, 40.0);
+        q = g_rand_double_range(rng, 0.11, 0.19);
+        /* The match level is the median over the textured lines' right
+         * costs, m times 0.5 to 2: q on the scale from m. */
+        one_sided(ev + mid, mid_after, m + q*(control - m), control,
+                  control*g_rand_double_range(rng, 0.6, 1.0));
+        for (i = mid + 1; i < mid + 1 + n_flat2; i++)
+            one_sided(ev + i, TRUE, noise, 2.0*noise, noise);
+        n = mid + 1 + n_flat2;
+        one_sided(ev + n, TRUE, m, control, control);
+        n++;
+        ck_assert_msg(jump_votes_split(ev, frame, n, &first, &last),
+                      "seed %u draw %d: no split", base_seed, d);
+        ck_assert_msg(first >= n_before && last <= n - 1,
+                      "seed %u draw %d: split %d..%d outside the tie %d..%d",
+                      base_seed, d, first, last, n_before, n - 1);
+        if (mid_after)
+            ck_assert_msg(last <= mid,
+                          "seed %u draw %d: split %d..%d, line %d leaning "
+                          "after the jump", base_seed, d, first, last, mid);
+        else
+            ck_assert_msg(first >= mid + 1,
+                          "seed %u draw %d: split %d..%d, line %d leaning "
+                          "before the jump", base_seed, d, first, last, mid);
+    }
+    g_rand_free(rng);
+}
+END_TEST
+
 /* Lines all on one side, or fewer than two, place no jump. */
 START_TEST(test_no_jump_without_both_sides)
 {
@@ -176,6 +251,7 @@ main(void)
     base_seed = test_seed_from_env("test-jump-votes");
     tcase_add_test(tc, test_clear_jump_to_the_line);
     tcase_add_test(tc, test_edge_line_needs_its_neighbours);
+    tcase_add_test(tc, test_tie_narrowed_by_leaning_line);
     tcase_add_test(tc, test_no_jump_without_both_sides);
     return test_run_suite(s);
 }
