@@ -27,7 +27,9 @@ typedef struct {
 /* What the correction achieved against the truth. */
 typedef struct {
     gdouble trajectory_rms_px;   /* over every scan line of every frame,
-                                    lines within 3 of a jump left out */
+                                    lines within 3 of a jump left out,
+                                    and featureless lines in the
+                                    correction's jump window */
     gdouble trajectory_worst_px;
     gdouble trajectory_relative_px; /* the same RMS without the mean error:
                                        how well the frames overlay, whatever
@@ -63,6 +65,11 @@ gboolean      series_case_judge   (const FrameSeries *series,
                                    const DriftModel *model,
                                    const SeriesCaseOptions *options,
                                    SeriesCaseResult *result);
+
+/* The mean square of line r of field after its best quadratic along the
+ * line: about 1e-19 m^2 on a featureless line (noise of 0.2 nm), 2e-17 to
+ * 1e-16 m^2 where it cuts particles. */
+gdouble       series_case_line_texture(GwyDataField *field, gint r);
 
 G_END_DECLS
 

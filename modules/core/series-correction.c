@@ -1100,13 +1100,47 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
             n++;
         }
     }
-    if (jump_votes_split(evidence, frame, n, &first, &last))
+    correction->jump_tied_lines = 0;
+    if (jump_votes_split(evidence, frame, n, &first, &last)) {
         fit->nonlinear = jump_within_ties(fit->nonlinear, when, ends, n,
                                           first, last, t_lo, t_hi);
+        correction->jump_tied_lines = last - first;
+        correction->jump_window[0] = (first > 0) ? ends[first-1] : t_lo;
+        correction->jump_window[1] = (last < n) ? when[last] : t_hi;
+    }
     g_free(evidence);
     g_free(frame);
     g_free(line);
     g_free(when);
+}
+
+/* A jump whose lines tie over this many lines or more is reported: the
+ * trajectory on them is a guess (a single line between two runs is the
+ * jump's own). */
+#define JUMP_TIED_WARN_LINES 2
+
+/* The lines that tie around the chosen jump (featureless, or seen by no
+ * other frame) are corrected by the blocks' guess: the data cannot tell
+ * where in them the jump lies, and the user is told which times those
+ * are (a jump in the last featureless lines of a frame before a flagged
+ * one, seed 480000936 of test-series-correction: their drift is 5.9 px
+ * either way, and no particle on them shows it). */
+static void
+warn_about_jump(SeriesCorrection *correction)
+{
+    const DriftFit *chosen = correction->fit.fits + correction->fit.chosen;
+
+    if (correction->use_smooth || chosen->type != DRIFT_MODEL_JUMP
+        || correction->jump_tied_lines < JUMP_TIED_WARN_LINES)
+        return;
+    add_warning(correction,
+                g_strdup_printf(_("the jump at %.1f s may lie anywhere from "
+                                  "%.1f s to %.1f s: %d scan lines there "
+                                  "show nothing that places them before "
+                                  "or after it"),
+                                chosen->nonlinear, correction->jump_window[0],
+                                correction->jump_window[1],
+                                correction->jump_tied_lines));
 }
 
 /* Blocks straddling the jump pull the fitted time and with it the step and
@@ -1303,6 +1337,7 @@ series_correction_compute(const FrameSeries *series,
             judge_frames(correction, registered);
         }
         warn_about_fit(correction, registered);
+        warn_about_jump(correction);
     }
     else
         g_set_error(error, SERIES_CORRECTION_ERROR,

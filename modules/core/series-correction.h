@@ -62,6 +62,11 @@ typedef struct {
     gboolean use_smooth;    /* it predicts held-out blocks better than the
                                chosen model by the fit's cv_gain: the
                                trajectory is it */
+    gint jump_tied_lines;   /* scan lines of frames not flagged that nothing
+                               places on either side of the chosen jump
+                               (docs/series.md, step 5); 0 when none */
+    gdouble jump_window[2]; /* the times (s) between which the jump may lie
+                               as far as those lines tell */
 } SeriesCorrection;
 
 /* Pairs of frames registered in a long series: each frame against this
