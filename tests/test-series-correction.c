@@ -125,30 +125,66 @@ END_TEST
  * did not, and seed 370001600 drew a sample whose only evidence it was. */
 #define JUDGED_LINE_TEXTURE 5e-17
 
+typedef gboolean (*LinesWanted)(const gdouble *texture,
+                                const ScanTiming *timing,
+                                const DriftModel *model);
+
+/* Whether frame 0 of case i scanned under model has the lines wanted,
+ * judged by their textures (series_case_line_texture). */
+static gboolean
+first_frame_lines(guint32 seed, gint i, const DriftModel *model,
+                  const SeriesCaseOptions *options, LinesWanted wanted)
+{
+    FrameSeries *series = series_case_scan(seed, i, model, options, NULL);
+    const ScanTiming *timing;
+    gdouble *texture;
+    gboolean found;
+    gint r;
+
+    ck_assert(series != NULL);
+    timing = &series->frames[0].timing;
+    texture = g_new(gdouble, timing->yres);
+    for (r = 0; r < timing->yres; r++)
+        texture[r] = series_case_line_texture(series->frames[0].field, r);
+    found = wanted(texture, timing, model);
+    g_free(texture);
+    frame_series_free(series);
+    return found;
+}
+
 /* Whether the first line of frame 0 that the judge counts after the jump
  * (3 lines past it and more) shows particles and is not the frame's last
  * line: a featureless line matches either drift, and the last line's
  * content lies past the last line of every later frame, so nothing in the
  * data says on which side of the jump they lie. */
 static gboolean
-judged_line_has_evidence(guint32 seed, gint i, const DriftModel *model,
-                         const SeriesCaseOptions *options)
+judged_line_has_evidence(const gdouble *texture, const ScanTiming *timing,
+                         const DriftModel *model)
 {
-    FrameSeries *series = series_case_scan(seed, i, model, options, NULL);
-    const SeriesFrame *f0;
-    gboolean found = FALSE;
     gint r;
 
-    ck_assert(series != NULL);
-    f0 = series->frames;
-    for (r = 0; r < f0->timing.yres; r++) {
-        if (scan_timing_rows_time(&f0->timing, r, r+1) >= model->t_jump + 1.5) {
-            found = (r < f0->timing.yres - 1 && series_case_line_texture(f0->field, r) > JUDGED_LINE_TEXTURE);
-            break;
-        }
+    for (r = 0; r < timing->yres; r++) {
+        if (scan_timing_rows_time(timing, r, r+1) >= model->t_jump + 1.5)
+            return r < timing->yres - 1 && texture[r] > JUDGED_LINE_TEXTURE;
     }
-    frame_series_free(series);
-    return found;
+    return FALSE;
+}
+
+/* A jump lines_lo to lines_hi lines before the end of frame 0 (128
+ * lines of 0.5 s), a step of 3.5-6 px down and up to 1 px across, on a
+ * slow drift. */
+static void
+draw_end_jump(GRand *rng, gdouble lines_lo, gdouble lines_hi,
+              DriftModel *model)
+{
+    gdouble px = 1e-6/128.0;
+
+    drift_model_init(model, DRIFT_MODEL_JUMP);
+    model->v[0] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
+    model->v[1] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
+    model->t_jump = 64.0 - 0.5*g_rand_double_range(rng, lines_lo, lines_hi);
+    model->step[0] = px*g_rand_double_range(rng, -1.0, 1.0);
+    model->step[1] = px*g_rand_double_range(rng, 3.5, 6.0);
 }
 
 /* A jump in the last lines of the first frame, whose next frame slipped
@@ -167,17 +203,12 @@ START_TEST(test_jump_before_slipped_frame)
     GRand *rng = test_rand_salted(base_seed, 4000 + _i);
     SeriesCaseOptions options = { FALSE, 1 };
     DriftModel model;
-    gdouble px = 1e-6/128.0;
     gint attempt, i = 300 + 20*_i;
 
-    drift_model_init(&model, DRIFT_MODEL_JUMP);
     for (attempt = 0; attempt < 20; attempt++, i++) {
-        model.v[0] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
-        model.v[1] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
-        model.t_jump = 64.0 - 0.5*g_rand_double_range(rng, 4.5, 6.5);
-        model.step[0] = px*g_rand_double_range(rng, -1.0, 1.0);
-        model.step[1] = px*g_rand_double_range(rng, 3.5, 6.0);
-        if (judged_line_has_evidence(base_seed, i, &model, &options))
+        draw_end_jump(rng, 4.5, 6.5, &model);
+        if (first_frame_lines(base_seed, i, &model, &options,
+                              judged_line_has_evidence))
             break;
     }
     ck_assert_msg(attempt < 20, "seed %u: no sample shows particles after the jump", base_seed);
@@ -190,22 +221,17 @@ END_TEST
 /* Whether every line of frame 0 from the jump's to the last shows
  * nothing (series_case_line_texture below 1e-18 m^2). */
 static gboolean
-featureless_after_jump(guint32 seed, gint i, const DriftModel *model,
-                       const SeriesCaseOptions *options)
+featureless_after_jump(const gdouble *texture, const ScanTiming *timing,
+                       const DriftModel *model)
 {
-    FrameSeries *series = series_case_scan(seed, i, model, options, NULL);
-    const SeriesFrame *f0;
-    gboolean featureless = TRUE;
     gint r;
 
-    ck_assert(series != NULL);
-    f0 = series->frames;
-    for (r = 0; r < f0->timing.yres; r++) {
-        if (scan_timing_row_start(&f0->timing, r) + f0->timing.line_time > model->t_jump)
-            featureless &= (series_case_line_texture(f0->field, r) < 1e-18);
+    for (r = 0; r < timing->yres; r++) {
+        if (scan_timing_row_start(timing, r) + timing->line_time > model->t_jump
+            && !(texture[r] < 1e-18))
+            return FALSE;
     }
-    frame_series_free(series);
-    return featureless;
+    return TRUE;
 }
 
 /* The same jump in frame 0's last 2-5 lines before a slipped frame, but
@@ -222,19 +248,14 @@ START_TEST(test_jump_in_featureless_lines)
     DriftModel model;
     SeriesCorrection correction;
     FrameSeries *series;
-    gdouble px = 1e-6/128.0;
     gint attempt, i = 600 + 200*_i;
     gboolean warned = FALSE;
     guint w;
 
-    drift_model_init(&model, DRIFT_MODEL_JUMP);
     for (attempt = 0; attempt < 200; attempt++, i++) {
-        model.v[0] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
-        model.v[1] = g_rand_double_range(rng, -0.05e-9, 0.05e-9);
-        model.t_jump = 64.0 - 0.5*g_rand_double_range(rng, 2.0, 5.0);
-        model.step[0] = px*g_rand_double_range(rng, -1.0, 1.0);
-        model.step[1] = px*g_rand_double_range(rng, 3.5, 6.0);
-        if (featureless_after_jump(base_seed, i, &model, &options))
+        draw_end_jump(rng, 2.0, 5.0, &model);
+        if (first_frame_lines(base_seed, i, &model, &options,
+                              featureless_after_jump))
             break;
     }
     ck_assert_msg(attempt < 200, "seed %u: no sample is featureless after the jump", base_seed);
