@@ -36,6 +36,7 @@ enum {
     PARAM_INTERPOLATION,
     PARAM_CROP,
     PARAM_ADD_GRAPH,
+    INFO_TIMING_USE,
 };
 
 typedef struct {
@@ -56,6 +57,14 @@ typedef struct {
     GwyGraphModel *gmodel;
     GtkWidget *summary;
 } SeriesGUI;
+
+/* Which of the timing settings the frames need. */
+typedef enum {
+    TIMING_USE_UNKNOWN,     /* the frames could not be read */
+    TIMING_USE_NONE,        /* the file gives it all */
+    TIMING_USE_DIRECTION,   /* the file lacks the slow-scan direction */
+    TIMING_USE_ALL,         /* the file lacks the timing */
+} TimingUse;
 
 static void
 series_args_reset(SeriesArgs *args)
@@ -202,6 +211,7 @@ load_series(SeriesArgs *args, GError **error)
     frame_series_options_init(&options);
     options.channel_ids = (gint*)ids->data;
     options.n_channel_ids = ids->len;
+    options.hints_for_dialog = TRUE;
     /* Where the metadata gives the timing but not the direction. */
     options.fallback_direction = gwy_params_get_enum(args->params, PARAM_DIRECTION);
     args->timing_assumed = FALSE;
@@ -515,6 +525,53 @@ preview(gpointer user_data)
     gwy_app_wait_cursor_finish(GTK_WINDOW(gui->dialog));
 }
 
+/* What the file's metadata leaves to the settings: the frames read (not
+ * measured) as the measurement will read them. */
+static TimingUse
+timing_use(SeriesArgs *args)
+{
+    FrameSeries *series = load_series(args, NULL);
+    TimingUse use = TIMING_USE_UNKNOWN;
+
+    if (series) {
+        if (args->timing_assumed)
+            use = TIMING_USE_ALL;
+        else
+            use = direction_from_setting(series) ? TIMING_USE_DIRECTION : TIMING_USE_NONE;
+    }
+    frame_series_free(series);
+    return use;
+}
+
+/* The timing settings greyed where the file gives what they stand in for,
+ * and a line that says which are used. */
+static void
+show_timing_use(SeriesGUI *gui)
+{
+    GwyParamTable *table = gui->table;
+    TimingUse use = timing_use(gui->args);
+    gchar *text = NULL;
+
+    gwy_param_table_set_sensitive(table, PARAM_LINE_TIME, use != TIMING_USE_NONE
+                                  && use != TIMING_USE_DIRECTION);
+    gwy_param_table_set_sensitive(table, PARAM_FRAME_INTERVAL, use != TIMING_USE_NONE
+                                  && use != TIMING_USE_DIRECTION);
+    gwy_param_table_set_sensitive(table, PARAM_DIRECTION, use != TIMING_USE_NONE);
+    if (use == TIMING_USE_NONE)
+        text = g_strdup(_("The file gives the timing: these settings are not used."));
+    else if (use == TIMING_USE_DIRECTION)
+        text = g_strdup(_("The file gives the timing but not the slow-scan "
+                          "direction: only the direction is used."));
+    else if (use == TIMING_USE_ALL)
+        text = g_strdup_printf(_("The file lacks the timing (%s): these settings "
+                                 "are used."), gui->args->timing_reason);
+    else
+        text = g_strdup(_("Used only if the file lacks them."));
+    gwy_param_table_set_label(table, INFO_TIMING_USE, text);
+    g_free(text);
+    series_args_reset(gui->args);
+}
+
 static void
 param_changed(SeriesGUI *gui, gint id)
 {
@@ -585,8 +642,7 @@ run_gui(SeriesArgs *args)
     gwy_param_table_set_unitstr(table, PARAM_FRAME_INTERVAL, "s");
     gwy_param_table_append_combo(table, PARAM_DIRECTION);
     /* The fields look as if they mattered: say when they do. */
-    gwy_param_table_append_message(table, -1,
-                                   _("Used only if the file lacks them."));
+    gwy_param_table_append_message(table, INFO_TIMING_USE, NULL);
     gwy_param_table_append_header(table, -1, _("Output"));
     gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
     gwy_param_table_append_checkbox(table, PARAM_CROP);
@@ -596,6 +652,7 @@ run_gui(SeriesArgs *args)
     gtk_box_pack_start(GTK_BOX(hbox), gwy_param_table_widget(table), FALSE,
                        FALSE, 0);
     gwy_dialog_add_param_table(dialog, table);
+    show_timing_use(&gui);
 
     g_signal_connect_swapped(table, "param-changed", G_CALLBACK(param_changed),
                              &gui);

@@ -194,6 +194,44 @@ START_TEST(test_options_override_and_refusals)
 }
 END_TEST
 
+/* A file whose frames carry no timing: the refusal tells the user what to
+ * do in the words of the front end that asked (the dialog has no
+ * --line-time). */
+START_TEST(test_timing_hints_name_the_front_end)
+{
+    GwyContainer *data = gwy_container_new();
+    gchar *name = g_strdup("frames.gwy");
+    FrameSeriesOptions options;
+    FrameSeries *series;
+    GError *error = NULL;
+    gint k;
+
+    for (k = 0; k < 2; k++) {
+        GwyDataField *field = gwy_data_field_new(16, 16, 16e-9, 16e-9, TRUE);
+
+        /* Frames alike but not identical (identical ones are dropped). */
+        gwy_data_field_set_val(field, 3, 5, k*1e-9);
+        gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
+        g_object_unref(field);
+    }
+    frame_series_options_init(&options);
+    series = frame_series_from_files(&data, &name, 1, &options, &error);
+    ck_assert(series == NULL);
+    ck_assert_int_eq(error->code, FRAME_SERIES_ERROR_TIMING);
+    ck_assert_msg(g_str_has_suffix(error->message, "the line time is not in the metadata; give --line-time"),
+                  "%s", error->message);
+    g_clear_error(&error);
+    options.hints_for_dialog = TRUE;
+    series = frame_series_from_files(&data, &name, 1, &options, &error);
+    ck_assert(series == NULL);
+    ck_assert_msg(g_str_has_suffix(error->message, "the line time is not in the metadata; set the line time"),
+                  "%s", error->message);
+    g_clear_error(&error);
+    g_object_unref(data);
+    g_free(name);
+}
+END_TEST
+
 /************************************************************************
  * simscan's own files: timing from simscan's metadata keys
  ************************************************************************/
@@ -317,11 +355,12 @@ main(void)
     gwy_app_init_nongui("enable-threads", FALSE, NULL);
     tcase_set_timeout(tc_simscan, 120);
     tcase_add_test(tc_simscan, test_simscan_fit_reads_simscan_timing);
+    tcase_add_test(tc_simscan, test_title_base);
+    tcase_add_test(tc_simscan, test_timing_hints_name_the_front_end);
     if (probe) {
         tc = tcase_create("measured");
         tcase_add_test(tc, test_nanoscope_timing);
         tcase_add_test(tc, test_hsafm_channels_as_frames);
-    tcase_add_test(tc, test_title_base);
         tcase_add_test(tc, test_anasys_duplicates_dropped);
         tcase_add_test(tc, test_options_override_and_refusals);
         suite_add_tcase(s, tc);

@@ -61,6 +61,7 @@ typedef struct {
     GtkTreeModel *reference_model;
     gchar *reference_active;     /* its preselected label */
     GString *missing_tooltips;   /* when set: settings without a tooltip */
+    gint sensitive_entries;      /* text entries the user can type into */
 } DialogProbe;
 
 /************************************************************************
@@ -174,6 +175,25 @@ inspect_reference(GtkWidget *dialog, DialogProbe *probe)
 
 static void collect_missing_tooltips(GtkWidget *widget, GString *missing);
 
+static gint
+count_sensitive_entries(GtkWidget *widget)
+{
+    GList *children, *l;
+    gint n = 0;
+
+    if (!gtk_widget_get_visible(widget))
+        return 0;
+    if (GTK_IS_ENTRY(widget))
+        return gtk_widget_is_sensitive(widget);
+    if (!GTK_IS_CONTAINER(widget))
+        return 0;
+    children = gtk_container_get_children(GTK_CONTAINER(widget));
+    for (l = children; l; l = g_list_next(l))
+        n += count_sensitive_entries(GTK_WIDGET(l->data));
+    g_list_free(children);
+    return n;
+}
+
 /* Waits until the preview has computed (its status line is up), then
  * records what the dialog shows, photographs it and answers. */
 static gboolean
@@ -199,7 +219,9 @@ probe_dialog(gpointer user_data)
         inspect_reference(dialog, probe);
     if (probe->missing_tooltips)
         collect_missing_tooltips(dialog, probe->missing_tooltips);
-    probe->saved = gui_save_screenshot(dialog, probe->screenshot, &probe->width, &probe->height);
+    probe->sensitive_entries = count_sensitive_entries(dialog);
+    probe->saved = probe->screenshot
+                   && gui_save_screenshot(dialog, probe->screenshot, &probe->width, &probe->height);
     gtk_dialog_response(GTK_DIALOG(dialog), probe->response);
     return FALSE;
 }
@@ -604,30 +626,53 @@ START_TEST(test_cancel_large_image)
 }
 END_TEST
 
-/* The series dialog, too, says what each of its settings does (it had no
- * tooltip at all); Cancel adds nothing. */
-START_TEST(test_series_dialog_tooltips)
+/* Three frames "Height 0..2" of the series dialog; with timing, each
+ * with the metadata of a frame of line_time s per line scanned down,
+ * one after another. */
+static GwyContainer*
+make_series_data(gdouble line_time)
 {
-    GwyContainer *data = gwy_container_new();
-    GString *missing = g_string_new(NULL);
-    DialogProbe probe;
+    GwyContainer *data = gwy_container_new(), *meta;
     GRand *rng = g_rand_new_with_seed(seed);
-    gchar title[32];
+    gchar text[32];
     gint k;
 
-    init_application();
     for (k = 0; k < 3; k++) {
         GwyDataField *field = gwy_data_field_new(XRES, YRES, XRES*1e-9, YRES*1e-9, FALSE);
 
         gwy_data_field_synth_gaussian_displacement(field, 3.0, 1.0, rng);
         gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
         gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
-        g_snprintf(title, sizeof(title), "Height %d", k);
+        g_snprintf(text, sizeof(text), "Height %d", k);
         gwy_container_set_const_string(data, gwy_app_get_data_title_key_for_id(k),
-                                       (const guchar*)title);
+                                       (const guchar*)text);
         g_object_unref(field);
+        if (line_time <= 0.0)
+            continue;
+        meta = gwy_container_new();
+        g_snprintf(text, sizeof(text), "%g s", line_time);
+        gwy_container_set_const_string_by_name(meta, "Line time", (const guchar*)text);
+        g_snprintf(text, sizeof(text), "%g", k*YRES*line_time);
+        gwy_container_set_const_string_by_name(meta, "Frame start (s)", (const guchar*)text);
+        gwy_container_set_const_string_by_name(meta, "Slow scan", (const guchar*)"down");
+        g_snprintf(text, sizeof(text), "/%d/meta", k);
+        gwy_container_set_object_by_name(data, text, meta);
+        g_object_unref(meta);
     }
     g_rand_free(rng);
+    return data;
+}
+
+/* The series dialog, too, says what each of its settings does (it had no
+ * tooltip at all), and that the timing settings are used when the file
+ * lacks the timing (all of them sensitive); Cancel adds nothing. */
+START_TEST(test_series_dialog_tooltips)
+{
+    GwyContainer *data = make_series_data(0.0);
+    GString *missing = g_string_new(NULL);
+    DialogProbe probe;
+
+    init_application();
     probe_init(&probe, "Interpolation", SCREENSHOT_SERIES, GTK_RESPONSE_CANCEL);
     probe.missing_tooltips = missing;
     gwy_app_data_browser_add(data);
@@ -635,10 +680,36 @@ START_TEST(test_series_dialog_tooltips)
     printf("test-gui-dialog: the series dialog shows:\n%s", probe.texts->str);
     ck_assert_msg(probe.ready, "no series dialog; it shows:\n%s", probe.texts->str);
     ck_assert_msg(!missing->len, "series settings without a tooltip: %s", missing->str);
+    ck_assert_msg(strstr(probe.texts->str, "these settings are used"),
+                  "the dialog does not say the timing settings are used:\n%s",
+                  probe.texts->str);
+    ck_assert_int_eq(probe.sensitive_entries, 2);
     ck_assert_int_eq(gui_count_channels(data), 3);
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
     g_string_free(missing, TRUE);
+    probe_clear(&probe);
+}
+END_TEST
+
+/* Frames whose metadata gives the timing: the dialog says the timing
+ * settings are not used and greys their entries (they looked as if they
+ * mattered). */
+START_TEST(test_series_dialog_timing_from_file)
+{
+    GwyContainer *data = make_series_data(0.02);
+    DialogProbe probe;
+
+    init_application();
+    probe_init(&probe, "Interpolation", NULL, GTK_RESPONSE_CANCEL);
+    gwy_app_data_browser_add(data);
+    run_function_dialog_on(LOCALSCAN_SERIES_FUNCTION_NAME, data, 0, &probe);
+    ck_assert_msg(probe.ready, "no series dialog; it shows:\n%s", probe.texts->str);
+    ck_assert_msg(strstr(probe.texts->str, "The file gives the timing: these settings are not used."),
+                  "the dialog does not say the file gives the timing:\n%s", probe.texts->str);
+    ck_assert_int_eq(probe.sensitive_entries, 0);
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
     probe_clear(&probe);
 }
 END_TEST
@@ -663,5 +734,6 @@ main(void)
     tcase_add_test(tc, test_reference_chooser);
     tcase_add_test(tc, test_cancel_large_image);
     tcase_add_test(tc, test_series_dialog_tooltips);
+    tcase_add_test(tc, test_series_dialog_timing_from_file);
     return test_run_suite(suite);
 }

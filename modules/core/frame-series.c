@@ -410,6 +410,28 @@ drop_duplicates(FrameSeries *series, MetaTiming *mts)
     }
 }
 
+typedef enum {
+    HINT_LINE_TIME,
+    HINT_DIRECTION,
+    HINT_FRAME_TIMES,
+} TimingHint;
+
+/* What the user can do where the metadata lacks some timing, in the words
+ * of the front end that asked. */
+static const gchar*
+timing_hint(const FrameSeriesOptions *options, TimingHint which)
+{
+    static const gchar *const command[] = {
+        N_("give --line-time"), N_("give --direction"), N_("give --frame-times"),
+    };
+    static const gchar *const dialog[] = {
+        N_("set the line time"), N_("set the slow scan direction"),
+        N_("set the frame interval"),
+    };
+
+    return _(options->hints_for_dialog ? dialog[which] : command[which]);
+}
+
 static gboolean
 assign_line_times(FrameSeries *series, const MetaTiming *mts,
                   const FrameSeriesOptions *options, GError **error)
@@ -429,8 +451,8 @@ assign_line_times(FrameSeries *series, const MetaTiming *mts,
         }
         else {
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
-                        _("%s: the line time is not in the metadata; "
-                          "give --line-time"), frame->label);
+                        _("%s: the line time is not in the metadata; %s"),
+                        frame->label, timing_hint(options, HINT_LINE_TIME));
             return FALSE;
         }
         if (options->direction >= 0) {
@@ -456,8 +478,9 @@ assign_line_times(FrameSeries *series, const MetaTiming *mts,
         g_ptr_array_add(series->notes,
                         g_strdup_printf(_("the slow-scan direction of %d of "
                                           "%d frames is not in the metadata: "
-                                          "taken as down (give --direction)"),
-                                        assumed, series->n_frames));
+                                          "taken as down (%s)"),
+                                        assumed, series->n_frames,
+                                        timing_hint(options, HINT_DIRECTION)));
     return TRUE;
 }
 
@@ -467,7 +490,8 @@ assign_line_times(FrameSeries *series, const MetaTiming *mts,
 #define CLOCK_GAP_FRAMES 1000.0
 
 static gboolean
-check_one_clock(const FrameSeries *series, GError **error)
+check_one_clock(const FrameSeries *series, const FrameSeriesOptions *options,
+                GError **error)
 {
     gdouble first = G_MAXDOUBLE, last = -G_MAXDOUBLE, longest = 0.0;
     gint i, a = 0, b = 0;
@@ -489,9 +513,9 @@ check_one_clock(const FrameSeries *series, GError **error)
         return TRUE;
     g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
                 _("%s and %s start %.3g s apart in the metadata: their time "
-                  "stamps cannot come from one clock; give --frame-times"),
+                  "stamps cannot come from one clock; %s"),
                 series->frames[a].label, series->frames[b].label,
-                last - first);
+                last - first, timing_hint(options, HINT_FRAME_TIMES));
     return FALSE;
 }
 
@@ -527,7 +551,8 @@ assign_start_times(FrameSeries *series, const MetaTiming *mts,
                 g_set_error(error, FRAME_SERIES_ERROR,
                             FRAME_SERIES_ERROR_TIMING,
                             _("%s: the frame's start time is not in the "
-                              "metadata; give --frame-times"), frame->label);
+                              "metadata; %s"), frame->label,
+                            timing_hint(options, HINT_FRAME_TIMES));
                 return FALSE;
             }
             if (mts[i].start_is_end)
@@ -540,7 +565,7 @@ assign_start_times(FrameSeries *series, const MetaTiming *mts,
         for (i = 0; i < n; i++)
             series->frames[i].timing.frame_start
                 = series->frames[i].absolute_start - t0;
-        if (!check_one_clock(series, error))
+        if (!check_one_clock(series, options, error))
             return FALSE;
         if (mts[0].start_is_end)
             g_ptr_array_add(series->notes,

@@ -71,6 +71,8 @@ typedef struct {
                                      names the channel of every file */
     gint n_channel_ids;           /* 0: not given */
     gboolean keep_duplicates;     /* keep frames with bit-identical data */
+    gboolean hints_for_dialog;    /* errors name the dialog's settings, not
+                                     the command line's options */
 } FrameSeriesOptions;
 
 GQuark        frame_series_error_quark  (void);
