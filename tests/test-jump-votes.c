@@ -27,7 +27,7 @@ two_sided(LineEvidence *ev, gdouble before, gdouble after)
     ev->before = before;
     ev->after = after;
     ev->two_sided = TRUE;
-    ev->control = ev->texture = NAN;
+    ev->control = ev->texture = ev->nearby = NAN;
 }
 
 /* A line cutting particles: about the typical match m (a few times the
@@ -151,76 +151,72 @@ START_TEST(test_edge_line_needs_its_neighbours)
 }
 END_TEST
 
-/* A line seen under one drift only: cost under it (NAN under the
- * other), its control and its texture. */
+/* A line seen under one drift only (its content out of every other frame
+ * under the other): cost under it, control, texture and nearby cost. */
 static void
 one_sided(LineEvidence *ev, gboolean seen_after, gdouble cost,
-          gdouble control, gdouble texture)
+          gdouble control, gdouble texture, gdouble nearby)
 {
     ev->two_sided = FALSE;
     ev->before = seen_after ? NAN : cost;
     ev->after = seen_after ? cost : NAN;
     ev->control = control;
     ev->texture = texture;
+    ev->nearby = nearby;
 }
 
-/* The last lines of a frame whose content the step takes out of every
- * later frame but one, as before a flagged frame: textured lines seen
- * under both drifts before the jump, then lines seen after it only:
- * featureless ones (no evidence), one that cuts particles but costs
- * between a match and a mismatch of its scale (0.1 to 0.2: it tells
- * nothing by itself), more featureless ones and the frame's last line, a
- * clear match after the jump.  The votes tie from the first featureless
- * line to the last line; the in-between line leans to its side and must
- * narrow the tie: seen after the jump, the split goes no later than it;
- * seen before it (its content under the drift without the step), no
- * earlier than the line after it.  The tie ran to the frame's end and
- * the blocks' guess put a jump 2 lines late, 5.6 px on a textured line
- * (test-series-correction seed 560100016). */
-START_TEST(test_tie_narrowed_by_leaning_line)
+/* Between textured lines before the jump and after it, a line cutting
+ * particles seen under one drift only.  Its cost below a fifth of its
+ * scale (match level to control) puts it on that drift's side only where
+ * its content sits exactly there, costing less than a pixel off; no
+ * minimum, it tells nothing (the split ties on either side of it); above
+ * a fifth it lies on the other side whatever lies nearby.  Lines before a
+ * jump cost 0.10 and 0.14 of the scale against content that merely
+ * resembled theirs (seeds 572000020 and 572000004 of
+ * test-series-correction), lines after one 0.12 and 0.15 (seeds
+ * 560100016, 560100232): the scale alone placed them wrong. */
+START_TEST(test_one_sided_line_needs_a_minimum)
 {
     GRand *rng = test_rand_salted(base_seed, 3);
     LineEvidence ev[40];
-    gint frame[40] = { 0 }, d, i, n_before, n_flat, n_flat2, mid, n;
+    gint frame[40] = { 0 }, d, n_before, n_after, mid, n, kind, want_first, want_last;
     gint first, last;
-    gdouble noise, m, control, q;
-    gboolean mid_after;
+    gdouble m, control, q, cost, nearby;
+    gboolean seen_after;
 
     for (d = 0; d < N_DRAWS; d++) {
-        n_before = g_rand_int_range(rng, 8, 21);
-        n_flat = g_rand_int_range(rng, 0, 4);
-        n_flat2 = g_rand_int_range(rng, 0, 4);
-        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
-        m = noise*g_rand_double_range(rng, 10.0, 40.0);
+        n_before = g_rand_int_range(rng, 6, 16);
+        n_after = g_rand_int_range(rng, 6, 16);
+        m = 1e-19*g_rand_double_range(rng, 5.0, 40.0);
         textured_run(ev, rng, m, 0, n_before, n_before, FALSE);
-        for (i = n_before; i < n_before + n_flat; i++)
-            one_sided(ev + i, TRUE, noise, 2.0*noise, noise);
-        mid = n_before + n_flat;
-        mid_after = g_rand_boolean(rng);
-        control = m*g_rand_double_range(rng, 15.0, 40.0);
-        q = g_rand_double_range(rng, 0.11, 0.19);
-        /* The match level is the median over the textured lines' right
-         * costs, m times 0.5 to 2: q on the scale from m. */
-        one_sided(ev + mid, mid_after, m + q*(control - m), control,
-                  control*g_rand_double_range(rng, 0.6, 1.0));
-        for (i = mid + 1; i < mid + 1 + n_flat2; i++)
-            one_sided(ev + i, TRUE, noise, 2.0*noise, noise);
-        n = mid + 1 + n_flat2;
-        one_sided(ev + n, TRUE, m, control, control);
-        n++;
+        mid = n_before;
+        n = mid + 1 + n_after;
+        textured_run(ev, rng, m, mid + 1, n, mid + 1, FALSE);
+        seen_after = g_rand_boolean(rng);
+        /* 0: a match, a minimum; 1: as low, no minimum; 2: a mismatch. */
+        kind = g_rand_int_range(rng, 0, 3);
+        control = m*g_rand_double_range(rng, 15.0, 60.0);
+        q = (kind == 2) ? g_rand_double_range(rng, 0.25, 0.9)
+                        : g_rand_double_range(rng, 0.0, 0.19);
+        cost = m + q*(control - m);
+        nearby = cost*((kind == 1) ? g_rand_double_range(rng, 0.5, 1.0)
+                                   : g_rand_double_range(rng, 1.1, 10.0));
+        one_sided(ev + mid, seen_after, cost, control,
+                  control*g_rand_double_range(rng, 0.6, 1.0), nearby);
+        if (kind == 1) {
+            want_first = mid;
+            want_last = mid + 1;
+        }
+        else
+            want_first = want_last = ((kind == 0) == seen_after) ? mid : mid + 1;
         ck_assert_msg(jump_votes_split(ev, frame, n, &first, &last),
                       "seed %u draw %d: no split", base_seed, d);
-        ck_assert_msg(first >= n_before && last <= n - 1,
-                      "seed %u draw %d: split %d..%d outside the tie %d..%d",
-                      base_seed, d, first, last, n_before, n - 1);
-        if (mid_after)
-            ck_assert_msg(last <= mid,
-                          "seed %u draw %d: split %d..%d, line %d leaning "
-                          "after the jump", base_seed, d, first, last, mid);
-        else
-            ck_assert_msg(first >= mid + 1,
-                          "seed %u draw %d: split %d..%d, line %d leaning "
-                          "before the jump", base_seed, d, first, last, mid);
+        ck_assert_msg(first == want_first && last == want_last,
+                      "seed %u draw %d: split %d..%d, not %d..%d (line %d seen "
+                      "%s the jump, %.2f of its scale, %s)", base_seed, d,
+                      first, last, want_first, want_last, mid,
+                      seen_after ? "after" : "before", q,
+                      kind == 1 ? "no minimum" : "a minimum");
     }
     g_rand_free(rng);
 }
@@ -251,7 +247,7 @@ main(void)
     base_seed = test_seed_from_env("test-jump-votes");
     tcase_add_test(tc, test_clear_jump_to_the_line);
     tcase_add_test(tc, test_edge_line_needs_its_neighbours);
-    tcase_add_test(tc, test_tie_narrowed_by_leaning_line);
+    tcase_add_test(tc, test_one_sided_line_needs_a_minimum);
     tcase_add_test(tc, test_no_jump_without_both_sides);
     return test_run_suite(s);
 }

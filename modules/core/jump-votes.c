@@ -17,13 +17,21 @@
  * under the wrong one the cost is a step's displacement and the control
  * two, which costs at most four times as much (displacements small beside
  * the content's features cost as their square): above a fifth of the
- * scale the side is wrong, below a tenth right, in between the line tells
- * nothing.  And only a line whose own texture and control both stand
- * well above the match level is judged at all: a featureless line, or one
- * whose features a step hardly moves, costs about the same under either
- * drift, and a featureless line matches featureless content a step off
- * as well as its own while its control may meet a particle (seed 21). */
-#define ONE_SIDED_MATCH 0.1
+ * scale the side is wrong.  Below it the line lies on its side only where
+ * its content sits exactly where that drift puts it: its cost is lower
+ * than a pixel off in any direction (nearby).  The scale alone does not
+ * tell: lines after a jump cost 0.12 and 0.15 of it (their content at the
+ * frame's edge, seeds 560100016 and 560100232 of test-series-correction),
+ * lines before one 0.10 and 0.14 (content that merely resembles what lies
+ * a step away, seeds 572000020 and 572000004), but the first were minima
+ * (1.3-1.5 times lower than a pixel off) and the second not (0.6-1.0): a
+ * step off, a line meets other content, whose mismatch does not rise on
+ * every side.  A line below a fifth that is no minimum tells nothing.
+ * And only a line whose own texture and control both stand well above the
+ * match level is judged at all: a featureless line, or one whose features
+ * a step hardly moves, costs about the same under either drift, and a
+ * featureless line matches featureless content a step off as well as its
+ * own while its control may meet a particle (seed 21). */
 #define ONE_SIDED_MISMATCH 0.2
 #define ONE_SIDED_CONTRAST 8.0
 
@@ -42,8 +50,7 @@
  * some frames show under one drift only and others under the other only
  * is not judged either (its two costs come from different frames). */
 static gdouble
-evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after,
-               gint *lean)
+evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
 {
     gdouble *right = g_new(gdouble, MAX(n, 1)), match, cost, other, q;
     gint i, m = 0;
@@ -56,7 +63,6 @@ evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after,
     g_free(right);
     for (i = 0; i < n; i++) {
         before[i] = after[i] = 0.0;
-        lean[i] = 0;
         if (ev[i].two_sided) {
             before[i] = ev[i].before;
             after[i] = ev[i].after;
@@ -67,18 +73,12 @@ evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after,
             continue;
         cost = isnan(ev[i].before) ? ev[i].after : ev[i].before;
         q = (cost - match)/(ev[i].control - match);
-        if (q <= ONE_SIDED_MATCH)
-            other = ev[i].control;
-        else if (q >= ONE_SIDED_MISMATCH)
+        if (q >= ONE_SIDED_MISMATCH)
             other = match;
-        else {
-            /* In between, nearer a match than the lowest mismatch (a
-             * quarter): the line leans to its side (+1: after the jump),
-             * which decides only between splits the votes leave tied
-             * (tied_split_leanings). */
-            lean[i] = isnan(ev[i].before) ? 1 : -1;
+        else if (cost < ev[i].nearby)
+            other = ev[i].control;
+        else
             continue;
-        }
         before[i] = isnan(ev[i].before) ? other : cost;
         after[i] = isnan(ev[i].before) ? cost : other;
     }
@@ -179,50 +179,16 @@ best_split(const gdouble *votes, gint n, gint *first, gint *last)
     }
 }
 
-/* Tied splits first .. last leave lines first .. last-1 on either side:
- * lines without evidence, or judged lines whose cost fell between a match
- * and a mismatch.  Those lean, and the leanings narrow the tie to the
- * splits that agree with most of them (a line cutting particles after a
- * jump in the last lines of a frame, its content seen by the frames after
- * a flagged one only, cost 0.12 of its scale: the tie ran to the frame's
- * end, the blocks' guess in the flagged frame put it on the wrong side,
- * 5.6 px; test-series-correction seed 560100016).  Only judged lines
- * lean: a featureless line's leaning is noise, and one moved a jump out
- * of a flagged frame onto the next frame's first lines (seed 3000021). */
-static void
-tied_split_leanings(const gint *lean, gint *first, gint *last)
-{
-    gint s, i, score, best = 0, lo = *first, hi = *first;
-
-    for (s = *first; s <= *last; s++) {
-        score = 0;
-        for (i = *first; i < *last; i++)
-            score += (i >= s) ? lean[i] : -lean[i];
-        if (s == *first || score > best) {
-            best = score;
-            lo = hi = s;
-        }
-        else if (score == best && hi == s - 1)
-            hi = s;
-    }
-    *first = lo;
-    *last = hi;
-}
-
 gboolean
 jump_votes_split(const LineEvidence *evidence, const gint *frame, gint n,
                  gint *first, gint *last)
 {
     gdouble *costs = g_new(gdouble, 3*MAX(n, 1)), *before = costs;
     gdouble *after = costs + MAX(n, 1), *votes = after + MAX(n, 1), match;
-    gint *lean = g_new(gint, MAX(n, 1));
 
-    match = evidence_costs(evidence, n, before, after, lean);
+    match = evidence_costs(evidence, n, before, after);
     steady_votes(before, after, evidence, frame, n, match, votes);
     best_split(votes, n, first, last);
-    if (*first < *last)
-        tied_split_leanings(lean, first, last);
-    g_free(lean);
     g_free(costs);
     return n >= 2 && *last > 0 && *first < n;
 }

@@ -25,6 +25,10 @@ typedef struct {
     gdouble control;         /* one-sided only; NAN where not seen */
     gdouble texture;         /* one-sided only: the line's mean square after
                                 its quadratic; NAN otherwise */
+    gdouble nearby;          /* one-sided only: the lowest mismatch of its
+                                content a pixel off the place its one drift
+                                predicts (left, right, up or down); NAN
+                                where not seen */
 } LineEvidence;
 
 /* The best splits of lines 0 .. n-1, in the order they were scanned (frame

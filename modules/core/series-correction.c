@@ -870,12 +870,12 @@ eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
 
 /* Content of frame k's line r as frame j shows it, with the drift of line
  * r taken from `side`: each pixel's true position, then where frame j saw
- * it (its row's own time found by two fixed-point steps), sampled
- * bilinearly; NAN outside frame j. */
+ * it (its row's own time found by two fixed-point steps), moved by
+ * (off_x, off_y) px, sampled bilinearly; NAN outside frame j. */
 static void
 predict_line(const SeriesCorrection *correction, const SeriesFrame *fk,
              const SeriesFrame *fj, const gdouble *ref, gint r, JumpSide side,
-             gdouble *line)
+             gdouble off_x, gdouble off_y, gdouble *line)
 {
     gint xres = fk->timing.xres, yres = fk->timing.yres, c, it, x0, y0;
     gdouble t, dx, dy, x, y, yj, tj, jx, jy, fx, fy;
@@ -892,7 +892,8 @@ predict_line(const SeriesCorrection *correction, const SeriesFrame *fk,
             eval_side(correction, tj, JUMP_AS_FITTED, &jx, &jy);
             yj = y + jy;
         }
-        x += jx;
+        x += jx + off_x;
+        yj += off_y;
         x0 = (gint)floor(x);
         y0 = (gint)floor(yj);
         if (x0 < 0 || y0 < 0 || x0 + 1 >= xres || y0 + 1 >= yres) {
@@ -942,6 +943,30 @@ line_mismatch(const gdouble *data, const gdouble *pred, gint n, gdouble *u,
 }
 
 
+/* The lowest mismatch of line r of frame k (data row) with its content as
+ * frame j shows it under `side` moved a pixel left, right, up or down
+ * (NAN where none of them lies in frame j): a line under its right drift
+ * costs less where it is than a pixel off (jump-votes.c).  line is work
+ * space of 3 rows. */
+static gdouble
+nearby_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
+                const SeriesFrame *fj, const gdouble *ref, gint r,
+                JumpSide side, const gdouble *row, gdouble *line)
+{
+    static const gdouble offsets[4][2] = { { -1, 0 }, { 1, 0 }, { 0, -1 }, { 0, 1 } };
+    gint xres = fk->timing.xres, i;
+    gdouble lowest = NAN, e;
+
+    for (i = 0; i < 4; i++) {
+        predict_line(correction, fk, fj, ref, r, side, offsets[i][0],
+                     offsets[i][1], line);
+        e = line_mismatch(row, line, xres, line + xres, line + 2*xres);
+        if (!isnan(e) && !(lowest <= e))
+            lowest = e;
+    }
+    return lowest;
+}
+
 /* How well line r of frame k matches the frames near it (those not
  * flagged, up to JUMP_PARTNER_REACH away: the next frame may be flagged,
  * the previous one may not show the line's content) with the drift
@@ -955,7 +980,8 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     const SeriesFrame *fk = series->frames + k;
     gint j, count = 0, nb = 0, na = 0, xres = fk->timing.xres;
     const gdouble *row = gwy_data_field_get_data_const(fk->field) + (gsize)r*xres;
-    gdouble eb, ea, ec, sb = 0.0, sa = 0.0, ob = 0.0, oa = 0.0, cb = 0.0, ca = 0.0;
+    gdouble eb, ea, ec, en, sb = 0.0, sa = 0.0, ob = 0.0, oa = 0.0, cb = 0.0, ca = 0.0;
+    gdouble near_a = 0.0, near_b = 0.0;
     gdouble *u = line + xres, *d = u + xres;
     const gdouble *ref;
 
@@ -965,10 +991,10 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
             continue;
         ref = gwy_data_field_get_data_const(series->frames[j].field);
         predict_line(correction, fk, series->frames + j, ref, r, JUMP_NEVER,
-                     line);
+                     0.0, 0.0, line);
         eb = line_mismatch(row, line, xres, u, d);
         predict_line(correction, fk, series->frames + j, ref, r, JUMP_ALWAYS,
-                     line);
+                     0.0, 0.0, line);
         ea = line_mismatch(row, line, xres, u, d);
         if (!isnan(eb) && !isnan(ea)) {
             sb += eb;
@@ -979,17 +1005,21 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
         if (isnan(eb) && isnan(ea))
             continue;
         predict_line(correction, fk, series->frames + j, ref, r,
-                     isnan(eb) ? JUMP_TWICE : JUMP_BACKWARDS, line);
+                     isnan(eb) ? JUMP_TWICE : JUMP_BACKWARDS, 0.0, 0.0, line);
         if (isnan(ec = line_mismatch(row, line, xres, u, d)))
             continue;
+        en = nearby_mismatch(correction, fk, series->frames + j, ref, r,
+                             isnan(eb) ? JUMP_ALWAYS : JUMP_NEVER, row, line);
         if (isnan(eb)) {
             oa += ea;
             ca += ec;
+            near_a += en;
             na++;
         }
         else {
             ob += eb;
             cb += ec;
+            near_b += en;
             nb++;
         }
     }
@@ -997,6 +1027,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     ev->before = count ? sb/count : (nb ? ob/nb : NAN);
     ev->after = count ? sa/count : (na ? oa/na : NAN);
     ev->control = (count || (nb && na)) ? NAN : (nb ? cb/nb : (na ? ca/na : NAN));
+    ev->nearby = isnan(ev->control) ? NAN : (nb ? near_b/nb : near_a/na);
     /* Only a one-sided line is judged by its texture. */
     ev->texture = NAN;
     if (!isnan(ev->control)) {
