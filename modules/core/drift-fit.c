@@ -495,43 +495,79 @@ phasor_step(Phasor *p)
     p->s = s;
 }
 
+/* What a used measurement brings to every frequency of
+ * oscillation_scan(), in the order they are summed: its weight, the
+ * velocity's basis value (t_a - t_b) and its weighted product, its
+ * displacements, and its span's half as a phase per unit frequency. */
+typedef struct {
+    gdouble w, r0, wr0, d0, d1, half_2pi;
+    gboolean spans;
+} ScanTerm;
+
+/* The sums of the velocity's basis alone: the same at every frequency. */
+typedef struct {
+    gdouble a00, b0[2], wsum;
+} ScanFixed;
+
 /* One frequency of oscillation_scan(): the normal equations (as
- * solve_fixed() sums them) and the visibility, from the phasors of the
- * used measurements at it, each stepped on to the next frequency. */
+ * solve_fixed() sums them, product by product) and the visibility, from
+ * the phasors of the used measurements at it, each stepped on to the next
+ * frequency.  The velocity's own sums come from fixed. */
 static gdouble
-scan_frequency(const Prepared *pm, const gint *used, gint nu, gdouble f,
-               Phasor *pa, Phasor *pb, Phasor *ph, const gdouble *sdd,
-               gdouble *visibility)
+scan_frequency(const ScanTerm *terms, gint nu, const ScanFixed *fixed,
+               gdouble f, Phasor *pa, Phasor *pb, Phasor *ph,
+               const gdouble *sdd, gdouble *visibility)
 {
     gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], coef[2][MAX_BASIS];
-    gdouble row[3], x, w, wi, vsum = 0.0, wsum = 0.0, rss;
-    gint u, i, j, l;
+    gdouble a01 = 0.0, a02 = 0.0, a10 = 0.0, a11 = 0.0, a12 = 0.0;
+    gdouble a20 = 0.0, a21 = 0.0, a22 = 0.0, bx1 = 0.0, bx2 = 0.0;
+    gdouble by1 = 0.0, by2 = 0.0, x, w, r1, r2, wr1, wr2, vsum = 0.0, rss;
+    gint u;
 
-    memset(ata, 0, sizeof(ata));
-    memset(atb, 0, sizeof(atb));
     for (u = 0; u < nu; u++) {
-        i = used[u];
-        wi = pm->w[i];
+        const ScanTerm *t = terms + u;
+
         /* The basis averaged over the span (model_basis_mean). */
-        x = 2.0*G_PI*pm->half[i]*f;
-        w = (pm->half[i] > 0.0) ? (fabs(x) < 1e-4 ? 1.0 - x*x/6.0 : ph[u].s/x) : 1.0;
-        row[0] = pm->ta[i] - pm->tb[i];
-        row[1] = w*(pa[u].s - pb[u].s);
-        row[2] = w*(pa[u].c - pb[u].c);
-        for (j = 0; j < 3; j++) {
-            for (l = 0; l < 3; l++)
-                ata[j*3 + l] += wi*row[j]*row[l];
-            atb[0][j] += wi*row[j]*pm->d[0][i];
-            atb[1][j] += wi*row[j]*pm->d[1][i];
-        }
+        x = t->half_2pi*f;
+        w = t->spans ? (fabs(x) < 1e-4 ? 1.0 - x*x/6.0 : ph[u].s/x) : 1.0;
+        r1 = w*(pa[u].s - pb[u].s);
+        r2 = w*(pa[u].c - pb[u].c);
+        wr1 = t->w*r1;
+        wr2 = t->w*r2;
+        a01 += t->wr0*r1;
+        a02 += t->wr0*r2;
+        a10 += wr1*t->r0;
+        a11 += wr1*r1;
+        a12 += wr1*r2;
+        a20 += wr2*t->r0;
+        a21 += wr2*r1;
+        a22 += wr2*r2;
+        bx1 += wr1*t->d0;
+        by1 += wr1*t->d1;
+        bx2 += wr2*t->d0;
+        by2 += wr2*t->d1;
         /* 1 - cos(w (t_a - t_b)), as oscillation_visibility() sums it. */
-        vsum += wi*(1.0 - (pa[u].c*pb[u].c + pa[u].s*pb[u].s));
-        wsum += wi;
+        vsum += t->w*(1.0 - (pa[u].c*pb[u].c + pa[u].s*pb[u].s));
         phasor_step(pa + u);
         phasor_step(pb + u);
         phasor_step(ph + u);
     }
-    *visibility = (wsum > 0.0) ? vsum/wsum : 0.0;
+    ata[0] = fixed->a00;
+    ata[1] = a01;
+    ata[2] = a02;
+    ata[3] = a10;
+    ata[4] = a11;
+    ata[5] = a12;
+    ata[6] = a20;
+    ata[7] = a21;
+    ata[8] = a22;
+    atb[0][0] = fixed->b0[0];
+    atb[1][0] = fixed->b0[1];
+    atb[0][1] = bx1;
+    atb[1][1] = by1;
+    atb[0][2] = bx2;
+    atb[1][2] = by2;
+    *visibility = (fixed->wsum > 0.0) ? vsum/fixed->wsum : 0.0;
     rss = solve_normal(ata, atb, sdd, 3, coef);
     return isfinite(rss) ? rss : G_MAXDOUBLE;
 }
@@ -547,15 +583,30 @@ oscillation_scan(const Prepared *pm, gdouble fmin, gdouble fmax, gint m,
                  gdouble *rss, gdouble *visibility)
 {
     gint n = MAX(pm->n, 1), *used = g_new(gint, n), nu = 0, i, j, u;
+    ScanTerm *terms = g_new(ScanTerm, n);
+    ScanFixed fixed = { 0.0, { 0.0, 0.0 }, 0.0 };
     Phasor *pa = g_new(Phasor, 3*n), *pb = pa + n, *ph = pb + n;
     gdouble df = (fmax - fmin)/(m - 1.0), f, sdd[2] = { 0.0, 0.0 };
 
     for (i = 0; i < pm->n; i++) {
+        ScanTerm *t = terms + nu;
+
         if (pm->w[i] <= 0.0)
             continue;
         used[nu++] = i;
         sdd[0] += pm->w[i]*pm->d[0][i]*pm->d[0][i];
         sdd[1] += pm->w[i]*pm->d[1][i]*pm->d[1][i];
+        t->w = pm->w[i];
+        t->r0 = pm->ta[i] - pm->tb[i];
+        t->wr0 = t->w*t->r0;
+        t->d0 = pm->d[0][i];
+        t->d1 = pm->d[1][i];
+        t->half_2pi = 2.0*G_PI*pm->half[i];
+        t->spans = (pm->half[i] > 0.0);
+        fixed.a00 += t->wr0*t->r0;
+        fixed.b0[0] += t->wr0*t->d0;
+        fixed.b0[1] += t->wr0*t->d1;
+        fixed.wsum += t->w;
     }
     for (j = 0; j < m; j++) {
         f = fmin + (fmax - fmin)*j/(m - 1.0);
@@ -565,8 +616,9 @@ oscillation_scan(const Prepared *pm, gdouble fmin, gdouble fmax, gint m,
             phasor_set(pb + u, 2.0*G_PI*pm->tb[i]*f, 2.0*G_PI*pm->tb[i]*df);
             phasor_set(ph + u, 2.0*G_PI*pm->half[i]*f, 2.0*G_PI*pm->half[i]*df);
         }
-        rss[j] = scan_frequency(pm, used, nu, f, pa, pb, ph, sdd, visibility + j);
+        rss[j] = scan_frequency(terms, nu, &fixed, f, pa, pb, ph, sdd, visibility + j);
     }
+    g_free(terms);
     g_free(pa);
     g_free(used);
 }
