@@ -5,6 +5,7 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include <string.h>
 #include <libgwyddion/gwyddion.h>
 #include <libgwydgets/gwydgets.h>
 #include "series-graph.h"
@@ -20,6 +21,75 @@ new_curve(const gchar *title, GwyGraphCurveType type, gint colour,
                  "color", gwy_graph_get_preset_color(colour), NULL);
     gwy_graph_curve_model_set_data(curve, t, v, n);
     return curve;
+}
+
+/* The share of each axis a legend of four curves covers in the dialog's
+ * graph, about; each corner's box is this large. */
+#define LEGEND_FRACTION 0.35
+
+/* Every curve's points, one after another (g_free x); their number. */
+static gint
+curve_points(GwyGraphModel *graph, gdouble **x, gdouble **y)
+{
+    gint i, n, total = 0, nc = gwy_graph_model_get_n_curves(graph);
+
+    for (i = 0; i < nc; i++)
+        total += gwy_graph_curve_model_get_ndata(gwy_graph_model_get_curve(graph, i));
+    *x = g_new(gdouble, 2*MAX(total, 1));
+    *y = *x + MAX(total, 1);
+    total = 0;
+    for (i = 0; i < nc; i++) {
+        GwyGraphCurveModel *curve = gwy_graph_model_get_curve(graph, i);
+
+        n = gwy_graph_curve_model_get_ndata(curve);
+        memcpy(*x + total, gwy_graph_curve_model_get_xdata(curve), n*sizeof(gdouble));
+        memcpy(*y + total, gwy_graph_curve_model_get_ydata(curve), n*sizeof(gdouble));
+        total += n;
+    }
+    return total;
+}
+
+static void
+value_range(const gdouble *v, gint n, gdouble *lo, gdouble *hi)
+{
+    gint i;
+
+    *lo = *hi = v[0];
+    for (i = 1; i < n; i++) {
+        *lo = MIN(*lo, v[i]);
+        *hi = MAX(*hi, v[i]);
+    }
+}
+
+void
+series_graph_place_legend(GwyGraphModel *graph)
+{
+    /* In GwyGraphLabelPosition's order: NE, NW, SE, SW. */
+    static const gboolean east[4] = { TRUE, FALSE, TRUE, FALSE };
+    static const gboolean north[4] = { TRUE, TRUE, FALSE, FALSE };
+    gdouble *x, *y, xmin, xmax, ymin, ymax, wx, wy;
+    gint j, c, n = curve_points(graph, &x, &y), count[4] = { 0, 0, 0, 0 };
+    gint best = GWY_GRAPH_LABEL_NORTHEAST;
+
+    if (n) {
+        value_range(x, n, &xmin, &xmax);
+        value_range(y, n, &ymin, &ymax);
+        wx = LEGEND_FRACTION*(xmax - xmin);
+        wy = LEGEND_FRACTION*(ymax - ymin);
+        for (j = 0; j < n; j++) {
+            for (c = 0; c < 4; c++) {
+                if ((east[c] ? x[j] >= xmax - wx : x[j] <= xmin + wx)
+                    && (north[c] ? y[j] >= ymax - wy : y[j] <= ymin + wy))
+                    count[c]++;
+            }
+        }
+        for (c = 1; c < 4; c++) {
+            if (count[c] < count[best])
+                best = c;
+        }
+        g_object_set(graph, "label-position", best, NULL);
+    }
+    g_free(x);
 }
 
 GwyGraphModel*
@@ -92,6 +162,7 @@ series_graph_new(const SeriesCorrection *c, const FrameSeries *series)
     g_array_free(t, TRUE);
     g_array_free(x, TRUE);
     g_array_free(y, TRUE);
+    series_graph_place_legend(graph);
     return graph;
 }
 

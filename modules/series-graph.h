@@ -17,6 +17,10 @@ G_BEGIN_DECLS
 
 GwyGraphModel*  series_graph_new  (const SeriesCorrection *correction,
                                    const FrameSeries *series);
+/* Puts the graph's legend in the corner of the plot its curves' points
+ * crowd least (the legend covered the measurements where they
+ * cluster). */
+void            series_graph_place_legend(GwyGraphModel *graph);
 
 G_END_DECLS
 

@@ -512,6 +512,7 @@ preview(gpointer user_data)
         gmodel = series_graph_new(&gui->args->correction, gui->args->series);
         gwy_graph_model_remove_all_curves(gui->gmodel);
         gwy_graph_model_append_curves(gui->gmodel, gmodel, 0);
+        series_graph_place_legend(gui->gmodel);
         g_object_unref(gmodel);
         text = describe_result(gui->args);
         gwy_dialog_have_result(GWY_DIALOG(gui->dialog));

@@ -46,7 +46,7 @@ fi
 # Every program whose source takes LOCALSCAN_TEST_SEED through the shared
 # helper (or the frame-pair one), roughly fastest first; the GUI tests last.
 if [ $# -eq 0 ]; then
-    set -- test-drift-model test-median test-jump-votes test-drift-fit test-trajectory-csv test-preview-field test-simscan-scanner \
+    set -- test-drift-model test-median test-jump-votes test-series-graph test-drift-fit test-trajectory-csv test-preview-field test-simscan-scanner \
         test-local-scan test-gwy-stream-save test-hostile-core \
         test-simscan-measured-sample test-continuous-compensate \
         test-drift-trajectory test-drift-fit-creep test-continuous-blocks \
