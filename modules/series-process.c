@@ -26,6 +26,9 @@
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
 
 #define SERIES_RUN_MODES (GWY_RUN_INTERACTIVE | GWY_RUN_IMMEDIATE)
+/* The share of a run's wait dialog the measurement takes; correcting the
+ * frames takes the rest. */
+#define SERIES_MEASURE_SHARE 0.8
 #define GRAPH_WIDTH 480
 #define GRAPH_HEIGHT 240
 
@@ -245,16 +248,31 @@ load_series(SeriesArgs *args, GError **error)
     return series;
 }
 
+/* Gwyddion's wait dialog as the measurement's progress (its Cancel stops
+ * it).  A cancel the dialog took while it was being shown has destroyed it
+ * already: setting its fraction then is an error. */
 static gboolean
-execute(SeriesArgs *args, GError **error)
+wait_dialog_progress(gdouble fraction, G_GNUC_UNUSED gpointer user_data)
 {
+    return !gwy_app_wait_was_canceled() && gwy_app_wait_set_fraction(fraction);
+}
+
+/* The series measured and fitted; with_progress: in Gwyddion's wait
+ * dialog, started by the caller, over its fractions from .. to. */
+static gboolean
+execute(SeriesArgs *args, gboolean with_progress, gdouble from, gdouble to,
+        GError **error)
+{
+    Progress progress = { wait_dialog_progress, NULL, from, to };
+
     if (args->computed)
         return TRUE;
     series_args_reset(args);
     if (!(args->series = load_series(args, error)))
         return FALSE;
-    if (!series_correction_compute(args->series, NULL, NULL,
-                                   &args->correction, error)) {
+    if (!series_correction_compute_progress(args->series, NULL, NULL,
+                                            with_progress ? &progress : NULL,
+                                            &args->correction, error)) {
         series_correction_clear(&args->correction);
         return FALSE;
     }
@@ -340,7 +358,9 @@ create_outputs(SeriesArgs *args, gboolean show_progress, GError **error)
         ok = series_correction_correct_frame(&args->correction, args->series,
                                              k, interpolation, results[k],
                                              masks[k], error);
-        if (ok && show_progress && !gwy_app_wait_set_fraction((k + 1.0)/n))
+        if (ok && show_progress
+            && !gwy_app_wait_set_fraction(SERIES_MEASURE_SHARE
+                                          + (1.0 - SERIES_MEASURE_SHARE)*(k + 1.0)/n))
             ok = FALSE;
     }
     if (ok && crop && !series_correction_common_area(masks, n, area, area + 1,
@@ -505,10 +525,13 @@ preview(gpointer user_data)
     SeriesGUI *gui = (SeriesGUI*)user_data;
     GwyGraphModel *gmodel;
     GError *error = NULL;
+    gboolean ok;
     gchar *text;
 
-    gwy_app_wait_cursor_start(GTK_WINDOW(gui->dialog));
-    if (execute(gui->args, &error)) {
+    gwy_app_wait_start(GTK_WINDOW(gui->dialog), _("Measuring the series..."));
+    ok = execute(gui->args, TRUE, 0.0, 1.0, &error);
+    gwy_app_wait_finish();
+    if (ok) {
         gmodel = series_graph_new(&gui->args->correction, gui->args->series);
         gwy_graph_model_remove_all_curves(gui->gmodel);
         gwy_graph_model_append_curves(gui->gmodel, gmodel, 0);
@@ -517,13 +540,18 @@ preview(gpointer user_data)
         text = describe_result(gui->args);
         gwy_dialog_have_result(GWY_DIALOG(gui->dialog));
     }
+    else if (g_error_matches(error, SERIES_CORRECTION_ERROR,
+                             SERIES_CORRECTION_ERROR_CANCELLED)) {
+        text = g_strdup(_("Measurement cancelled. Press Update to measure "
+                          "the series."));
+        g_clear_error(&error);
+    }
     else {
         text = g_strdup(error->message);
         g_clear_error(&error);
     }
     gtk_label_set_text(GTK_LABEL(gui->summary), text);
     g_free(text);
-    gwy_app_wait_cursor_finish(GTK_WINDOW(gui->dialog));
 }
 
 /* What the file's metadata leaves to the settings: the frames read (not
@@ -689,12 +717,16 @@ localscan_series(GwyContainer *data, GwyRunType runtype,
     if (show_progress)
         gwy_app_wait_start(gwy_app_find_window_for_channel(data, args.id),
                            _("Correcting the series..."));
-    ok = execute(&args, &error) && create_outputs(&args, show_progress, &error);
+    /* Measured already when the dialog's preview was up to date. */
+    ok = (execute(&args, show_progress, 0.0, SERIES_MEASURE_SHARE, &error)
+          && create_outputs(&args, show_progress, &error));
     if (show_progress)
         gwy_app_wait_finish();
     if (ok && gwy_params_get_boolean(args.params, PARAM_ADD_GRAPH))
         add_graph(&args);
-    if (!ok && error)
+    /* A run the user cancelled adds nothing and needs no word. */
+    if (!ok && error && !g_error_matches(error, SERIES_CORRECTION_ERROR,
+                                         SERIES_CORRECTION_ERROR_CANCELLED))
         report_error(&args, error);
 
 end:

@@ -26,6 +26,21 @@ gui_find_visible_dialog(GType type)
     return dialog;
 }
 
+GtkWidget*
+gui_find_titled_dialog(const gchar *title)
+{
+    GList *toplevels = gtk_window_list_toplevels(), *l;
+    GtkWidget *dialog = NULL;
+
+    for (l = toplevels; l && !dialog; l = g_list_next(l)) {
+        if (GTK_IS_DIALOG(l->data) && gtk_widget_get_visible(GTK_WIDGET(l->data))
+            && !g_strcmp0(gtk_window_get_title(GTK_WINDOW(l->data)), title))
+            dialog = GTK_WIDGET(l->data);
+    }
+    g_list_free(toplevels);
+    return dialog;
+}
+
 /* The widget itself or the first one below it with the name. */
 GtkWidget*
 gui_find_named_widget(GtkWidget *widget, const gchar *name)

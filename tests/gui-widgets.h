@@ -12,6 +12,8 @@
 #include <libgwyddion/gwyddion.h>
 
 GtkWidget* gui_find_visible_dialog(GType type);
+/* The visible dialog with this title (of several open at once). */
+GtkWidget* gui_find_titled_dialog (const gchar *title);
 GtkWidget* gui_find_named_widget  (GtkWidget *widget,
                                    const gchar *name);
 void       gui_flush_drawing      (void);

@@ -714,6 +714,136 @@ START_TEST(test_series_dialog_timing_from_file)
 }
 END_TEST
 
+/* A movie of n frames "Height 0.." of res x res px, each a window one
+ * pixel further along x and half a pixel along y on one surface. */
+static GwyContainer*
+make_movie_data(gint n, gint res)
+{
+    GwyContainer *data = gwy_container_new();
+    GwyDataField *surface = gwy_data_field_new(res + n + 8, res + n/2 + 8,
+                                               (res + n + 8)*1e-9, (res + n/2 + 8)*1e-9, FALSE);
+    GRand *rng = g_rand_new_with_seed(seed);
+    gchar title[32];
+    gint k;
+
+    gwy_data_field_synth_gaussian_displacement(surface, 3.0, 1.0, rng);
+    g_rand_free(rng);
+    for (k = 0; k < n; k++) {
+        GwyDataField *field = gwy_data_field_area_extract(surface, k, k/2, res, res);
+
+        gwy_data_field_set_xreal(field, res*1e-9);
+        gwy_data_field_set_yreal(field, res*1e-9);
+        gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+        gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
+        g_snprintf(title, sizeof(title), "Height %d", k);
+        gwy_container_set_const_string(data, gwy_app_get_data_title_key_for_id(k),
+                                       (const guchar*)title);
+        g_object_unref(field);
+    }
+    g_object_unref(surface);
+    return data;
+}
+
+/* The measurement's wait dialog, cancelled once it says it measures. */
+static gboolean
+cancel_measuring(gpointer user_data)
+{
+    WaitProbe *probe = (WaitProbe*)user_data;
+    GtkWidget *dialog = gui_find_titled_dialog("Please wait");
+
+    if (!dialog)
+        return TRUE;
+    probe->seen = TRUE;
+    g_string_truncate(probe->texts, 0);
+    collect_texts(dialog, probe->texts);
+    if (!strstr(probe->texts->str, "Measuring the series"))
+        return TRUE;
+    gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
+    probe->cancelled = TRUE;
+    return FALSE;
+}
+
+/* The series dialog ready: Update pressed (its wait dialog cancelled by
+ * cancel_measuring; the dialog measures when it next idles), then, once
+ * its summary has changed, what it says recorded and the dialog
+ * cancelled, again at each tick while it stays: GwyDialog dropped the
+ * first Cancel right after such a preview in 7 of 8 runs under load (the
+ * dialog stayed up for good), and took the second, a tick later. */
+typedef struct {
+    DialogProbe dialog;
+    WaitProbe wait;
+    GString *after;
+    gboolean updating;
+    gboolean answered;
+    gboolean stopped;            /* its timeout source is gone */
+    gint cancels;                /* Cancel answers until the dialog went */
+} UpdateProbe;
+
+static gboolean
+update_then_cancel(gpointer user_data)
+{
+    UpdateProbe *probe = (UpdateProbe*)user_data;
+    GtkWidget *dialog = gui_find_titled_dialog("Local Scan Series Drift");
+
+    probe->dialog.ticks++;
+    if (!dialog)
+        return (probe->stopped = (probe->dialog.ticks >= MAX_TICKS)) == FALSE;
+    if (!probe->updating) {
+        probe->dialog.ready = TRUE;
+        probe->dialog.dialog = dialog;
+        probe->updating = TRUE;
+        g_timeout_add(1, cancel_measuring, &probe->wait);
+        gtk_dialog_response(GTK_DIALOG(dialog), GWY_RESPONSE_UPDATE);
+        return TRUE;
+    }
+    if (!probe->answered) {
+        g_string_truncate(probe->after, 0);
+        collect_texts(dialog, probe->after);
+        if (g_str_has_prefix(probe->after->str, "Press Update to measure the series.")
+            && probe->dialog.ticks < MAX_TICKS)
+            return TRUE;
+        probe->answered = TRUE;
+    }
+    gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
+    probe->cancels++;
+    return (probe->stopped = (probe->dialog.ticks >= 2*MAX_TICKS)) == FALSE;
+}
+
+/* Update measures a long series in Gwyddion's wait dialog, whose Cancel
+ * stops the measurement: the dialog says so, and nothing is added (the
+ * measurement of a thousand frames takes seconds, and could not be
+ * stopped). */
+START_TEST(test_series_update_cancelled)
+{
+    GwyContainer *data = make_movie_data(48, 96);
+    UpdateProbe probe;
+    guint timeout;
+
+    init_application();
+    gwy_clear(&probe, 1);
+    probe.wait.texts = g_string_new(NULL);
+    probe.after = g_string_new(NULL);
+    gwy_app_data_browser_add(data);
+    gwy_app_data_browser_select_data_field(data, 0);
+    timeout = g_timeout_add(TICK_MS, update_then_cancel, &probe);
+    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
+    if (!probe.stopped)
+        g_source_remove(timeout);
+    printf("test-gui-dialog: the series dialog after a cancelled Update (closed by the "
+           "Cancel answer number %d) shows:\n%s", probe.cancels, probe.after->str);
+    fflush(stdout);
+    ck_assert_msg(probe.dialog.ready, "no series dialog");
+    ck_assert_msg(probe.wait.cancelled, "no measuring wait dialog (it said: %s)", probe.wait.texts->str);
+    ck_assert_msg(strstr(probe.after->str, "Measurement cancelled."),
+                  "the dialog does not say the measurement was cancelled:\n%s", probe.after->str);
+    ck_assert_int_eq(gui_count_channels(data), 48);
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+    g_string_free(probe.wait.texts, TRUE);
+    g_string_free(probe.after, TRUE);
+}
+END_TEST
+
 int
 main(void)
 {
@@ -735,5 +865,6 @@ main(void)
     tcase_add_test(tc, test_cancel_large_image);
     tcase_add_test(tc, test_series_dialog_tooltips);
     tcase_add_test(tc, test_series_dialog_timing_from_file);
+    tcase_add_test(tc, test_series_update_cancelled);
     return test_run_suite(suite);
 }

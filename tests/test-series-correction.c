@@ -287,6 +287,63 @@ START_TEST(test_jump_in_featureless_lines)
 }
 END_TEST
 
+/* Progress of the correction: fractions recorded; stop_at (>= 0) makes the
+ * call of that number stop it. */
+typedef struct {
+    gdouble fractions[64];
+    gint n;
+    gint stop_at;
+} ProgressLog;
+
+static gboolean
+log_progress(gdouble fraction, gpointer user_data)
+{
+    ProgressLog *log = (ProgressLog*)user_data;
+
+    if (log->n < (gint)G_N_ELEMENTS(log->fractions))
+        log->fractions[log->n] = fraction;
+    return log->n++ != log->stop_at;
+}
+
+/* The correction tells how far it has come, from 0 to 1 in order, ending
+ * at 1; stopped at its first report it fails as cancelled and holds
+ * nothing half-made (valgrind and ASan see the rest).  A long series
+ * reports after each chunk of its frames. */
+START_TEST(test_progress_and_cancel)
+{
+    SeriesCaseOptions options = { FALSE, -1 };
+    DriftModel model;
+    ProgressLog log = { { 0.0 }, 0, -1 };
+    Progress progress = { log_progress, &log, 0.0, 1.0 };
+    SeriesCorrection correction;
+    FrameSeries *series;
+    GError *error = NULL;
+    gint k;
+
+    hidden_case_draw(base_seed, 0, &model);
+    series = series_case_scan(base_seed, 0, &model, &options, NULL);
+    ck_assert(series_correction_compute_progress(series, NULL, NULL, &progress,
+                                                 &correction, &error));
+    series_correction_clear(&correction);
+    ck_assert_int_ge(log.n, 2);
+    for (k = 1; k < MIN(log.n, (gint)G_N_ELEMENTS(log.fractions)); k++)
+        ck_assert_msg(log.fractions[k] >= log.fractions[k-1] && log.fractions[k] <= 1.0,
+                      "report %d: %g after %g", k, log.fractions[k], log.fractions[k-1]);
+    ck_assert(log.fractions[MIN(log.n, (gint)G_N_ELEMENTS(log.fractions)) - 1] == 1.0);
+
+    log.n = 0;
+    log.stop_at = 0;
+    ck_assert(!series_correction_compute_progress(series, NULL, NULL, &progress,
+                                                  &correction, &error));
+    ck_assert(g_error_matches(error, SERIES_CORRECTION_ERROR, SERIES_CORRECTION_ERROR_CANCELLED));
+    ck_assert_int_eq(log.n, 1);
+    g_clear_error(&error);
+    series_correction_clear(&correction);
+    frame_series_free(series);
+    drift_model_clear(&model);
+}
+END_TEST
+
 /* A random walk: no model explains it, and the flexible trajectory
  * corrects the frames unless a model predicts nearly as well (a mild walk
  * is an acceleration); either way the frames overlay, whatever the
@@ -591,6 +648,7 @@ main(void)
     tcase_add_loop_test(tc, test_hidden_drift_corrected, 0, N_CASES);
     tcase_add_loop_test(tc, test_jump_before_slipped_frame, 0, 3);
     tcase_add_loop_test(tc, test_jump_in_featureless_lines, 0, 2);
+    tcase_add_test(tc, test_progress_and_cancel);
     tcase_add_loop_test(tc, test_random_walk_smooth, 0, 2);
     tcase_add_test(tc, test_outputs);
     tcase_add_test(tc, test_frames_overlay);

@@ -504,9 +504,18 @@ DriftMeasurement*
 displacement_measure_series(const FrameSeries *series,
                             const DisplacementOptions *options, gint *n)
 {
+    return displacement_measure_series_progress(series, options, NULL, n);
+}
+
+DriftMeasurement*
+displacement_measure_series_progress(const FrameSeries *series,
+                                     const DisplacementOptions *options,
+                                     const Progress *progress, gint *n)
+{
     DisplacementOptions defaults;
     SeriesRegistration reg;
     gint nf = series->n_frames, k, k0, k1, keep, released = 0, pairs;
+    gboolean go_on = TRUE;
 
     if (!options) {
         displacement_options_init(&defaults);
@@ -527,7 +536,7 @@ displacement_measure_series(const FrameSeries *series,
     pairs = MAX(nf - 1, 0) + reg.far_first[nf];
     reg.meas = g_new0(DriftMeasurement, MAX((gsize)pairs*options->n_blocks, 1));
     keep = reg.reach > 0 ? reg.reach : PREPARED_MAX_FRAMES;
-    for (k0 = 0; k0 < nf; k0 = k1) {
+    for (k0 = 0; k0 < nf && go_on; k0 = k1) {
         k1 = MIN(k0 + CHUNK_FRAMES, nf);
         parallel_run(k0, k1, prepare_task, &reg);
         parallel_run(MAX(k0, 1), k1, consecutive_task, &reg);
@@ -535,6 +544,7 @@ displacement_measure_series(const FrameSeries *series,
         /* Frames from k1 on reach back to k1 - keep at most. */
         for (; released < k1 - keep; released++)
             release_frame(&reg, released);
+        go_on = progress_report(progress, (gdouble)k1/nf);
     }
     for (k = 0; k < nf; k++)
         release_frame(&reg, k);
@@ -543,6 +553,11 @@ displacement_measure_series(const FrameSeries *series,
     g_free(reg.step);
     g_free(reg.spread);
     g_free(reg.far_first);
+    if (!go_on) {
+        g_free(reg.meas);
+        *n = 0;
+        return NULL;
+    }
     *n = compact_measurements(reg.meas, (gsize)pairs*options->n_blocks);
     return reg.meas;
 }

@@ -11,6 +11,7 @@
 #include <glib.h>
 #include "frame-series.h"
 #include "drift-fit.h"
+#include "progress.h"
 
 G_BEGIN_DECLS
 
@@ -68,6 +69,12 @@ gint               displacement_tall_blocks (gint n_blocks);
 DriftMeasurement*  displacement_measure_series(const FrameSeries *series,
                                                const DisplacementOptions *options,
                                                gint *n);
+/* The same, telling progress after each chunk of frames; NULL when
+ * progress stopped it. */
+DriftMeasurement*  displacement_measure_series_progress(const FrameSeries *series,
+                                                        const DisplacementOptions *options,
+                                                        const Progress *progress,
+                                                        gint *n);
 
 G_END_DECLS
 

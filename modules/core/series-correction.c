@@ -1233,14 +1233,20 @@ prepare_options(const FrameSeries *series, const DisplacementOptions *doptions,
  * weight as registered, frames flagged for missing data left out. */
 static gboolean
 measure_and_fit(SeriesCorrection *correction, const FrameSeries *series,
-                const DisplacementOptions *d, gdouble **registered)
+                const DisplacementOptions *d, const Progress *progress,
+                gdouble **registered, gboolean *cancelled)
 {
     FitReport *fit = &correction->fit;
     gdouble *weights;
     gboolean ok;
     gint i;
 
-    fit->meas = displacement_measure_series(series, d, &fit->n_meas);
+    fit->meas = displacement_measure_series_progress(series, d, progress,
+                                                     &fit->n_meas);
+    if ((*cancelled = !fit->meas)) {
+        *registered = NULL;
+        return FALSE;
+    }
     *registered = g_new(gdouble, 2*MAX(fit->n_meas, 1));
     weights = *registered + MAX(fit->n_meas, 1);
     flag_mostly_missing(correction, series);
@@ -1267,6 +1273,17 @@ measure_and_fit(SeriesCorrection *correction, const FrameSeries *series,
         ok = fit_models(correction, *registered, d->n_blocks);
     }
     return ok;
+}
+
+/* Every frame unjudged again (a new measurement judges them afresh). */
+static void
+verdicts_reset(SeriesCorrection *correction)
+{
+    gint k;
+
+    for (k = 0; k < correction->n_frames; k++)
+        g_free(correction->frames[k].reason);
+    memset(correction->frames, 0, correction->n_frames*sizeof(SeriesFrameVerdict));
 }
 
 /* A block registers as one shift, but the drift moves on while its lines
@@ -1314,11 +1331,29 @@ series_correction_compute(const FrameSeries *series,
                           const DriftFitOptions *foptions,
                           SeriesCorrection *correction, GError **error)
 {
+    return series_correction_compute_progress(series, doptions, foptions,
+                                              NULL, correction, error);
+}
+
+/* The share of the work the first measurement takes, then each round of
+ * shorter blocks (FINER_ROUNDS); the fits and the rest take what is left. */
+#define PROGRESS_MEASURE 0.75
+#define PROGRESS_FINER 0.1
+
+gboolean
+series_correction_compute_progress(const FrameSeries *series,
+                                   const DisplacementOptions *doptions,
+                                   const DriftFitOptions *foptions,
+                                   const Progress *progress,
+                                   SeriesCorrection *correction,
+                                   GError **error)
+{
     DisplacementOptions d;
     FitReport *fit = &correction->fit;
     gdouble *registered = NULL;
-    gboolean ok;
+    gboolean ok, cancelled = FALSE;
     gint round, knot_blocks;
+    Progress part;
     guint i;
 
     memset(correction, 0, sizeof(SeriesCorrection));
@@ -1336,7 +1371,8 @@ series_correction_compute(const FrameSeries *series,
     prepare_options(series, doptions, foptions, &d, &fit->fit_options);
     knot_blocks = d.n_blocks;
     drift_fit_candidates(&fit->n_fits);
-    ok = measure_and_fit(correction, series, &d, &registered);
+    part = progress_part(progress, 0.0, PROGRESS_MEASURE);
+    ok = measure_and_fit(correction, series, &d, &part, &registered, &cancelled);
     /* Blocks too long for the drift's own changes: measured again in
      * shorter ones (only when the caller left the blocks to us). */
     for (round = 0; ok && !doptions && round < FINER_ROUNDS
@@ -1349,9 +1385,11 @@ series_correction_compute(const FrameSeries *series,
         g_free(registered);
         g_free(fit->meas);
         fit->meas = NULL;
-        memset(correction->frames, 0,
-               series->n_frames*sizeof(SeriesFrameVerdict));
-        ok = measure_and_fit(correction, series, &d, &registered);
+        verdicts_reset(correction);
+        part = progress_part(progress, PROGRESS_MEASURE + round*PROGRESS_FINER,
+                             PROGRESS_MEASURE + (round + 1)*PROGRESS_FINER);
+        ok = measure_and_fit(correction, series, &d, &part, &registered,
+                             &cancelled);
     }
     if (ok) {
         locate_jump(correction, series,
@@ -1369,7 +1407,12 @@ series_correction_compute(const FrameSeries *series,
         }
         warn_about_fit(correction, registered);
         warn_about_jump(correction);
+        progress_report(progress, 1.0);
     }
+    else if (cancelled)
+        g_set_error(error, SERIES_CORRECTION_ERROR,
+                    SERIES_CORRECTION_ERROR_CANCELLED,
+                    _("the measurement of the series was cancelled"));
     else
         g_set_error(error, SERIES_CORRECTION_ERROR,
                     SERIES_CORRECTION_ERROR_FIT,

@@ -18,6 +18,7 @@
 #include "fit-report.h"
 #include "drift-trajectory.h"
 #include "smooth-trajectory.h"
+#include "progress.h"
 
 G_BEGIN_DECLS
 
@@ -34,6 +35,7 @@ G_BEGIN_DECLS
 typedef enum {
     SERIES_CORRECTION_ERROR_FIT,      /* too few frames registered */
     SERIES_CORRECTION_ERROR_COMPENSATE, /* the trajectory folds a frame */
+    SERIES_CORRECTION_ERROR_CANCELLED,  /* progress stopped it */
 } SeriesCorrectionError;
 
 /* What the series says about one frame. */
@@ -89,6 +91,14 @@ gboolean  series_correction_compute   (const FrameSeries *series,
                                        const DriftFitOptions *foptions,
                                        SeriesCorrection *correction,
                                        GError **error);
+/* The same, telling progress (NULL: none) how far it has come; FALSE with
+ * SERIES_CORRECTION_ERROR_CANCELLED when progress stopped it. */
+gboolean  series_correction_compute_progress(const FrameSeries *series,
+                                             const DisplacementOptions *doptions,
+                                             const DriftFitOptions *foptions,
+                                             const Progress *progress,
+                                             SeriesCorrection *correction,
+                                             GError **error);
 void      series_correction_clear     (SeriesCorrection *correction);
 
 /* p(t) - p(0) of the chosen fit in pixels of the frames. */
