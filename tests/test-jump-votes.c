@@ -222,6 +222,39 @@ START_TEST(test_one_sided_line_needs_a_minimum)
 }
 END_TEST
 
+/* A run of featureless lines between textured lines before and after a
+ * jump: their leanings are noise, a hundredth of a textured line's
+ * evidence and less, and whatever split they choose, the loose splits
+ * span the whole run (the series correction reports that window). */
+START_TEST(test_loose_splits_span_featureless_run)
+{
+    GRand *rng = test_rand_salted(base_seed, 5);
+    LineEvidence ev[60];
+    gint frame[60] = { 0 }, d, i, n_before, n_flat, n, first, last, lo, hi;
+    gdouble noise, m;
+
+    for (d = 0; d < N_DRAWS; d++) {
+        n_before = g_rand_int_range(rng, 6, 21);
+        n_flat = g_rand_int_range(rng, 2, 9);
+        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
+        m = noise*g_rand_double_range(rng, 10.0, 40.0);
+        textured_run(ev, rng, m, 0, n_before, n_before, FALSE);
+        for (i = n_before; i < n_before + n_flat; i++)
+            featureless_line(ev + i, rng, noise, g_rand_double_range(rng, -0.3, 0.3));
+        n = n_before + n_flat + g_rand_int_range(rng, 6, 21);
+        textured_run(ev, rng, m, n_before + n_flat, n, n_before + n_flat, FALSE);
+        ck_assert(jump_votes_split_loose(ev, frame, n, &first, &last, &lo, &hi));
+        ck_assert_msg(first >= n_before && last <= n_before + n_flat,
+                      "seed %u draw %d: split %d..%d outside the run %d..%d",
+                      base_seed, d, first, last, n_before, n_before + n_flat);
+        ck_assert_msg(lo == n_before && hi == n_before + n_flat,
+                      "seed %u draw %d: loose splits %d..%d, the run %d..%d",
+                      base_seed, d, lo, hi, n_before, n_before + n_flat);
+    }
+    g_rand_free(rng);
+}
+END_TEST
+
 /* Lines all on one side, or fewer than two, place no jump. */
 START_TEST(test_no_jump_without_both_sides)
 {
@@ -248,6 +281,7 @@ main(void)
     tcase_add_test(tc, test_clear_jump_to_the_line);
     tcase_add_test(tc, test_edge_line_needs_its_neighbours);
     tcase_add_test(tc, test_one_sided_line_needs_a_minimum);
+    tcase_add_test(tc, test_loose_splits_span_featureless_run);
     tcase_add_test(tc, test_no_jump_without_both_sides);
     return test_run_suite(s);
 }

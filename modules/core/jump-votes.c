@@ -111,7 +111,8 @@ median_vote(const gdouble *raw, const gint *frame, gint n, gint i)
 }
 
 /* The evidence of each line, its cost without the step minus its cost
- * with it (positive: the line lies after the jump).  A line with the
+ * with it (positive: the line lies after the jump); returns the level
+ * below which a line's evidence is weak.  A line with the
  * evidence of a typical line (a tenth of the median over the lines with
  * any) speaks for itself: the one line after a jump before a frame's
  * unseen last lines must count (seed 5000182).  A weak line, nearly
@@ -129,7 +130,7 @@ median_vote(const gdouble *raw, const gint *frame, gint n, gint i)
  * featureless lines that leaned the other way, it moved a jump 7 lines
  * late (test-series-correction seed 370001572, case 3: 4.4 px on those
  * lines). */
-static void
+static gdouble
 steady_votes(const gdouble *before, const gdouble *after,
              const LineEvidence *ev, const gint *frame, gint n, gdouble match,
              gdouble *votes)
@@ -153,6 +154,7 @@ steady_votes(const gdouble *before, const gdouble *after,
             votes[i] = median_vote(raw, frame, n, i);
     }
     g_free(raw);
+    return strong;
 }
 
 /* Split i: lines 0 .. i-1 before the jump, i .. n-1 after it; the best
@@ -183,12 +185,35 @@ gboolean
 jump_votes_split(const LineEvidence *evidence, const gint *frame, gint n,
                  gint *first, gint *last)
 {
+    gint loose_first, loose_last;
+
+    return jump_votes_split_loose(evidence, frame, n, first, last,
+                                  &loose_first, &loose_last);
+}
+
+/* The tied splits widened over the weak votes on either side: featureless
+ * lines vote by noise, and a split they decide is no better placed than a
+ * tie (a jump in frame 0's last featureless lines before a flagged frame
+ * was put four lines early by votes a hundred times below a typical
+ * line's, with no word: seed 575000436 of test-series-correction). */
+gboolean
+jump_votes_split_loose(const LineEvidence *evidence, const gint *frame,
+                       gint n, gint *first, gint *last, gint *loose_first,
+                       gint *loose_last)
+{
     gdouble *costs = g_new(gdouble, 3*MAX(n, 1)), *before = costs;
     gdouble *after = costs + MAX(n, 1), *votes = after + MAX(n, 1), match;
+    gdouble strong;
 
     match = evidence_costs(evidence, n, before, after);
-    steady_votes(before, after, evidence, frame, n, match, votes);
+    strong = steady_votes(before, after, evidence, frame, n, match, votes);
     best_split(votes, n, first, last);
+    *loose_first = *first;
+    *loose_last = *last;
+    while (*loose_first > 0 && fabs(votes[*loose_first - 1]) < strong)
+        (*loose_first)--;
+    while (*loose_last < n && fabs(votes[*loose_last]) < strong)
+        (*loose_last)++;
     g_free(costs);
     return n >= 2 && *last > 0 && *first < n;
 }

@@ -42,6 +42,17 @@ gboolean     jump_votes_split     (const LineEvidence *evidence,
                                    gint *first,
                                    gint *last);
 
+/* The same, and the splits loose_first .. loose_last that differ from the
+ * best only by lines whose evidence is weak (a tenth of a typical line's
+ * or less): where the data leaves the jump, whatever the split chosen. */
+gboolean     jump_votes_split_loose(const LineEvidence *evidence,
+                                    const gint *frame,
+                                    gint n,
+                                    gint *first,
+                                    gint *last,
+                                    gint *loose_first,
+                                    gint *loose_last);
+
 G_END_DECLS
 
 #endif

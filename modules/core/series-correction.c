@@ -1098,7 +1098,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
               gdouble block_span)
 {
     DriftFit *fit = correction->fit.fits + correction->fit.chosen;
-    gint nf = series->n_frames, k, r, i, n = 0, first, last, most = 0;
+    gint nf = series->n_frames, k, r, i, n = 0, first, last, lo, hi, most = 0;
     gdouble *line, *when, *ends, t, t_lo, t_hi;
     LineEvidence *evidence;
     gint *frame;
@@ -1132,12 +1132,12 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
         }
     }
     correction->jump_tied_lines = 0;
-    if (jump_votes_split(evidence, frame, n, &first, &last)) {
+    if (jump_votes_split_loose(evidence, frame, n, &first, &last, &lo, &hi)) {
         fit->nonlinear = jump_within_ties(fit->nonlinear, when, ends, n,
                                           first, last, t_lo, t_hi);
-        correction->jump_tied_lines = last - first;
-        correction->jump_window[0] = (first > 0) ? ends[first-1] : t_lo;
-        correction->jump_window[1] = (last < n) ? when[last] : t_hi;
+        correction->jump_tied_lines = hi - lo;
+        correction->jump_window[0] = (lo > 0) ? ends[lo-1] : t_lo;
+        correction->jump_window[1] = (hi < n) ? when[hi] : t_hi;
     }
     g_free(evidence);
     g_free(frame);
