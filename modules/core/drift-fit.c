@@ -552,21 +552,14 @@ scan_frequency(const ScanTerm *terms, gint nu, const ScanFixed *fixed,
         phasor_step(pb + u);
         phasor_step(ph + u);
     }
-    ata[0] = fixed->a00;
-    ata[1] = a01;
-    ata[2] = a02;
-    ata[3] = a10;
-    ata[4] = a11;
-    ata[5] = a12;
-    ata[6] = a20;
-    ata[7] = a21;
-    ata[8] = a22;
-    atb[0][0] = fixed->b0[0];
-    atb[1][0] = fixed->b0[1];
-    atb[0][1] = bx1;
-    atb[1][1] = by1;
-    atb[0][2] = bx2;
-    atb[1][2] = by2;
+    {
+        const gdouble a[9] = { fixed->a00, a01, a02, a10, a11, a12, a20, a21, a22 };
+        const gdouble b[2][3] = { { fixed->b0[0], bx1, bx2 }, { fixed->b0[1], by1, by2 } };
+
+        memcpy(ata, a, sizeof(a));
+        memcpy(atb[0], b[0], sizeof(b[0]));
+        memcpy(atb[1], b[1], sizeof(b[1]));
+    }
     *visibility = (fixed->wsum > 0.0) ? vsum/fixed->wsum : 0.0;
     rss = solve_normal(ata, atb, sdd, 3, coef);
     return isfinite(rss) ? rss : G_MAXDOUBLE;
