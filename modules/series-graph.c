@@ -6,6 +6,7 @@
  */
 #include "config.h"
 #include <string.h>
+#include <math.h>
 #include <libgwyddion/gwyddion.h>
 #include <libgwydgets/gwydgets.h>
 #include "series-graph.h"
@@ -49,16 +50,21 @@ curve_points(GwyGraphModel *graph, gdouble **x, gdouble **y)
     return total;
 }
 
-static void
+/* The range of the finite values; FALSE when there are none. */
+static gboolean
 value_range(const gdouble *v, gint n, gdouble *lo, gdouble *hi)
 {
     gint i;
 
-    *lo = *hi = v[0];
-    for (i = 1; i < n; i++) {
-        *lo = MIN(*lo, v[i]);
-        *hi = MAX(*hi, v[i]);
+    *lo = G_MAXDOUBLE;
+    *hi = -G_MAXDOUBLE;
+    for (i = 0; i < n; i++) {
+        if (isfinite(v[i])) {
+            *lo = MIN(*lo, v[i]);
+            *hi = MAX(*hi, v[i]);
+        }
     }
+    return *lo <= *hi;
 }
 
 void
@@ -71,9 +77,8 @@ series_graph_place_legend(GwyGraphModel *graph)
     gint j, c, n = curve_points(graph, &x, &y), count[4] = { 0, 0, 0, 0 };
     gint best = GWY_GRAPH_LABEL_NORTHEAST;
 
-    if (n) {
-        value_range(x, n, &xmin, &xmax);
-        value_range(y, n, &ymin, &ymax);
+    /* Points with a non-finite coordinate are drawn nowhere. */
+    if (value_range(x, n, &xmin, &xmax) && value_range(y, n, &ymin, &ymax)) {
         wx = LEGEND_FRACTION*(xmax - xmin);
         wy = LEGEND_FRACTION*(ymax - ymin);
         for (j = 0; j < n; j++) {

@@ -341,7 +341,8 @@ crop_to(GwyDataField *field, const gint *area)
 /* Every frame corrected (with Gwyddion's wait dialog, which can cancel),
  * then added, cropped to the common area when asked. */
 static gboolean
-create_outputs(SeriesArgs *args, gboolean show_progress, GError **error)
+create_outputs(SeriesArgs *args, gboolean show_progress, gdouble from,
+               GError **error)
 {
     gint n = args->series->n_frames, k, area[4];
     GwyDataField **results = g_new0(GwyDataField*, n);
@@ -359,8 +360,7 @@ create_outputs(SeriesArgs *args, gboolean show_progress, GError **error)
                                              k, interpolation, results[k],
                                              masks[k], error);
         if (ok && show_progress
-            && !gwy_app_wait_set_fraction(SERIES_MEASURE_SHARE
-                                          + (1.0 - SERIES_MEASURE_SHARE)*(k + 1.0)/n))
+            && !gwy_app_wait_set_fraction(from + (1.0 - from)*(k + 1.0)/n))
             ok = FALSE;
     }
     if (ok && crop && !series_correction_common_area(masks, n, area, area + 1,
@@ -700,6 +700,7 @@ localscan_series(GwyContainer *data, GwyRunType runtype,
     GError *error = NULL;
     SeriesArgs args;
     gboolean ok, show_progress;
+    gdouble share;
 
     g_return_if_fail(runtype & SERIES_RUN_MODES);
     gwy_clear(&args, 1);
@@ -717,9 +718,11 @@ localscan_series(GwyContainer *data, GwyRunType runtype,
     if (show_progress)
         gwy_app_wait_start(gwy_app_find_window_for_channel(data, args.id),
                            _("Correcting the series..."));
-    /* Measured already when the dialog's preview was up to date. */
-    ok = (execute(&args, show_progress, 0.0, SERIES_MEASURE_SHARE, &error)
-          && create_outputs(&args, show_progress, &error));
+    /* Measured already when the dialog's preview was up to date: the
+     * frames' correction then takes the whole bar. */
+    share = args.computed ? 0.0 : SERIES_MEASURE_SHARE;
+    ok = (execute(&args, show_progress, 0.0, share, &error)
+          && create_outputs(&args, show_progress, share, &error));
     if (show_progress)
         gwy_app_wait_finish();
     if (ok && gwy_params_get_boolean(args.params, PARAM_ADD_GRAPH))

@@ -981,7 +981,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     gint j, count = 0, nb = 0, na = 0, xres = fk->timing.xres;
     const gdouble *row = gwy_data_field_get_data_const(fk->field) + (gsize)r*xres;
     gdouble eb, ea, ec, en, sb = 0.0, sa = 0.0, ob = 0.0, oa = 0.0, cb = 0.0, ca = 0.0;
-    gdouble near_a = 0.0, near_b = 0.0;
+    gdouble near_a = 0.0, near_b = 0.0, cost_a = 0.0, cost_b = 0.0;
     gdouble *u = line + xres, *d = u + xres;
     const gdouble *ref;
 
@@ -1013,13 +1013,19 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
         if (isnan(eb)) {
             oa += ea;
             ca += ec;
-            near_a += en;
+            if (!isnan(en)) {
+                near_a += en;
+                cost_a += ea;
+            }
             na++;
         }
         else {
             ob += eb;
             cb += ec;
-            near_b += en;
+            if (!isnan(en)) {
+                near_b += en;
+                cost_b += eb;
+            }
             nb++;
         }
     }
@@ -1027,7 +1033,14 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     ev->before = count ? sb/count : (nb ? ob/nb : NAN);
     ev->after = count ? sa/count : (na ? oa/na : NAN);
     ev->control = (count || (nb && na)) ? NAN : (nb ? cb/nb : (na ? ca/na : NAN));
-    ev->nearby = isnan(ev->control) ? NAN : (nb ? near_b/nb : near_a/na);
+    /* The partners that show the line's content a pixel off too decide
+     * whether it is a minimum: scaled so that cost < nearby holds as their
+     * mean cost is below their mean nearby one. */
+    ev->nearby = NAN;
+    if (!isnan(ev->control) && (nb ? cost_b : cost_a) > 0.0)
+        ev->nearby = (nb ? ev->before*near_b/cost_b : ev->after*near_a/cost_a);
+    else if (!isnan(ev->control) && (nb ? near_b : near_a) > 0.0)
+        ev->nearby = INFINITY;
     /* Only a one-sided line is judged by its texture. */
     ev->texture = NAN;
     if (!isnan(ev->control)) {
@@ -1150,6 +1163,18 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
  * jump's own). */
 #define JUMP_TIED_WARN_LINES 2
 
+/* Whether frame k was scanned, at least in part, within the jump's
+ * window. */
+static gboolean
+frame_within_window(const SeriesCorrection *correction,
+                    const FrameSeries *series, gint k)
+{
+    const ScanTiming *timing = &series->frames[k].timing;
+
+    return (timing->frame_start < correction->jump_window[1]
+            && scan_timing_frame_end(timing) > correction->jump_window[0]);
+}
+
 /* The lines that tie around the chosen jump (featureless, or seen by no
  * other frame) are corrected by the blocks' guess: the data cannot tell
  * where in them the jump lies, and the user is told which times those
@@ -1157,21 +1182,36 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
  * one, seed 480000936 of test-series-correction: their drift is 5.9 px
  * either way, and no particle on them shows it). */
 static void
-warn_about_jump(SeriesCorrection *correction)
+warn_about_jump(SeriesCorrection *correction, const FrameSeries *series)
 {
     const DriftFit *chosen = correction->fit.fits + correction->fit.chosen;
 
+    GString *text;
+    gint k, n_flagged = 0;
+
+    /* What is not reported is no window at all (the trajectory is the
+     * flexible one, or a line or none ties). */
     if (correction->use_smooth || chosen->type != DRIFT_MODEL_JUMP
-        || correction->jump_tied_lines < JUMP_TIED_WARN_LINES)
+        || correction->jump_tied_lines < JUMP_TIED_WARN_LINES) {
+        correction->jump_tied_lines = 0;
         return;
-    add_warning(correction,
-                g_strdup_printf(_("the jump at %.1f s may lie anywhere from "
-                                  "%.1f s to %.1f s: %d scan lines there "
-                                  "show nothing that places them before "
-                                  "or after it"),
-                                chosen->nonlinear, correction->jump_window[0],
-                                correction->jump_window[1],
-                                correction->jump_tied_lines));
+    }
+    correction->jump_window[0] = MAX(correction->jump_window[0], 0.0);
+    correction->jump_window[1] = MIN(correction->jump_window[1], correction->span_s);
+    /* Seconds to four digits: lines of HS-AFM movies take a millisecond. */
+    text = g_string_new(NULL);
+    g_string_printf(text, _("the jump at %.6g s may lie anywhere from %.6g s "
+                            "to %.6g s: %d scan lines there show nothing "
+                            "that places them before or after it"),
+                    chosen->nonlinear, correction->jump_window[0],
+                    correction->jump_window[1], correction->jump_tied_lines);
+    for (k = 0; k < correction->n_frames; k++)
+        n_flagged += (correction->frames[k].flagged
+                      && frame_within_window(correction, series, k));
+    if (n_flagged)
+        g_string_append_printf(text, _(", and %d flagged frames lie within "
+                                       "it"), n_flagged);
+    add_warning(correction, g_string_free(text, FALSE));
 }
 
 /* Blocks straddling the jump pull the fitted time and with it the step and
@@ -1391,6 +1431,10 @@ series_correction_compute_progress(const FrameSeries *series,
         ok = measure_and_fit(correction, series, &d, &part, &registered,
                              &cancelled);
     }
+    /* The line-by-line jump and the flexible trajectory take seconds on a
+     * long series: a cancel given meanwhile is honoured after them. */
+    if (ok && !progress_report(progress, PROGRESS_MEASURE + FINER_ROUNDS*PROGRESS_FINER))
+        ok = !(cancelled = TRUE);
     if (ok) {
         locate_jump(correction, series,
                     series->frames[0].timing.yres*series->frames[0].timing.line_time/d.n_blocks);
@@ -1406,14 +1450,14 @@ series_correction_compute_progress(const FrameSeries *series,
             judge_frames(correction, registered);
         }
         warn_about_fit(correction, registered);
-        warn_about_jump(correction);
-        progress_report(progress, 1.0);
+        warn_about_jump(correction, series);
+        ok = !(cancelled = !progress_report(progress, 1.0));
     }
-    else if (cancelled)
+    if (!ok && cancelled)
         g_set_error(error, SERIES_CORRECTION_ERROR,
                     SERIES_CORRECTION_ERROR_CANCELLED,
                     _("the measurement of the series was cancelled"));
-    else
+    else if (!ok)
         g_set_error(error, SERIES_CORRECTION_ERROR,
                     SERIES_CORRECTION_ERROR_FIT,
                     _("too few blocks of the frames could be registered "
