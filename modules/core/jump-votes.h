@@ -43,8 +43,8 @@ gboolean     jump_votes_split     (const LineEvidence *evidence,
                                    gint *last);
 
 /* The same, and the splits loose_first .. loose_last that differ from the
- * best only by lines whose evidence is weak (a tenth of a typical line's
- * or less): where the data leaves the jump, whatever the split chosen. */
+ * best only by lines whose evidence is weak (below a tenth of a typical
+ * line's): where the data leaves the jump, whatever the split chosen. */
 gboolean     jump_votes_split_loose(const LineEvidence *evidence,
                                     const gint *frame,
                                     gint n,
