@@ -144,12 +144,10 @@ static const DialogTooltip series_tooltips[] = {
 static gboolean
 is_corrected(GwyContainer *data, gint id)
 {
-    GwyContainer *meta = localscan_channel_item(data, id, "meta");
-    const guchar *value = NULL;
+    const gchar *value = localscan_channel_meta_string(data, id, SERIES_CORRECTED_META_KEY);
 
-    if (meta && gwy_container_gis_string_by_name(meta, SERIES_CORRECTED_META_KEY, &value)
-        && (g_str_has_prefix((const gchar*)value, SERIES_CORRECTED_BY_TOOL)
-            || g_str_has_prefix((const gchar*)value, SERIES_CORRECTED_BY_DIALOG)))
+    if (value && (g_str_has_prefix(value, SERIES_CORRECTED_BY_TOOL)
+                  || g_str_has_prefix(value, SERIES_CORRECTED_BY_DIALOG)))
         return TRUE;
     return compensation_marker_get(data, id) != NULL;
 }
@@ -285,17 +283,10 @@ execute(SeriesArgs *args, gboolean with_progress, gdouble from, gdouble to,
 static void
 mark_corrected(GwyContainer *data, gint id)
 {
-    gchar key[48];
-    GwyContainer *meta;
-
-    g_snprintf(key, sizeof(key), "/%d/meta", id);
-    if (!gwy_container_gis_object_by_name(data, key, (GObject**)&meta)) {
-        meta = gwy_container_new();
-        gwy_container_set_object_by_name(data, key, meta);
-        g_object_unref(meta);
-    }
-    gwy_container_set_const_string_by_name(meta, SERIES_CORRECTED_META_KEY,
-                                           (const guchar*)SERIES_CORRECTED_BY_DIALOG ", line by line");
+    gwy_container_set_const_string_by_name(localscan_channel_meta(data, id, TRUE),
+                                           SERIES_CORRECTED_META_KEY,
+                                           (const guchar*)SERIES_CORRECTED_BY_DIALOG
+                                           ", line by line");
 }
 
 /* A corrected frame as a new channel: titled after its source, with its
@@ -579,12 +570,11 @@ show_timing_use(SeriesGUI *gui)
 {
     GwyParamTable *table = gui->table;
     TimingUse use = timing_use(gui->args);
+    gboolean times_used = (use == TIMING_USE_ALL || use == TIMING_USE_UNKNOWN);
     gchar *text = NULL;
 
-    gwy_param_table_set_sensitive(table, PARAM_LINE_TIME, use != TIMING_USE_NONE
-                                  && use != TIMING_USE_DIRECTION);
-    gwy_param_table_set_sensitive(table, PARAM_FRAME_INTERVAL, use != TIMING_USE_NONE
-                                  && use != TIMING_USE_DIRECTION);
+    gwy_param_table_set_sensitive(table, PARAM_LINE_TIME, times_used);
+    gwy_param_table_set_sensitive(table, PARAM_FRAME_INTERVAL, times_used);
     gwy_param_table_set_sensitive(table, PARAM_DIRECTION, use != TIMING_USE_NONE);
     if (use == TIMING_USE_NONE)
         text = g_strdup(_("The file gives the timing: these settings are not used."));

@@ -501,7 +501,6 @@ phasor_step(Phasor *p)
  * displacements, and its span's half as a phase per unit frequency. */
 typedef struct {
     gdouble w, r0, wr0, d0, d1, half_2pi;
-    gboolean spans;
 } ScanTerm;
 
 /* The sums of the velocity's basis alone: the same at every frequency. */
@@ -529,7 +528,7 @@ scan_frequency(const ScanTerm *terms, gint nu, const ScanFixed *fixed,
 
         /* The basis averaged over the span (model_basis_mean). */
         x = t->half_2pi*f;
-        w = t->spans ? (fabs(x) < 1e-4 ? 1.0 - x*x/6.0 : ph[u].s/x) : 1.0;
+        w = (t->half_2pi > 0.0) ? (fabs(x) < 1e-4 ? 1.0 - x*x/6.0 : ph[u].s/x) : 1.0;
         r1 = w*(pa[u].s - pb[u].s);
         r2 = w*(pa[u].c - pb[u].c);
         wr1 = t->w*r1;
@@ -595,7 +594,6 @@ oscillation_scan(const Prepared *pm, gdouble fmin, gdouble fmax, gint m,
         t->d0 = pm->d[0][i];
         t->d1 = pm->d[1][i];
         t->half_2pi = 2.0*G_PI*pm->half[i];
-        t->spans = (pm->half[i] > 0.0);
         fixed.a00 += t->wr0*t->r0;
         fixed.b0[0] += t->wr0*t->d0;
         fixed.b0[1] += t->wr0*t->d1;
