@@ -265,8 +265,9 @@ execute(SeriesArgs *args, gboolean with_progress, gdouble from, gdouble to,
 
     if (args->computed)
         return TRUE;
-    series_args_reset(args);
-    if (!(args->series = load_series(args, error)))
+    /* The frames read when the dialog opened serve until a timing setting
+     * they depend on changes (param_changed). */
+    if (!args->series && !(args->series = load_series(args, error)))
         return FALSE;
     if (!series_correction_compute_progress(args->series, NULL, NULL,
                                             with_progress ? &progress : NULL,
@@ -546,21 +547,15 @@ preview(gpointer user_data)
 }
 
 /* What the file's metadata leaves to the settings: the frames read (not
- * measured) as the measurement will read them. */
+ * measured) as the measurement will read them, and kept for it. */
 static TimingUse
 timing_use(SeriesArgs *args)
 {
-    FrameSeries *series = load_series(args, NULL);
-    TimingUse use = TIMING_USE_UNKNOWN;
-
-    if (series) {
-        if (args->timing_assumed)
-            use = TIMING_USE_ALL;
-        else
-            use = direction_from_setting(series) ? TIMING_USE_DIRECTION : TIMING_USE_NONE;
-    }
-    frame_series_free(series);
-    return use;
+    if (!args->series && !(args->series = load_series(args, NULL)))
+        return TIMING_USE_UNKNOWN;
+    if (args->timing_assumed)
+        return TIMING_USE_ALL;
+    return direction_from_setting(args->series) ? TIMING_USE_DIRECTION : TIMING_USE_NONE;
 }
 
 /* The timing settings greyed where the file gives what they stand in for,
@@ -588,7 +583,6 @@ show_timing_use(SeriesGUI *gui)
         text = g_strdup(_("Used only if the file lacks them."));
     gwy_param_table_set_label(table, INFO_TIMING_USE, text);
     g_free(text);
-    series_args_reset(gui->args);
 }
 
 static void
