@@ -27,7 +27,7 @@ two_sided(LineEvidence *ev, gdouble before, gdouble after)
     ev->before = before;
     ev->after = after;
     ev->two_sided = TRUE;
-    ev->control = ev->texture = ev->nearby = NAN;
+    ev->control = ev->texture = ev->nearby = ev->unrelated = NAN;
 }
 
 /* A line cutting particles: about the typical match m (a few times the
@@ -152,10 +152,11 @@ START_TEST(test_edge_line_needs_its_neighbours)
 END_TEST
 
 /* A line seen under one drift only (its content out of every other frame
- * under the other): cost under it, control, texture and nearby cost. */
+ * under the other): cost under it, control, texture, nearby cost and
+ * what unrelated content costs. */
 static void
 one_sided(LineEvidence *ev, gboolean seen_after, gdouble cost,
-          gdouble control, gdouble texture, gdouble nearby)
+          gdouble control, gdouble texture, gdouble nearby, gdouble unrelated)
 {
     ev->two_sided = FALSE;
     ev->before = seen_after ? NAN : cost;
@@ -163,6 +164,7 @@ one_sided(LineEvidence *ev, gboolean seen_after, gdouble cost,
     ev->control = control;
     ev->texture = texture;
     ev->nearby = nearby;
+    ev->unrelated = unrelated;
 }
 
 /* Between textured lines before the jump and after it, a line cutting
@@ -174,14 +176,17 @@ one_sided(LineEvidence *ev, gboolean seen_after, gdouble cost,
  * jump cost 0.10 and 0.14 of the scale against content that merely
  * resembled theirs (seeds 572000020 and 572000004 of
  * test-series-correction), lines after one 0.12 and 0.15 (seeds
- * 560100016, 560100232): the scale alone placed them wrong. */
+ * 560100016, 560100232): the scale alone placed them wrong.  Nor does a
+ * minimum tell where the line costs about what unrelated content would:
+ * a textured line against featureless content is a "minimum" by noise
+ * (seed 1603438049 of test-series-correction, 0.98 of unrelated). */
 START_TEST(test_one_sided_line_needs_a_minimum)
 {
     GRand *rng = test_rand_salted(base_seed, 3);
     LineEvidence ev[40];
     gint frame[40] = { 0 }, d, n_before, n_after, mid, n, kind, want_first, want_last;
     gint first, last;
-    gdouble m, control, q, cost, nearby;
+    gdouble m, control, q, cost, nearby, unrelated;
     gboolean seen_after;
 
     for (d = 0; d < N_DRAWS; d++) {
@@ -193,17 +198,22 @@ START_TEST(test_one_sided_line_needs_a_minimum)
         n = mid + 1 + n_after;
         textured_run(ev, rng, m, mid + 1, n, mid + 1, FALSE);
         seen_after = g_rand_boolean(rng);
-        /* 0: a match, a minimum; 1: as low, no minimum; 2: a mismatch. */
-        kind = g_rand_int_range(rng, 0, 3);
+        /* 0: a match, a minimum; 1: as low, no minimum; 2: a mismatch;
+         * 3: as low, a minimum by noise, but as costly as unrelated
+         * content. */
+        kind = g_rand_int_range(rng, 0, 4);
         control = m*g_rand_double_range(rng, 15.0, 60.0);
         q = (kind == 2) ? g_rand_double_range(rng, 0.25, 0.9)
                         : g_rand_double_range(rng, 0.0, 0.19);
         cost = m + q*(control - m);
         nearby = cost*((kind == 1) ? g_rand_double_range(rng, 0.5, 1.0)
-                                   : g_rand_double_range(rng, 1.1, 10.0));
+                       : (kind == 3) ? g_rand_double_range(rng, 1.0, 1.05)
+                       : g_rand_double_range(rng, 1.1, 10.0));
+        unrelated = cost/((kind == 3) ? g_rand_double_range(rng, 0.8, 1.1)
+                          : g_rand_double_range(rng, 0.0, 0.6));
         one_sided(ev + mid, seen_after, cost, control,
-                  control*g_rand_double_range(rng, 0.6, 1.0), nearby);
-        if (kind == 1) {
+                  control*g_rand_double_range(rng, 0.6, 1.0), nearby, unrelated);
+        if (kind == 1 || kind == 3) {
             want_first = mid;
             want_last = mid + 1;
         }
@@ -216,7 +226,7 @@ START_TEST(test_one_sided_line_needs_a_minimum)
                       "%s the jump, %.2f of its scale, %s)", base_seed, d,
                       first, last, want_first, want_last, mid,
                       seen_after ? "after" : "before", q,
-                      kind == 1 ? "no minimum" : "a minimum");
+                      kind == 1 ? "no minimum" : kind == 3 ? "unrelated" : "a minimum");
     }
     g_rand_free(rng);
 }

@@ -26,7 +26,8 @@
  * a step away, seeds 572000020 and 572000004), but the first were minima
  * (1.3-1.5 times lower than a pixel off) and the second not (0.6-1.0): a
  * step off, a line meets other content, whose mismatch does not rise on
- * every side.  A line below a fifth that is no minimum tells nothing.
+ * every side.  A line below a fifth that is no minimum, or no match at
+ * all (ONE_SIDED_RELATED), tells nothing.
  * And only a line whose own texture and control both stand well above the
  * match level is judged at all: a featureless line, or one whose features
  * a step hardly moves, costs about the same under either drift, and a
@@ -34,6 +35,15 @@
  * own while its control may meet a particle (seed 21). */
 #define ONE_SIDED_MISMATCH 0.2
 #define ONE_SIDED_CONTRAST 8.0
+/* A minimum means something only where the line resembles the content its
+ * drift predicts: below this fraction of what unrelated content costs
+ * (the two textures summed).  A textured line whose content that drift
+ * puts on featureless lines costs its own texture there, and a pixel off
+ * just the same: noise made it a "minimum", 0.98 of unrelated, and a line
+ * before a jump voted after it (test-series-correction seed 1603438049,
+ * case 809).  True matches of 600 drawn end-of-frame jumps cost at most
+ * 0.57 of unrelated, 0.24 at the 99th percentile. */
+#define ONE_SIDED_RELATED 0.75
 
 /* Costs without and with the step of each line, as steady_votes() weighs
  * them (0 and 0: no evidence).  A line seen under one drift only is given
@@ -75,7 +85,8 @@ evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
         q = (cost - match)/(ev[i].control - match);
         if (q >= ONE_SIDED_MISMATCH)
             other = match;
-        else if (cost < ev[i].nearby)
+        else if (cost < ev[i].nearby
+                 && cost < ONE_SIDED_RELATED*ev[i].unrelated)
             other = ev[i].control;
         else
             continue;

@@ -29,6 +29,10 @@ typedef struct {
                                 content a pixel off the place its one drift
                                 predicts (left, right, up or down); NAN
                                 where not seen */
+    gdouble unrelated;       /* one-sided only: what content unrelated to the
+                                line would cost, its texture plus that of
+                                the content its one drift predicts; NAN
+                                otherwise */
 } LineEvidence;
 
 /* The best splits of lines 0 .. n-1, in the order they were scanned (frame

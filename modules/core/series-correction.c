@@ -972,7 +972,8 @@ nearby_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
  * the previous one may not show the line's content) with the drift
  * without the step and with it.  Frames that show the line's content
  * under both count alone when there are any: content seen under one only
- * is compared with nothing under the other. */
+ * is compared with nothing under the other.  line is work space of 4
+ * rows. */
 static void
 line_costs(const SeriesCorrection *correction, const FrameSeries *series,
            gint k, gint r, gdouble *line, LineEvidence *ev)
@@ -982,8 +983,12 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     const gdouble *row = gwy_data_field_get_data_const(fk->field) + (gsize)r*xres;
     gdouble eb, ea, ec, en, sb = 0.0, sa = 0.0, ob = 0.0, oa = 0.0, cb = 0.0, ca = 0.0;
     gdouble near_a = 0.0, near_b = 0.0, cost_a = 0.0, cost_b = 0.0;
-    gdouble *u = line + xres, *d = u + xres;
+    gdouble et, ta = 0.0, tb = 0.0;
+    gdouble *u = line + xres, *d = u + xres, *zeros = d + xres;
     const gdouble *ref;
+
+    for (j = 0; j < xres; j++)
+        zeros[j] = 0.0;
 
     for (j = k - JUMP_PARTNER_REACH; j <= k + JUMP_PARTNER_REACH; j++) {
         if (j == k || j < 0 || j >= series->n_frames
@@ -1004,6 +1009,12 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
         }
         if (isnan(eb) && isnan(ea))
             continue;
+        /* The seen side's prediction is still in line when it was the
+         * drift with the step; the other is predicted again. */
+        if (isnan(ea))
+            predict_line(correction, fk, series->frames + j, ref, r,
+                         JUMP_NEVER, 0.0, 0.0, line);
+        et = line_mismatch(zeros, line, xres, u, d);
         predict_line(correction, fk, series->frames + j, ref, r,
                      isnan(eb) ? JUMP_TWICE : JUMP_BACKWARDS, 0.0, 0.0, line);
         if (isnan(ec = line_mismatch(row, line, xres, u, d)))
@@ -1013,6 +1024,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
         if (isnan(eb)) {
             oa += ea;
             ca += ec;
+            ta += et;
             if (!isnan(en)) {
                 near_a += en;
                 cost_a += ea;
@@ -1022,6 +1034,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
         else {
             ob += eb;
             cb += ec;
+            tb += et;
             if (!isnan(en)) {
                 near_b += en;
                 cost_b += eb;
@@ -1042,11 +1055,10 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     else if (!isnan(ev->control) && (nb ? near_b : near_a) > 0.0)
         ev->nearby = INFINITY;
     /* Only a one-sided line is judged by its texture. */
-    ev->texture = NAN;
+    ev->texture = ev->unrelated = NAN;
     if (!isnan(ev->control)) {
-        for (j = 0; j < xres; j++)
-            line[j] = 0.0;
-        ev->texture = line_mismatch(row, line, xres, u, d);
+        ev->texture = line_mismatch(row, zeros, xres, u, d);
+        ev->unrelated = ev->texture + (nb ? tb/nb : ta/na);
     }
 }
 
@@ -1122,7 +1134,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
                        JUMP_SEARCH_BLOCKS*block_span, &t_lo, &t_hi);
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
-    line = g_new(gdouble, 3*series->frames[0].timing.xres);
+    line = g_new(gdouble, 4*series->frames[0].timing.xres);
     when = g_new(gdouble, 2*most);
     ends = when + most;
     frame = g_new(gint, most);
