@@ -684,6 +684,13 @@ START_TEST(test_channel_option)
 }
 END_TEST
 
+/* Users know channels by their titles: -c Amplitude is channel 1. */
+START_TEST(test_channel_by_title)
+{
+    run_three_channels(seed + 2, 1, (const gchar *const[]){ "-c", "Amplitude", NULL });
+}
+END_TEST
+
 /* The id of the channel whose title ends in the result suffix. */
 static gint
 result_channel(GwyContainer *data)
@@ -1117,8 +1124,12 @@ static const ErrorCase error_cases[] = {
       "gwy-localscan: unknown mode 'fast' (known: paper, continuous)" },
     { "unknown option", GOOD_TABLE, NULL, { "--stripez", "3", "-o", "@OUT", "@IN", }, 2,
       "gwy-localscan: Unknown option --stripez" },
-    { "-c not a number", GOOD_TABLE, NULL, { "-c", "two", "-o", "@OUT", "@IN", }, 2,
-      "gwy-localscan: Cannot parse integer value*" },
+    { "-c no such title", GOOD_TABLE, NULL, { "-c", "two", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN has no channel titled 'two' (its channels: 0 'Simple')" },
+    { "-c empty", GOOD_TABLE, NULL, { "-c", "", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: -c is empty: give a channel's id or title" },
+    { "-c id too large", GOOD_TABLE, NULL, { "-c", "99999999999", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: -c 99999999999: no channel id is that large" },
     { "unreadable input", GOOD_TABLE, NULL, { "-o", "@OUT", "@IN.missing", }, 1,
       "gwy-localscan: cannot read @IN.missing: no such file" },
     { "input is a directory", GOOD_TABLE, NULL, { "-o", "@OUT", "@OUTDIR", }, 1,
@@ -2039,7 +2050,8 @@ START_TEST(test_reference_continuous)
 END_TEST
 
 /* in.gwy: channel 0 the image (a drifting frame, 160 x 160), channel 1
- * white noise of its size (nothing to match), channel 2 a smaller field. */
+ * white noise of its size (nothing to match), channel 2 a smaller field
+ * titled as channel 1 is. */
 static gchar*
 reference_error_input(void)
 {
@@ -2056,7 +2068,7 @@ reference_error_input(void)
     small = random_field(rng, REF_SIZE/2, REF_SIZE, REF_STEP, REF_STEP);
     add_channel(data, 0, rf.image, "Drifting", NULL);
     add_channel(data, 1, noise, "Noise", NULL);
-    add_channel(data, 2, small, "Small", NULL);
+    add_channel(data, 2, small, "Noise", NULL);
     save_gwy(data, input);
     g_object_unref(noise);
     g_object_unref(small);
@@ -2097,6 +2109,10 @@ static const ReferenceErrorCase reference_error_cases[] = {
       "gwy-localscan: 161 stripes do not fit the 160 rows of the image @IN channel 0" },
     { "nothing matches", { "--reference", ":1", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: no stripe of @IN channel 0 matched the reference @IN channel 1" },
+    { "image by title", { "-c", "Drifting", "--reference", ":1", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: no stripe of @IN channel 0 matched the reference @IN channel 1" },
+    { "title of two channels", { "-c", "Noise", "--reference", ":0", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN has 2 channels titled 'Noise' (1, 2): give the id with -c" },
     { "masking alone", { "--masking", "ignore", "-o", "@OUT", "@IN", }, 2,
       "gwy-localscan: --masking needs --reference" },
     { "unknown masking", { "--masking", "maybe", "--reference", ":1", "-o", "@OUT", "@IN", }, 2,
@@ -2280,6 +2296,7 @@ gwy_localscan_suite(void)
     tcase_add_checked_fixture(tc, setup_scratch, teardown_scratch);
     tcase_add_test(tc, test_stored_table_first_channel);
     tcase_add_test(tc, test_channel_option);
+    tcase_add_test(tc, test_channel_by_title);
     tcase_add_test(tc, test_no_double_correction);
     tcase_add_test(tc, test_all_channels);
     tcase_add_loop_test(tc, test_table_file_physical_units, 0, G_N_ELEMENTS(unit_names));

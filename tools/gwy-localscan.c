@@ -52,7 +52,8 @@ enum {
 typedef struct {
     gchar *output;
     gchar *table_file;
-    gint channel;
+    gchar *channel_arg;
+    gint channel;                /* from channel_arg, unless it is a title */
     gchar *mode_name;
     gchar *write_drift;
     gchar *reference;
@@ -98,8 +99,9 @@ static GOptionEntry option_table[] = {
     { "drift", 'd', 0, G_OPTION_ARG_FILENAME, &options.table_file,
       N_("Read the drift table from TABLE.csv instead of the one stored "
          "with the channel"), N_("TABLE.csv") },
-    { "channel", 'c', 0, G_OPTION_ARG_INT, &options.channel,
-      N_("Compensate channel ID (default: the first channel)"), N_("ID") },
+    { "channel", 'c', 0, G_OPTION_ARG_STRING, &options.channel_arg,
+      N_("Compensate channel ID, or the channel titled TITLE (default: the first channel)"),
+      N_("ID|TITLE") },
     { "mode", 'm', 0, G_OPTION_ARG_STRING, &options.mode_name,
       N_("Compensation mode: paper (default) or continuous (line by line, "
          "timed by the file's metadata: line time or line rate, slow-scan "
@@ -198,6 +200,7 @@ free_options(void)
     g_free(options.output);
     g_free(options.table_file);
     g_free(options.mode_name);
+    g_free(options.channel_arg);
     g_free(options.write_drift);
     g_free(options.reference);
     g_free(options.search_arg);
@@ -311,6 +314,32 @@ parse_search(const gchar *arg, GError **error)
     }
     options.search_x = values[0];
     options.search_y = (n == 2) ? values[1] : values[0];
+    return TRUE;
+}
+
+/* -c ID|TITLE: text that reads as an integer is an id (a negative one is
+ * reported as a channel the file lacks); anything else is a title, looked
+ * up once the file is read. */
+static gboolean
+parse_channel(const gchar *arg, GError **error)
+{
+    GError *err = NULL;
+    gint64 id;
+
+    if (!*arg) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("-c is empty: give a channel's id or title"));
+        return FALSE;
+    }
+    if (g_ascii_string_to_signed(arg, 10, G_MININT + 1, G_MAXINT, &id, &err))
+        options.channel = (gint)id;
+    else if (g_error_matches(err, G_NUMBER_PARSER_ERROR, G_NUMBER_PARSER_ERROR_OUT_OF_BOUNDS)) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("-c %s: no channel id is that large"), arg);
+        g_error_free(err);
+        return FALSE;
+    }
+    g_clear_error(&err);
     return TRUE;
 }
 
@@ -439,6 +468,8 @@ check_command_line(GError **error)
                     LOCALSCAN_STRIPES_MIN, LOCALSCAN_STRIPES_MAX, options.stripes);
         return NULL;
     }
+    if (options.channel_arg && !parse_channel(options.channel_arg, error))
+        return NULL;
     if (options.reference && !parse_reference(options.reference, &reference_spec, error))
         return NULL;
     if ((options.search_arg || options.accept_partial || options.masking_name) && !options.reference) {
@@ -486,9 +517,62 @@ format_channel_list(const gint *ids)
     return g_string_free(str, FALSE);
 }
 
+/* "0 'ZSensor', 1 'Phase'": the channels a title may name. */
+static gchar*
+format_titled_channel_list(GwyContainer *data, const gint *ids)
+{
+    GString *str = g_string_new(NULL);
+    const gchar *title;
+    gchar *quoted;
+    guint i;
+
+    for (i = 0; ids[i] != -1; i++) {
+        title = localscan_channel_title(data, ids[i]);
+        quoted = quoted_input_excerpt(title ? title : "", -1);
+        g_string_append_printf(str, i ? ", %d '%s'" : "%d '%s'", ids[i], quoted);
+        g_free(quoted);
+    }
+    return g_string_free(str, FALSE);
+}
+
+/* The one channel titled title exactly; -1 with error set when none or
+ * several are. */
+static gint
+pick_titled_channel(GwyContainer *data, const gchar *filename, const gint *ids,
+                    const gchar *title, GError **error)
+{
+    GString *matches = g_string_new(NULL);
+    gchar *list, *quoted = quoted_input_excerpt(title, -1);
+    gint i, n = 0, id = -1;
+
+    for (i = 0; ids[i] != -1; i++) {
+        if (g_strcmp0(localscan_channel_title(data, ids[i]), title) == 0) {
+            g_string_append_printf(matches, n++ ? ", %d" : "%d", ids[i]);
+            id = ids[i];
+        }
+    }
+    if (!n) {
+        list = format_titled_channel_list(data, ids);
+        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
+                    _("%s has no channel titled '%s' (its channels: %s)"),
+                    filename, quoted, list);
+        g_free(list);
+    }
+    else if (n > 1) {
+        g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
+                    _("%s has %d channels titled '%s' (%s): give the id with -c"),
+                    filename, n, quoted, matches->str);
+        id = -1;
+    }
+    g_string_free(matches, TRUE);
+    g_free(quoted);
+    return id;
+}
+
+/* The channel -c names (wanted, or title where it is not an id). */
 static gint
 pick_channel(GwyContainer *data, const gchar *filename, gint wanted,
-             GError **error)
+             const gchar *title, GError **error)
 {
     gint *ids = localscan_channel_ids(data);
     gchar *list;
@@ -498,6 +582,8 @@ pick_channel(GwyContainer *data, const gchar *filename, gint wanted,
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
                     _("%s contains no image channel"), filename);
     }
+    else if (title)
+        id = pick_titled_channel(data, filename, ids, title, error);
     else if (wanted == CHANNEL_FIRST)
         id = ids[0];
     else if (headless_run_has_channel(data, wanted))
@@ -620,7 +706,7 @@ measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
     image_name = describe_channel(filename, id);
     if (!refdata)
         goto end;
-    if ((refid = pick_channel(refdata, reffile, spec.channel, error)) < 0)
+    if ((refid = pick_channel(refdata, reffile, spec.channel, NULL, error)) < 0)
         goto end;
     reference_name = describe_channel(reffile, refid);
     if (same_file && refid == id) {
@@ -865,7 +951,9 @@ run_batch(const CompensationMode *mode, GError **error)
 
     if (!(data = headless_run_load(input, error)))
         return FALSE;
-    if ((id = pick_channel(data, input, options.channel, error)) < 0)
+    if ((id = pick_channel(data, input, options.channel,
+                           (options.channel_arg && options.channel == CHANNEL_FIRST)
+                           ? options.channel_arg : NULL, error)) < 0)
         goto end;
     if (!check_not_compensated(data, input, id, error))
         goto end;
