@@ -202,11 +202,28 @@ jump_votes_split(const LineEvidence *evidence, const gint *frame, gint n,
                                   &loose_first, &loose_last);
 }
 
-/* The tied splits widened over the weak votes on either side: featureless
- * lines vote by noise, and a split they decide is no better placed than a
- * tie (a jump in frame 0's last featureless lines before a flagged frame
- * was put four lines early by votes a hundred times below a typical
- * line's, with no word: seed 575000436 of test-series-correction). */
+/* Whether line i's vote leaves where the jump lies open: a weak one, or
+ * that of a frame's edge line seen under one drift only.  The other
+ * drift puts such a line's content a fraction of a pixel past the other
+ * frames' edge, and the one it is seen under may match a mirror image of
+ * it: a round particle's rows either side of its centre are alike.  The
+ * first line of the frame after a flagged one so matched the rows a step
+ * away and put a jump that lay in the featureless end of the frame
+ * before the flagged one there, with no word (test-series-correction
+ * seeds 700000014 and 810000003). */
+static gboolean
+vote_leaves_open(const LineEvidence *ev, const gdouble *votes, gint i,
+                 gdouble strong)
+{
+    return fabs(votes[i]) < strong || (ev[i].frame_edge && !ev[i].two_sided);
+}
+
+/* The tied splits widened over the votes that leave the jump open on
+ * either side: featureless lines vote by noise, and a split they decide is
+ * no better placed than a tie (a jump in frame 0's last featureless lines
+ * before a flagged frame was put four lines early by votes a hundred times
+ * below a typical line's, with no word: seed 575000436 of
+ * test-series-correction). */
 gboolean
 jump_votes_split_loose(const LineEvidence *evidence, const gint *frame,
                        gint n, gint *first, gint *last, gint *loose_first,
@@ -221,9 +238,9 @@ jump_votes_split_loose(const LineEvidence *evidence, const gint *frame,
     best_split(votes, n, first, last);
     *loose_first = *first;
     *loose_last = *last;
-    while (*loose_first > 0 && fabs(votes[*loose_first - 1]) < strong)
+    while (*loose_first > 0 && vote_leaves_open(evidence, votes, *loose_first - 1, strong))
         (*loose_first)--;
-    while (*loose_last < n && fabs(votes[*loose_last]) < strong)
+    while (*loose_last < n && vote_leaves_open(evidence, votes, *loose_last, strong))
         (*loose_last)++;
     g_free(costs);
     return n >= 2 && *last > 0 && *first < n;

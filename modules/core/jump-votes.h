@@ -33,6 +33,7 @@ typedef struct {
                                 line would cost, its texture plus that of
                                 the content its one drift predicts; NAN
                                 otherwise */
+    gboolean frame_edge;     /* the first or last line its frame scanned */
 } LineEvidence;
 
 /* The best splits of lines 0 .. n-1, in the order they were scanned (frame
@@ -48,7 +49,8 @@ gboolean     jump_votes_split     (const LineEvidence *evidence,
 
 /* The same, and the splits loose_first .. loose_last that differ from the
  * best only by lines whose evidence is weak (below a tenth of a typical
- * line's): where the data leaves the jump, whatever the split chosen. */
+ * line's) or unsure (a frame's edge line seen under one drift only): where
+ * the data leaves the jump, whatever the split chosen. */
 gboolean     jump_votes_split_loose(const LineEvidence *evidence,
                                     const gint *frame,
                                     gint n,
