@@ -1054,8 +1054,8 @@ END_TEST
 START_TEST(test_help_lists_options)
 {
     static const gchar *options[] = {
-        "-o, --output=OUT.gwy", "-d, --drift=TABLE.csv", "-c, --channel=ID",
-        "-m, --mode=paper|continuous", "--reference=FILE[:ID]", "--stripes=N", "--masking=MODE",
+        "-o, --output=OUT.gwy", "-d, --drift=TABLE.csv", "-c, --channel=ID|TITLE",
+        "-m, --mode=paper|continuous", "--reference=FILE[:ID|:TITLE]", "--stripes=N", "--masking=MODE",
         "--write-drift=TABLE.csv", "--version", "INPUT", "--line-time=S", "--direction=down|up",
         "--frame-start=S",
     };
@@ -1574,7 +1574,10 @@ START_TEST(test_german_messages)
 
     run_tool_env(&run, module_path(), german, (const gchar *const[]){ "--help", NULL });
     ck_assert_int_eq(run.status, 0);
-    ck_assert_msg(strstr(run.out, "-o, --output=AUSGABE.gwy        Das Ergebnis nach AUSGABE.gwy schreiben"),
+    /* The gap between the two is GLib's, wide enough for the longest
+     * option. */
+    ck_assert_msg(strstr(run.out, "-o, --output=AUSGABE.gwy ")
+                  && strstr(run.out, " Das Ergebnis nach AUSGABE.gwy schreiben"),
                   "no German --help:\n%s", run.out);
     tool_run_clear(&run);
 
@@ -1899,7 +1902,8 @@ START_TEST(test_reference_two_files)
 END_TEST
 
 /* Sub-pixel drift rounded for paper mode; the reference is channel 3 of
- * the input itself, named as ":3" and as "INPUT:3". */
+ * the input itself, named as ":3", "INPUT:3", ":Reference" and
+ * "INPUT:Reference" (the image then named by its title too). */
 START_TEST(test_reference_same_file)
 {
     GRand *rng = g_rand_new_with_seed(seed + 300 + _i);
@@ -1915,9 +1919,10 @@ START_TEST(test_reference_same_file)
     add_channel(data, 1, rf.image, "Drifting", NULL);
     add_channel(data, 3, rf.reference, "Reference", NULL);
     save_gwy(data, input);
-    refarg = g_strconcat(_i ? input : "", ":3", NULL);
+    refarg = g_strconcat((_i % 2) ? input : "", (_i < 2) ? ":3" : ":Reference", NULL);
     run_reference_case(data, input, 1, &rf,
-                       (const gchar *const[]){ "-c", "1", "--reference", refarg, "--stripes", "8",
+                       (const gchar *const[]){ "-c", (_i < 2) ? "1" : "Drifting", "--reference", refarg,
+                                               "--stripes", "8",
                                                "--write-drift", used, "-o", output, input, NULL },
                        TRUE, 3.0);
 
@@ -2111,8 +2116,12 @@ static const ReferenceErrorCase reference_error_cases[] = {
       "gwy-localscan: no stripe of @IN channel 0 matched the reference @IN channel 1" },
     { "image by title", { "-c", "Drifting", "--reference", ":1", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: no stripe of @IN channel 0 matched the reference @IN channel 1" },
+    { "no reference channel of that title", { "--reference", ":Nothing", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN has no channel titled 'Nothing' (its channels: 0 'Drifting', 1 'Noise', 2 'Noise')" },
+    { "reference title of two channels", { "--reference", "@IN:Noise", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: @IN has 2 channels titled 'Noise' (1, 2): give its id instead" },
     { "title of two channels", { "-c", "Noise", "--reference", ":0", "-o", "@OUT", "@IN", }, 1,
-      "gwy-localscan: @IN has 2 channels titled 'Noise' (1, 2): give the id with -c" },
+      "gwy-localscan: @IN has 2 channels titled 'Noise' (1, 2): give its id instead" },
     { "masking alone", { "--masking", "ignore", "-o", "@OUT", "@IN", }, 2,
       "gwy-localscan: --masking needs --reference" },
     { "unknown masking", { "--masking", "maybe", "--reference", ":1", "-o", "@OUT", "@IN", }, 2,
@@ -2321,7 +2330,7 @@ gwy_localscan_suite(void)
     tcase_add_checked_fixture(tc, setup_scratch, teardown_scratch);
     tcase_add_test(tc, test_reference_two_files);
     tcase_add_test(tc, test_reference_masked_hole);
-    tcase_add_loop_test(tc, test_reference_same_file, 0, 2);
+    tcase_add_loop_test(tc, test_reference_same_file, 0, 4);
     tcase_add_test(tc, test_reference_continuous);
     tcase_add_loop_test(tc, test_reference_errors, 0, G_N_ELEMENTS(reference_error_cases));
     suite_add_tcase(suite, tc);

@@ -82,13 +82,14 @@ static Options options = {
     .interpolation = -1,
 };
 
-/* --reference FILE[:ID] taken apart. */
+/* --reference FILE[:ID|:TITLE] taken apart. */
 typedef struct {
     gchar *file;       /* NULL: the INPUT itself */
     gint channel;      /* CHANNEL_FIRST: the first channel of file */
+    gchar *title;      /* the channel titled so instead; NULL: none */
 } ReferenceSpec;
 
-static ReferenceSpec reference_spec = { NULL, CHANNEL_FIRST };
+static ReferenceSpec reference_spec = { NULL, CHANNEL_FIRST, NULL };
 
 /* Every option gwy-localscan knows; --help is generated from this table.
  * A new option is one entry here plus its handling in run_batch() (drift
@@ -110,9 +111,10 @@ static GOptionEntry option_table[] = {
       N_("paper|continuous") },
     { "reference", 0, 0, G_OPTION_ARG_FILENAME, &options.reference,
       N_("Measure the drift by registering stripes of the image against "
-         "a drift-free scan of the same area: channel ID of FILE (default "
-         "its first channel); FILE may be INPUT itself, and :ID alone means "
-         "channel ID of INPUT.  Not with -d"), N_("FILE[:ID]") },
+         "a drift-free scan of the same area: channel ID of FILE, or the "
+         "channel titled TITLE (default its first channel); FILE may be INPUT "
+         "itself, and :ID or :TITLE alone means that channel of INPUT.  Not "
+         "with -d"), N_("FILE[:ID|:TITLE]") },
     { "stripes", 0, 0, G_OPTION_ARG_INT, &options.stripes,
       NULL, N_("N") },   /* stripes_help() */
     { "search", 0, 0, G_OPTION_ARG_STRING, &options.search_arg,
@@ -210,6 +212,7 @@ free_options(void)
     g_free(options.frame_start_arg);
     g_free(options.interpolation_name);
     g_free(reference_spec.file);
+    g_free(reference_spec.title);
     g_strfreev(options.inputs);
 }
 
@@ -343,7 +346,21 @@ parse_channel(const gchar *arg, GError **error)
     return TRUE;
 }
 
-/* FILE[:ID] (channel-spec.h); an empty FILE is the INPUT. */
+/* FILE:TITLE where the whole text names no file but FILE (or the INPUT,
+ * for :TITLE) does: file names may hold colons, so the whole text is
+ * tried as a file first. */
+static void
+split_reference_title(gchar **file, ReferenceSpec *spec)
+{
+    gchar *colon = strrchr(*file, ':');
+
+    if (!colon || !colon[1] || g_file_test(*file, G_FILE_TEST_EXISTS))
+        return;
+    spec->title = g_strdup(colon + 1);
+    *colon = '\0';
+}
+
+/* FILE[:ID|:TITLE] (channel-spec.h); an empty FILE is the INPUT. */
 static gboolean
 parse_reference(const gchar *arg, ReferenceSpec *spec, GError **error)
 {
@@ -357,6 +374,8 @@ parse_reference(const gchar *arg, ReferenceSpec *spec, GError **error)
         g_error_free(err);
         return FALSE;
     }
+    if (id == CHANNEL_SPEC_NO_ID)
+        split_reference_title(&file, spec);
     spec->channel = (id == CHANNEL_SPEC_NO_ID ? CHANNEL_FIRST : id);
     spec->file = (*file ? file : NULL);
     if (!*file)
@@ -560,7 +579,7 @@ pick_titled_channel(GwyContainer *data, const gchar *filename, const gint *ids,
     }
     else if (n > 1) {
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
-                    _("%s has %d channels titled '%s' (%s): give the id with -c"),
+                    _("%s has %d channels titled '%s' (%s): give its id instead"),
                     filename, n, quoted, matches->str);
         id = -1;
     }
@@ -706,7 +725,7 @@ measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
     image_name = describe_channel(filename, id);
     if (!refdata)
         goto end;
-    if ((refid = pick_channel(refdata, reffile, spec.channel, NULL, error)) < 0)
+    if ((refid = pick_channel(refdata, reffile, spec.channel, spec.title, error)) < 0)
         goto end;
     reference_name = describe_channel(reffile, refid);
     if (same_file && refid == id) {
