@@ -124,6 +124,62 @@ START_TEST(test_commit_writes_all)
 }
 END_TEST
 
+/* The symbolic link's target, read back as the link's own text. */
+static void
+assert_link(const gchar *name, const gchar *expected)
+{
+    gchar *p = path(name), *target = g_file_read_link(p, NULL);
+
+    ck_assert_msg(target != NULL, "%s is no longer a link", name);
+    ck_assert_str_eq(target, expected);
+    g_free(target);
+    g_free(p);
+}
+
+/* An output named by a symbolic link is written where the link points,
+ * through relative and absolute links, a chain of them, and a dangling
+ * one, and every link stays a link: renamed over the link, the output
+ * replaced it and left its target as it was (as root, --json /dev/stdout
+ * replaced /dev/stdout). */
+START_TEST(test_links_written_through)
+{
+    OutputFiles *files = output_files_new();
+    gchar *absolute, *p;
+
+    make_dir();
+    g_mkdir(path("sub"), 0700);
+    put("target.csv", "old\n");
+    p = path("rel.csv");
+    ck_assert_int_eq(symlink("target.csv", p), 0);
+    g_free(p);
+    p = path("sub/up.csv");
+    ck_assert_int_eq(symlink("../chained.csv", p), 0);
+    g_free(p);
+    p = path("chain.csv");
+    ck_assert_int_eq(symlink("sub/up.csv", p), 0);
+    g_free(p);
+    absolute = path("fresh.csv");
+    p = path("abs.csv");
+    ck_assert_int_eq(symlink(absolute, p), 0);
+    g_free(p);
+    ck_assert(add(files, "rel.csv", "through a relative link", NULL));
+    ck_assert(add(files, "chain.csv", "through a chain", NULL));
+    ck_assert(add(files, "abs.csv", "through a dangling absolute link", NULL));
+    ck_assert(output_files_commit(files, NULL));
+    output_files_free(files);
+    assert_contents("target.csv", "through a relative link");
+    assert_contents("chained.csv", "through a chain");
+    assert_contents("fresh.csv", "through a dangling absolute link");
+    assert_link("rel.csv", "target.csv");
+    assert_link("sub/up.csv", "../chained.csv");
+    assert_link("chain.csv", "sub/up.csv");
+    assert_link("abs.csv", absolute);
+    assert_listing("abs.csv chain.csv chained.csv fresh.csv rel.csv sub target.csv");
+    g_free(absolute);
+    remove_dir();
+}
+END_TEST
+
 /* The last target becomes a folder after it was checked: its rename fails
  * and the targets renamed before it get their old state back. */
 START_TEST(test_failed_rename_rolls_back)
@@ -280,6 +336,7 @@ main(void)
     Suite *suite = test_suite_new("output-files", "core", &tc);
 
     tcase_add_test(tc, test_commit_writes_all);
+    tcase_add_test(tc, test_links_written_through);
     tcase_add_test(tc, test_failed_rename_rolls_back);
     tcase_add_test(tc, test_free_without_commit);
     tcase_add_test(tc, test_add_refuses_folder_and_repeats);

@@ -208,20 +208,54 @@ check_target(OutputFiles *files, const gchar *filename, GError **error)
     return output_files_check_kind(filename, error) && check_new_target(files, filename, error);
 }
 
-/* Adds filename to the set with a new temporary file beside it, open as
- * *fd; NULL with error set on failure. */
+/* Links followed to the file they name, existing or not: an output named
+ * by a symbolic link is written where the link points.  Renamed over the
+ * link itself, the new file replaced the link and left its target as it
+ * was (as root, --json /dev/stdout replaced /dev/stdout).  A link
+ * relative to its folder is read there; a chain too long for the system
+ * stays a link (the rename then replaces it, as the system would refuse
+ * to open it). */
+static gchar*
+link_target(const gchar *filename)
+{
+    gchar *path = g_strdup(filename), *target, *dir, *next;
+    GStatBuf st;
+    gint depth;
+
+    for (depth = 0; depth < 40; depth++) {
+        if (g_lstat(path, &st) != 0 || !S_ISLNK(st.st_mode)
+            || !(target = g_file_read_link(path, NULL)))
+            break;
+        if (g_path_is_absolute(target))
+            next = target;
+        else {
+            dir = g_path_get_dirname(path);
+            next = g_build_filename(dir, target, NULL);
+            g_free(dir);
+            g_free(target);
+        }
+        g_free(path);
+        path = next;
+    }
+    return path;
+}
+
+/* Adds filename to the set with a new temporary file beside the file it
+ * names, open as *fd; NULL with error set on failure. */
 static PendingOutput*
 add_pending(OutputFiles *files, const gchar *filename, gint *fd,
             GError **error)
 {
     PendingOutput p;
+    gchar *target = link_target(filename);
 
     memset(&p, 0, sizeof(p));
-    if (!(p.tmpname = make_temp_beside(filename, "", fd))) {
+    if (!(p.tmpname = make_temp_beside(target, "", fd))) {
         set_errno_error(error, errno, filename);
+        g_free(target);
         return NULL;
     }
-    p.filename = g_strdup(filename);
+    p.filename = target;
     g_array_append_val(files->pending, p);
     return &g_array_index(files->pending, PendingOutput,
                           files->pending->len - 1);
