@@ -511,6 +511,85 @@ START_TEST(test_outputs)
 }
 END_TEST
 
+/* Whether a warning of the correction holds text. */
+static gboolean
+warned_of(const SeriesCorrection *correction, const gchar *text)
+{
+    guint w;
+
+    for (w = 0; w < correction->warnings->len; w++) {
+        if (strstr(g_ptr_array_index(correction->warnings, w), text))
+            return TRUE;
+    }
+    return FALSE;
+}
+
+/* A featureless frame between two good ones (a constant, or zeros: a
+ * channel that recorded nothing) is flagged, and the two others are
+ * registered against each other as if it were absent: the drift drawn at
+ * random (2-6 px per frame each way) within 0.05 px per frame.  The pairs
+ * with the featureless frame registered no block, and their overall
+ * shifts, noise, centred the search of the other pair: 4 of its 16 blocks
+ * found, the drift read 100 px wrong (the hostile-input run).  Nor is a
+ * jump between the two frames, which one pair cannot tell from the
+ * velocity, refused aloud. */
+START_TEST(test_featureless_frame_between)
+{
+    GRand *rng = test_rand_salted(base_seed, 6000 + _i);
+    gdouble vx = (g_rand_boolean(rng) ? 1 : -1)*g_rand_double_range(rng, 2.0, 6.0);
+    gdouble vy = (g_rand_boolean(rng) ? 1 : -1)*g_rand_double_range(rng, 2.0, 6.0);
+    FrameSeries *series = steady_series(3, 64, vx, vy);
+    SeriesCorrection correction;
+    GError *error = NULL;
+    gdouble dx, dy, t;
+    gint i;
+
+    gwy_data_field_fill(series->frames[1].field, _i ? 0.0 : 3e-9);
+    ck_assert_msg(series_correction_compute(series, NULL, NULL, &correction, &error),
+                  "seed %u: %s", base_seed, error ? error->message : "?");
+    ck_assert_msg(correction.frames[1].flagged && !correction.frames[0].flagged
+                  && !correction.frames[2].flagged,
+                  "seed %u: flagged %d %d %d", base_seed, correction.frames[0].flagged,
+                  correction.frames[1].flagged, correction.frames[2].flagged);
+    for (i = 0; i < 3; i++) {
+        t = 64.0*i + 32.0;
+        series_correction_eval(&correction, t, &dx, &dy);
+        ck_assert_msg(fabs(dx - vx*t/64.0) < 0.05*t/64.0 + 0.05 && fabs(dy - vy*t/64.0) < 0.05*t/64.0 + 0.05,
+                      "seed %u: drift (%g, %g) px at %g s, truth (%g, %g)", base_seed, dx, dy, t,
+                      vx*t/64.0, vy*t/64.0);
+    }
+    ck_assert_msg(!warned_of(&correction, "refused"), "seed %u: a refused effect reported", base_seed);
+    series_correction_clear(&correction);
+    frame_series_free(series);
+    g_rand_free(rng);
+}
+END_TEST
+
+/* Every frame the same constant (a channel that recorded nothing, kept
+ * three times): a few blocks match by chance, each frame is flagged as
+ * registered against none, and the correction fails saying so, rather
+ * than correcting the frames from blocks that matched nothing (it wrote
+ * them with exit status 0 before). */
+START_TEST(test_all_frames_flagged_refused)
+{
+    FrameSeries *series = steady_series(3, 64, 3.0, 1.0);
+    SeriesCorrection correction;
+    GError *error = NULL;
+    gint k;
+
+    for (k = 0; k < 3; k++)
+        gwy_data_field_fill(series->frames[k].field, 1e-9);
+    ck_assert(!series_correction_compute(series, NULL, NULL, &correction, &error));
+    ck_assert(g_error_matches(error, SERIES_CORRECTION_ERROR, SERIES_CORRECTION_ERROR_FIT));
+    printf("all frames featureless: %s\n", error->message);
+    ck_assert_msg(g_str_has_suffix(error->message, "no two frames agree on a drift trajectory"),
+                  "%s", error->message);
+    g_clear_error(&error);
+    series_correction_clear(&correction);
+    frame_series_free(series);
+}
+END_TEST
+
 /* The corrected frames of a steady drift show the same content where they
  * overlap, masked where they have none; the common area is where all
  * have data. */
@@ -659,6 +738,8 @@ main(void)
     tcase_add_test(tc, test_progress_and_cancel);
     tcase_add_loop_test(tc, test_random_walk_smooth, 0, 2);
     tcase_add_test(tc, test_outputs);
+    tcase_add_loop_test(tc, test_featureless_frame_between, 0, 2);
+    tcase_add_test(tc, test_all_frames_flagged_refused);
     tcase_add_test(tc, test_frames_overlay);
     tcase_add_test(tc, test_long_series);
     tcase_set_timeout(tc, 120);

@@ -299,17 +299,22 @@ release_frame(SeriesRegistration *reg, gint k)
     reg->prepared[k] = FALSE;
 }
 
-/* How far (px) the accepted blocks lie from the pair's overall shift along
- * either axis; -1 when no block was accepted. */
+/* How far (px) the accepted blocks (scoring min_score or more) lie from
+ * the pair's overall shift along either axis; -1 when no block was
+ * accepted.  Blocks below min_score count for nothing: counted here (any
+ * score above 0), those of a featureless middle frame made its pairs'
+ * overall shifts, noise, the centre of a narrow search for the pair of
+ * the frames either side, which then found 4 of 16 blocks, wrong by
+ * 100 px (the frames alone: 16, right). */
 static gdouble
 block_spread(const gdouble *dx, const gdouble *dy, const gdouble *score, gint n,
-             const gdouble *global)
+             gdouble min_score, const gdouble *global)
 {
     gdouble spread = -1.0;
     gint s;
 
     for (s = 0; s < n; s++) {
-        if (score[s] > 0.0)
+        if (score[s] >= min_score && score[s] > 0.0)
             spread = MAX(spread, MAX(fabs(dx[s] - global[0]), fabs(dy[s] - global[1])));
     }
     return spread;
@@ -357,7 +362,7 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
                       reg->prepared[kb] ? reg->frames[kb] : own_b,
                       xres, yres, n, options, guess, &search, dx, dy, score, global);
     if (spread)
-        *spread = block_spread(dx, dy, score, n, global);
+        *spread = block_spread(dx, dy, score, n, options->min_score, global);
     stripe_registration_frame_free(own_a);
     stripe_registration_frame_free(own_b);
     for (s = 0; s < n; s++) {
@@ -470,7 +475,7 @@ older_task(gpointer data, gint k)
 {
     SeriesRegistration *reg = data;
     gint nf = reg->series->n_frames, j;
-    gdouble guess[2], global[3];
+    gdouble guess[2], global[3], radius;
 
     for (j = k-2; j >= oldest_partner(reg, k); j--) {
         if (j == k-2) {
@@ -481,7 +486,13 @@ older_task(gpointer data, gint k)
             guess[0] = global[0] + reg->step[3*(j+1)];
             guess[1] = global[1] + reg->step[3*(j+1) + 1];
         }
-        measure_pair(reg, k, j, older_pair_blocks(reg, k, j), guess, older_pair_radius(reg, k, j),
+        /* A consecutive pair between that registered no block gives no
+         * guess: its overall shift is noise (a featureless frame between
+         * two good ones: the pair of those two, searched around noise,
+         * found 4 of 16 blocks, 100 px wrong), and the frame is searched
+         * as a consecutive pair's. */
+        radius = older_pair_radius(reg, k, j);
+        measure_pair(reg, k, j, older_pair_blocks(reg, k, j), (radius > 0.0) ? guess : NULL, radius,
                      global, NULL, nf - 1 + reg->far_first[k] + (k-2 - j));
     }
 }

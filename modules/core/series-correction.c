@@ -199,6 +199,28 @@ subset_stride(gint count, gint most, gint n_blocks)
  * an oscillation's period grow with the measurements times their count,
  * and a few thousand measurements determine a handful of parameters as
  * well as fifty thousand. */
+/* Whether the measurements with weight come from more than one pair of
+ * frames.  From one pair (two frames, or three with the middle one
+ * flagged), a jump between its frames is the velocity over again, any
+ * size of it fits, and refusing it is nothing the user needs to hear
+ * ("a jump of 2.04e+03 nm was fitted and refused" on two clean frames). */
+static gboolean
+several_pairs_used(const DriftMeasurement *meas, gint n)
+{
+    gint i, first = -1;
+
+    for (i = 0; i < n; i++) {
+        if (!(meas[i].weight > 0.0))
+            continue;
+        if (first < 0)
+            first = i;
+        else if (meas[i].frame_a != meas[first].frame_a
+                 || meas[i].frame_b != meas[first].frame_b)
+            return TRUE;
+    }
+    return FALSE;
+}
+
 static gboolean
 fit_models(SeriesCorrection *correction, const gdouble *weights, gint n_blocks)
 {
@@ -216,8 +238,8 @@ fit_models(SeriesCorrection *correction, const gdouble *weights, gint n_blocks)
     }
     fit->chosen = drift_fit_select_kept(fit->meas, fit->n_meas,
                                         &fit->fit_options, fit->fits, kept);
-    fit->chosen = plausible_choice(correction, fit->fits, fit->n_fits,
-                                   fit->chosen, TRUE);
+    fit->chosen = plausible_choice(correction, fit->fits, fit->n_fits, fit->chosen,
+                                   several_pairs_used(fit->meas, fit->n_meas));
     for (i = 0; i < fit->n_meas; i++) {
         if (!kept[i])
             fit->meas[i].weight = 0.0;
@@ -1404,6 +1426,30 @@ series_correction_compute(const FrameSeries *series,
 #define PROGRESS_MEASURE 0.75
 #define PROGRESS_FINER 0.1
 
+/* Frames not flagged. */
+static gint
+frames_kept(const SeriesCorrection *correction)
+{
+    gint k, n = 0;
+
+    for (k = 0; k < correction->n_frames; k++)
+        n += !correction->frames[k].flagged;
+    return n;
+}
+
+/* The reason the first flagged frame was flagged, "" when none is. */
+static const gchar*
+first_flag_reason(const SeriesCorrection *correction)
+{
+    gint k;
+
+    for (k = 0; k < correction->n_frames; k++) {
+        if (correction->frames[k].flagged && correction->frames[k].reason)
+            return correction->frames[k].reason;
+    }
+    return "";
+}
+
 gboolean
 series_correction_compute_progress(const FrameSeries *series,
                                    const DisplacementOptions *doptions,
@@ -1415,7 +1461,7 @@ series_correction_compute_progress(const FrameSeries *series,
     DisplacementOptions d;
     FitReport *fit = &correction->fit;
     gdouble *registered = NULL;
-    gboolean ok, cancelled = FALSE;
+    gboolean ok, cancelled = FALSE, unsupported = FALSE;
     gint round, knot_blocks;
     Progress part;
     guint i;
@@ -1476,11 +1522,20 @@ series_correction_compute_progress(const FrameSeries *series,
         warn_about_fit(correction, registered);
         warn_about_jump(correction, series);
         ok = !(cancelled = !progress_report(progress, 1.0));
+        unsupported = ok && frames_kept(correction) < 2;
+        ok = ok && !unsupported;
     }
     if (!ok && cancelled)
         g_set_error(error, SERIES_CORRECTION_ERROR,
                     SERIES_CORRECTION_ERROR_CANCELLED,
                     _("the measurement of the series was cancelled"));
+    else if (unsupported)
+        g_set_error(error, SERIES_CORRECTION_ERROR,
+                    SERIES_CORRECTION_ERROR_FIT,
+                    _("%d of the %d frames were flagged (%s): no two frames "
+                      "agree on a drift trajectory"),
+                    series->n_frames - frames_kept(correction), series->n_frames,
+                    first_flag_reason(correction));
     else if (!ok)
         g_set_error(error, SERIES_CORRECTION_ERROR,
                     SERIES_CORRECTION_ERROR_FIT,

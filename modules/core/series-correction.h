@@ -85,7 +85,9 @@ GQuark    series_correction_error_quark(void);
  * SERIES_CORRECTION_PAIR_REACH unless doptions says otherwise), fits the
  * drift models (foptions, NULL for defaults), flags frames that disagree
  * and fits again without them.  FALSE with error set when no model could
- * be fitted (too few registered blocks). */
+ * be fitted (too few registered blocks), or when fewer than two frames
+ * are left unflagged: nothing supports a trajectory.  The correction is
+ * cleared with series_correction_clear() either way. */
 gboolean  series_correction_compute   (const FrameSeries *series,
                                        const DisplacementOptions *doptions,
                                        const DriftFitOptions *foptions,
