@@ -188,7 +188,7 @@ START_TEST(test_one_sided_line_needs_a_minimum)
     LineEvidence ev[40];
     gint frame[40] = { 0 }, d, n_before, n_after, mid, n, kind, want_first, want_last;
     gint first, last;
-    gdouble m, control, q, cost, nearby, unrelated;
+    gdouble m, control, q, cost, nearby, unrelated, texture;
     gboolean seen_after;
 
     for (d = 0; d < N_DRAWS; d++) {
@@ -202,19 +202,25 @@ START_TEST(test_one_sided_line_needs_a_minimum)
         seen_after = g_rand_boolean(rng);
         /* 0: a match, a minimum; 1: as low, no minimum; 2: a mismatch;
          * 3: as low, a minimum by noise, but as costly as unrelated
-         * content. */
+         * content: a textured line against featureless content costs
+         * its own texture (well above the match level) and unrelated
+         * content that texture and the little the featureless content
+         * has. */
         kind = g_rand_int_range(rng, 0, 4);
-        control = m*g_rand_double_range(rng, 15.0, 60.0);
+        control = m*((kind == 3) ? g_rand_double_range(rng, 40.0, 60.0)
+                     : g_rand_double_range(rng, 15.0, 60.0));
         q = (kind == 2) ? g_rand_double_range(rng, 0.25, 0.9)
-                        : g_rand_double_range(rng, 0.0, 0.19);
+            : (kind == 3) ? g_rand_double_range(rng, 0.1, 0.19)
+            : g_rand_double_range(rng, 0.0, 0.19);
         cost = m + q*(control - m);
         nearby = cost*((kind == 1) ? g_rand_double_range(rng, 0.5, 1.0)
                        : (kind == 3) ? g_rand_double_range(rng, 1.0, 1.05)
                        : g_rand_double_range(rng, 1.1, 10.0));
-        unrelated = cost/((kind == 3) ? g_rand_double_range(rng, 0.8, 1.1)
-                          : g_rand_double_range(rng, 0.0, 0.6));
-        one_sided(ev + mid, seen_after, cost, control,
-                  control*g_rand_double_range(rng, 0.6, 1.0), nearby, unrelated);
+        texture = (kind == 3) ? cost*g_rand_double_range(rng, 0.95, 1.0)
+                              : control*g_rand_double_range(rng, 0.6, 1.0);
+        unrelated = (kind == 3) ? texture + m*g_rand_double_range(rng, 0.0, 0.5)
+                                : cost/g_rand_double_range(rng, 0.0, 0.6);
+        one_sided(ev + mid, seen_after, cost, control, texture, nearby, unrelated);
         if (kind == 1 || kind == 3) {
             want_first = mid;
             want_last = mid + 1;

@@ -337,8 +337,11 @@ parse_channel(const gchar *arg, GError **error)
     if (g_ascii_string_to_signed(arg, 10, G_MININT + 1, G_MAXINT, &id, &err))
         options.channel = (gint)id;
     else if (g_error_matches(err, G_NUMBER_PARSER_ERROR, G_NUMBER_PARSER_ERROR_OUT_OF_BOUNDS)) {
+        gchar *quoted = quoted_input_excerpt(arg, -1);
+
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
-                    _("-c %s: no channel id is that large"), arg);
+                    _("-c %s: no channel id lies that far from 0"), quoted);
+        g_free(quoted);
         g_error_free(err);
         return FALSE;
     }
@@ -536,6 +539,10 @@ format_channel_list(const gint *ids)
     return g_string_free(str, FALSE);
 }
 
+/* A one-file movie may hold hundreds of channels: the list names this
+ * many and counts the rest, so that the message stays one line. */
+#define TITLED_CHANNELS_LISTED 20
+
 /* "0 'ZSensor', 1 'Phase'": the channels a title may name. */
 static gchar*
 format_titled_channel_list(GwyContainer *data, const gint *ids)
@@ -543,14 +550,18 @@ format_titled_channel_list(GwyContainer *data, const gint *ids)
     GString *str = g_string_new(NULL);
     const gchar *title;
     gchar *quoted;
-    guint i;
+    guint i, n;
 
-    for (i = 0; ids[i] != -1; i++) {
+    for (n = 0; ids[n] != -1; n++)
+        ;
+    for (i = 0; i < MIN(n, TITLED_CHANNELS_LISTED); i++) {
         title = localscan_channel_title(data, ids[i]);
         quoted = quoted_input_excerpt(title ? title : "", -1);
         g_string_append_printf(str, i ? ", %d '%s'" : "%d '%s'", ids[i], quoted);
         g_free(quoted);
     }
+    if (n > TITLED_CHANNELS_LISTED)
+        g_string_append_printf(str, _(" and %u more"), n - TITLED_CHANNELS_LISTED);
     return g_string_free(str, FALSE);
 }
 

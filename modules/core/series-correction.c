@@ -1171,7 +1171,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     when = g_new(gdouble, 2*most);
     ends = when + most;
     frame = g_new(gint, most);
-    evidence = g_new(LineEvidence, most);
+    evidence = g_new0(LineEvidence, most);
     /* The lines around the jump in the order they were scanned. */
     for (k = 0; k < nf; k++) {
         const SeriesFrame *fk = series->frames + k;
