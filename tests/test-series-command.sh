@@ -139,6 +139,15 @@ bad_case 1 "time order" --line-time 0.5 --frame-times 0,128,64 -o "$tmp/bad.gwy"
 # apart, overlap by most of a frame: no clock's rounding explains that.
 bad_case 1 "cannot overlap" --line-time 0.5 --frame-times 0,10,20 -o "$tmp/bad.gwy" $frames
 bad_case 1 "cannot overlap" --line-time 10 --frame-times 0,64,128 -o "$tmp/bad.gwy" $frames
+# An output outgrowing the file-size limit (ulimit -f, 10 kB): the write
+# fails like any other, named by the output, not its temporary, and the
+# temporary is removed (the signal the limit raised killed the program
+# and left it behind).  The subshell's verdict comes back as its status.
+( ulimit -f 20 && LC_ALL=C bad_case 1 "cannot write $tmp/bad.gwy: File too large" $timing -o "$tmp/bad.gwy" $frames
+  exit $failures ) >"$tmp/out.ulimit"
+status=$?
+check
+[ $status -eq $failures ] || { failures=$status; fail "$(cat "$tmp/out.ulimit")"; }
 
 # The measured series, as a user runs them.
 measured=${LOCALSCAN_MEASURED_DIR:-}

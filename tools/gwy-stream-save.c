@@ -245,6 +245,13 @@ add_item(gpointer hkey, gpointer hvalue, gpointer user_data)
 gboolean
 gwy_stream_save(GwyContainer *data, const gchar *filename, GError **error)
 {
+    return gwy_stream_save_as(data, filename, filename, error);
+}
+
+gboolean
+gwy_stream_save_as(GwyContainer *data, const gchar *filename,
+                   const gchar *shown_name, GError **error)
+{
     GwyContainer *proxy = gwy_container_new();
     GHashTable *stand_ins = g_hash_table_new(NULL, NULL);
     GByteArray *bytes;
@@ -276,7 +283,7 @@ gwy_stream_save(GwyContainer *data, const gchar *filename, GError **error)
     }
     if (!w.ok) {
         g_set_error(error, G_FILE_ERROR, g_file_error_from_errno(saved_errno),
-                    _("cannot write %s: %s"), filename,
+                    _("cannot write %s: %s"), shown_name,
                     saved_errno ? g_strerror(saved_errno) : _("malformed serialised data"));
     }
     g_byte_array_free(bytes, TRUE);

@@ -19,6 +19,12 @@ G_BEGIN_DECLS
 gboolean gwy_stream_save(GwyContainer *data,
                          const gchar *filename,
                          GError **error);
+/* The same, its messages naming shown_name: the output a temporary file
+ * filename stands for until it is renamed. */
+gboolean gwy_stream_save_as(GwyContainer *data,
+                            const gchar *filename,
+                            const gchar *shown_name,
+                            GError **error);
 
 G_END_DECLS
 

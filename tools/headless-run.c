@@ -206,9 +206,11 @@ headless_run_add_gwy(OutputFiles *files, GwyContainer *data,
         return FALSE;
     /* Not Gwyddion's own .gwy writer (file module "gwyfile"), which builds
      * the whole file in memory first (gwy-stream-save.h). */
-    if (!gwy_stream_save(data, tmpname, &err)) {
-        set_save_error(error, filename,
-                       err ? err->message : _("the .gwy writer failed"));
+    if (!gwy_stream_save_as(data, tmpname, filename, &err)) {
+        if (err)
+            g_set_error_literal(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_SAVE, err->message);
+        else
+            set_save_error(error, filename, _("the .gwy writer failed"));
         g_clear_error(&err);
         return FALSE;
     }

@@ -516,7 +516,7 @@ write_outputs(const SeriesCommandArgs *args, SeriesRun *run,
     gboolean ok;
 
     ok = ((temp = output_files_reserve(files, args->output, error))
-          && gwy_stream_save(out, temp, error));
+          && gwy_stream_save_as(out, temp, args->output, error));
     if (ok && args->trajectory) {
         text = series_correction_trajectory_csv(&run->correction, run->series);
         ok = output_files_add(files, args->trajectory, (const guchar*)text,

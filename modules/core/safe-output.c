@@ -59,6 +59,10 @@ install_handlers(void)
             continue;
         sigaction(caught_signals[i], &action, NULL);
     }
+    /* A file grown past the size limit (ulimit -f) killed the program and
+     * left its temporary; ignored, the write fails with EFBIG and the
+     * output is given up like any that cannot be written. */
+    signal(SIGXFSZ, SIG_IGN);
 }
 
 static sigset_t held_before;
