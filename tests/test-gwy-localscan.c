@@ -2117,6 +2117,8 @@ static const ReferenceErrorCase reference_error_cases[] = {
       "gwy-localscan: no stripe of @IN channel 0 matched the reference @IN channel 1" },
     { "no reference channel of that title", { "--reference", ":Nothing", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: @IN has no channel titled 'Nothing' (its channels: 0 'Drifting', 1 'Noise', 2 'Noise')" },
+    { "reference empty", { "--reference", "", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --reference: the file name is empty" },
     { "reference title of two channels", { "--reference", "@IN:Noise", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: @IN has 2 channels titled 'Noise' (1, 2): give its id instead" },
     { "title of two channels", { "-c", "Noise", "--reference", ":0", "-o", "@OUT", "@IN", }, 1,

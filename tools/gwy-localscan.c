@@ -371,6 +371,12 @@ parse_reference(const gchar *arg, ReferenceSpec *spec, GError **error)
     gchar *file;
     gint id;
 
+    /* Not the INPUT, as ":" is: an empty name is a slip. */
+    if (!*arg) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("--reference: the file name is empty"));
+        return FALSE;
+    }
     if (!channel_spec_parse(arg, &file, &id, &err)) {
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
                     "--reference %s", err->message);

@@ -149,10 +149,12 @@ effect_size_nm(const DriftFit *fit, gdouble span)
  * the frames could show (a fit bending to a few failed registrations), or
  * smaller than EFFECT_MIN_PX: measurements of steady drift so exact that a
  * jump of a thousandth of a pixel passes every relative test change no
- * corrected frame, and name no effect. */
+ * corrected frame, and name no effect.  An effect refused as too large is
+ * told in refused_type and refused_nm (refused_type may be NULL). */
 static gint
 plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
-                 gint n_fits, gint chosen, gboolean warn)
+                 gint n_fits, gint chosen, gint *refused_type,
+                 gdouble *refused_nm)
 {
     gdouble size, pixel = 1e9*MIN(correction->xstep, correction->ystep);
     gboolean too_large;
@@ -164,12 +166,10 @@ plausible_choice(const SeriesCorrection *correction, const DriftFit *fits,
     too_large = !(size <= PLAUSIBLE_EFFECT*correction->frame_nm);
     if (!too_large && size >= EFFECT_MIN_PX*pixel)
         return chosen;
-    if (warn && too_large)
-        add_warning((SeriesCorrection*)correction,
-                    g_strdup_printf(_("a %s of %.3g nm was fitted and "
-                                      "refused: more than half the frame"),
-                                    drift_model_type_name(fits[chosen].type),
-                                    size));
+    if (refused_type && too_large) {
+        *refused_type = fits[chosen].type;
+        *refused_nm = size;
+    }
     for (i = 0; i < n_fits; i++) {
         if (fits[i].type == DRIFT_MODEL_NONE && fits[i].ok)
             return i;
@@ -238,8 +238,13 @@ fit_models(SeriesCorrection *correction, const gdouble *weights, gint n_blocks)
     }
     fit->chosen = drift_fit_select_kept(fit->meas, fit->n_meas,
                                         &fit->fit_options, fit->fits, kept);
+    /* Only the last fit's refusal is told, once (warn_about_fit): every
+     * fit of the rounds said it before, twice where a frame was flagged. */
+    correction->refused_type = -1;
     fit->chosen = plausible_choice(correction, fit->fits, fit->n_fits, fit->chosen,
-                                   several_pairs_used(fit->meas, fit->n_meas));
+                                   several_pairs_used(fit->meas, fit->n_meas)
+                                   ? &correction->refused_type : NULL,
+                                   &correction->refused_nm);
     for (i = 0; i < fit->n_meas; i++) {
         if (!kept[i])
             fit->meas[i].weight = 0.0;
@@ -556,7 +561,7 @@ fit_leaving_out(const SeriesCorrection *correction, const FramePairs *pairs,
      * cross-validation, a fit per frame affordable. */
     options.n_folds = 0;
     chosen = drift_fit_select(work, report->n_meas, &options, fits);
-    chosen = plausible_choice(correction, fits, report->n_fits, chosen, FALSE);
+    chosen = plausible_choice(correction, fits, report->n_fits, chosen, NULL, NULL);
     if (chosen >= 0) {
         result->fit = fits[chosen];
         result->n_params = fits[chosen].n_params;
@@ -814,6 +819,12 @@ warn_about_fit(SeriesCorrection *correction, const gdouble *registered)
     gint i, n_reg = 0;
     gdouble rms_px;
 
+    if (correction->refused_type >= 0)
+        add_warning(correction,
+                    g_strdup_printf(_("a %s of %.3g nm was fitted and "
+                                      "refused: more than half the frame"),
+                                    drift_model_type_name(correction->refused_type),
+                                    correction->refused_nm));
     for (i = 0; i < fit->n_meas; i++)
         n_reg += (registered[i] > 0.0);
     if (2*n_reg < fit->n_meas)

@@ -69,6 +69,10 @@ typedef struct {
                                (docs/series.md, step 5); 0 when none */
     gdouble jump_window[2]; /* the times (s) between which the jump may lie
                                as far as those lines tell */
+    /* private: the effect the last fit chose and refused as too large for
+     * the frames (DriftModelType, -1: none), said once in the warnings */
+    gint refused_type;
+    gdouble refused_nm;
 } SeriesCorrection;
 
 /* Pairs of frames registered in a long series: each frame against this
