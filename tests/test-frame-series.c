@@ -232,6 +232,50 @@ START_TEST(test_timing_hints_name_the_front_end)
 }
 END_TEST
 
+/* --frame-times gives a time to each frame as given: one channel of four
+ * identical to an earlier one is dropped with its own time, and the
+ * others keep theirs (the times were counted after the drop: 'gives 4
+ * times for 3 frames'). */
+START_TEST(test_frame_times_follow_dropped_duplicates)
+{
+    GwyContainer *data = gwy_container_new();
+    gchar *name = g_strdup("frames.gwy");
+    gdouble times[4] = { 0.0, 20.0, 40.0, 60.0 };
+    static const gdouble kept[3] = { 0.0, 20.0, 60.0 };
+    FrameSeriesOptions options;
+    FrameSeries *series;
+    GError *error = NULL;
+    gint k;
+
+    for (k = 0; k < 4; k++) {
+        GwyDataField *field = gwy_data_field_new(16, 16, 16e-9, 16e-9, TRUE);
+
+        /* Channel 2 the same as channel 0. */
+        gwy_data_field_set_val(field, 3, 5, (k % 2 ? k : 0)*1e-9);
+        gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
+        g_object_unref(field);
+    }
+    frame_series_options_init(&options);
+    options.line_time = 1.0;
+    options.frame_times = times;
+    options.n_frame_times = 4;
+    series = frame_series_from_files(&data, &name, 1, &options, &error);
+    ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
+    ck_assert_int_eq(series->n_frames, 3);
+    for (k = 0; k < 3; k++)
+        ck_assert_msg(series->frames[k].timing.frame_start == kept[k],
+                      "frame %d starts at %g s, not %g s", k, series->frames[k].timing.frame_start, kept[k]);
+    frame_series_free(series);
+    options.n_frame_times = 3;
+    series = frame_series_from_files(&data, &name, 1, &options, &error);
+    ck_assert(series == NULL);
+    ck_assert_str_eq(error->message, "--frame-times gives 3 times for 4 frames");
+    g_clear_error(&error);
+    g_object_unref(data);
+    g_free(name);
+}
+END_TEST
+
 /************************************************************************
  * simscan's own files: timing from simscan's metadata keys
  ************************************************************************/
@@ -357,6 +401,7 @@ main(void)
     tcase_add_test(tc_simscan, test_simscan_fit_reads_simscan_timing);
     tcase_add_test(tc_simscan, test_title_base);
     tcase_add_test(tc_simscan, test_timing_hints_name_the_front_end);
+    tcase_add_test(tc_simscan, test_frame_times_follow_dropped_duplicates);
     if (probe) {
         tc = tcase_create("measured");
         tcase_add_test(tc, test_nanoscope_timing);

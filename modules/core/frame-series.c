@@ -21,6 +21,7 @@ typedef struct {
     gdouble start;
     gint direction;
     gboolean start_is_end;   /* the stamp marks the end of the frame */
+    gdouble given_start;     /* the frame's time in options->frame_times */
 } MetaTiming;
 
 GQuark
@@ -531,14 +532,8 @@ assign_start_times(FrameSeries *series, const MetaTiming *mts,
     gdouble t0 = NAN;
 
     if (options->frame_times) {
-        if (options->n_frame_times != n) {
-            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
-                        _("--frame-times gives %d times for %d frames"),
-                        options->n_frame_times, n);
-            return FALSE;
-        }
         for (i = 0; i < n; i++) {
-            series->frames[i].timing.frame_start = options->frame_times[i];
+            series->frames[i].timing.frame_start = mts[i].given_start;
             series->frames[i].start_source = FRAME_TIME_OPTION;
         }
     }
@@ -608,6 +603,29 @@ assign_start_times(FrameSeries *series, const MetaTiming *mts,
     return TRUE;
 }
 
+/* The times --frame-times gives, one for each frame as given: a frame
+ * dropped as a duplicate takes its own with it (counted after the drop,
+ * three times for three files, one a copy, were 'three times for two
+ * frames'). */
+static gboolean
+take_given_times(FrameSeries *series, MetaTiming *mts,
+                 const FrameSeriesOptions *options, GError **error)
+{
+    gint i;
+
+    if (!options->frame_times)
+        return TRUE;
+    if (options->n_frame_times != series->n_frames) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                    _("--frame-times gives %d times for %d frames"),
+                    options->n_frame_times, series->n_frames);
+        return FALSE;
+    }
+    for (i = 0; i < series->n_frames; i++)
+        mts[i].given_start = options->frame_times[i];
+    return TRUE;
+}
+
 FrameSeries*
 frame_series_from_files(GwyContainer **datas, gchar **filenames,
                         gint n_files, const FrameSeriesOptions *options,
@@ -636,7 +654,7 @@ frame_series_from_files(GwyContainer **datas, gchar **filenames,
     else
         ok = load_one_channel_per_file(series, filenames, n_files, datas,
                                        options, &mts, error);
-    if (!ok)
+    if (!ok || !take_given_times(series, mts, options, error))
         goto fail;
     if (!options->keep_duplicates)
         drop_duplicates(series, mts);
