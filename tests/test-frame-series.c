@@ -276,6 +276,60 @@ START_TEST(test_frame_times_follow_dropped_duplicates)
 }
 END_TEST
 
+/* A file of three 16-line frames whose metadata gives a line time of 1 ms
+ * and these start times. */
+static GwyContainer*
+timed_frames(const gdouble *starts)
+{
+    GwyContainer *data = gwy_container_new();
+    gchar value[40];
+    gint k;
+
+    for (k = 0; k < 3; k++) {
+        GwyDataField *field = gwy_data_field_new(16, 16, 16e-9, 16e-9, TRUE);
+        GwyContainer *meta = gwy_container_new();
+
+        gwy_data_field_set_val(field, 3, 5, k*1e-9);
+        gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
+        gwy_container_set_const_string_by_name(meta, "Line time (s)", (const guchar*)"0.001");
+        gwy_container_set_const_string_by_name(meta, "Slow scan", (const guchar*)"down");
+        g_ascii_dtostr(value, sizeof(value), starts[k]);
+        gwy_container_set_string_by_name(meta, "Frame start (s)", (const guchar*)g_strdup(value));
+        gwy_container_set_object(data, gwy_app_get_data_meta_key_for_id(k), meta);
+        g_object_unref(meta);
+        g_object_unref(field);
+    }
+    return data;
+}
+
+/* A time lapse of 16 ms frames, 100 s apart, is one clock's (refused
+ * before as 6000 frame times apart); frames stamped 0 s, 100 s and 1.7e9 s
+ * (a relative time beside a date) are not, and are refused. */
+START_TEST(test_one_clock)
+{
+    static const gdouble lapse[3] = { 0.0, 100.0, 200.0 }, mixed[3] = { 0.0, 100.0, 1.7e9 };
+    GwyContainer *data = timed_frames(lapse);
+    gchar *name = g_strdup("frames.gwy");
+    FrameSeries *series;
+    GError *error = NULL;
+
+    series = frame_series_from_files(&data, &name, 1, NULL, &error);
+    ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
+    ck_assert(series->frames[2].timing.frame_start == 200.0);
+    frame_series_free(series);
+    g_object_unref(data);
+    data = timed_frames(mixed);
+    series = frame_series_from_files(&data, &name, 1, NULL, &error);
+    ck_assert(series == NULL);
+    /* Untitled channels named by their ids. */
+    ck_assert_msg(g_str_has_prefix(error->message, "frames.gwy channel 0 and frames.gwy channel 2 start")
+                  && strstr(error->message, "cannot come from one clock"), "%s", error->message);
+    g_clear_error(&error);
+    g_object_unref(data);
+    g_free(name);
+}
+END_TEST
+
 /************************************************************************
  * simscan's own files: timing from simscan's metadata keys
  ************************************************************************/
@@ -402,6 +456,7 @@ main(void)
     tcase_add_test(tc_simscan, test_title_base);
     tcase_add_test(tc_simscan, test_timing_hints_name_the_front_end);
     tcase_add_test(tc_simscan, test_frame_times_follow_dropped_duplicates);
+    tcase_add_test(tc_simscan, test_one_clock);
     if (probe) {
         tc = tcase_create("measured");
         tcase_add_test(tc, test_nanoscope_timing);

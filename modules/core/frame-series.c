@@ -214,8 +214,13 @@ append_channel(FrameSeries *series, GwyContainer *data, gint id,
     gchar *label;
     MetaTiming *mt = mts + series->n_frames;
 
-    label = with_title ? g_strdup_printf("%s:%s", base, title ? title : "?")
-                       : g_strdup(base);
+    /* An untitled channel is named by its id: two '?' told nothing. */
+    if (!with_title)
+        label = g_strdup(base);
+    else if (title)
+        label = g_strdup_printf("%s:%s", base, title);
+    else
+        label = g_strdup_printf(_("%s channel %d"), base, id);
     frame_series_append(series, field, label, NULL);
     series->frames[series->n_frames-1].channel_id = id;
     series->frames[series->n_frames-1].file_index = file_index;
@@ -487,8 +492,12 @@ assign_line_times(FrameSeries *series, const MetaTiming *mts,
 
 /* Time stamps from different clocks (one file's relative frame time,
  * another's date) put frames decades apart; a series whose frames lie more
- * than CLOCK_GAP_FRAMES frame times apart is refused, not fitted. */
+ * than CLOCK_GAP_FRAMES frame times and CLOCK_GAP_SECONDS apart is
+ * refused, not fitted.  Fast frames taken minutes apart (a time lapse of
+ * 64 ms frames, 100 s apart) lie thousands of frame times apart on one
+ * clock: by frame times alone they were refused. */
 #define CLOCK_GAP_FRAMES 1000.0
+#define CLOCK_GAP_SECONDS (365.0*86400.0)
 
 static gboolean
 check_one_clock(const FrameSeries *series, const FrameSeriesOptions *options,
@@ -510,7 +519,7 @@ check_one_clock(const FrameSeries *series, const FrameSeriesOptions *options,
             b = i;
         }
     }
-    if (last - first <= CLOCK_GAP_FRAMES*series->n_frames*longest)
+    if (last - first <= MAX(CLOCK_GAP_FRAMES*series->n_frames*longest, CLOCK_GAP_SECONDS))
         return TRUE;
     g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
                 _("%s and %s start %.3g s apart in the metadata: their time "
