@@ -355,8 +355,7 @@ create_outputs(SeriesArgs *args, gboolean show_progress, gdouble from,
             && !gwy_app_wait_set_fraction(from + (1.0 - from)*(k + 1.0)/n))
             ok = FALSE;
     }
-    if (ok && crop && !series_correction_common_area(masks, n, area, area + 1,
-                                                     area + 2, area + 3)) {
+    if (ok && crop && !series_correction_trusted_area(&args->correction, masks, n, area)) {
         g_set_error(error, SERIES_CORRECTION_ERROR,
                     SERIES_CORRECTION_ERROR_COMPENSATE,
                     _("No part of the area is covered by every frame."));
@@ -365,9 +364,13 @@ create_outputs(SeriesArgs *args, gboolean show_progress, gdouble from,
     for (k = 0; k < n && ok; k++) {
         if (crop) {
             GwyDataField *part = crop_to(results[k], area);
+            GwyDataField *mask_part = crop_to(masks[k], area);
 
-            add_corrected_channel(args, k, part, NULL);
+            /* Only a flagged frame may lack pixels in the area. */
+            add_corrected_channel(args, k, part,
+                                  gwy_data_field_get_max(mask_part) > 0.0 ? mask_part : NULL);
             g_object_unref(part);
+            g_object_unref(mask_part);
         }
         else
             add_corrected_channel(args, k, results[k], masks[k]);

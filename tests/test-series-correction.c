@@ -590,6 +590,40 @@ START_TEST(test_all_frames_flagged_refused)
 }
 END_TEST
 
+/* The area --crop common keeps is the one the frames not flagged share:
+ * frame 0 lacks its first 4 columns, frame 2 its last 4 rows, and frame 1,
+ * flagged, a random 1 % of its pixels, which would leave a sliver. */
+START_TEST(test_trusted_area_leaves_flagged_frames_out)
+{
+    GRand *rng = test_rand_salted(base_seed, 7000);
+    SeriesCorrection correction;
+    GwyDataField *masks[3];
+    gint k, i, area[4];
+
+    memset(&correction, 0, sizeof(correction));
+    correction.n_frames = 3;
+    correction.frames = g_new0(SeriesFrameVerdict, 3);
+    correction.frames[1].flagged = TRUE;
+    for (k = 0; k < 3; k++)
+        masks[k] = gwy_data_field_new(32, 32, 32e-9, 32e-9, TRUE);
+    gwy_data_field_area_fill(masks[0], 0, 0, 4, 32, 1.0);
+    gwy_data_field_area_fill(masks[2], 0, 28, 32, 4, 1.0);
+    for (i = 0; i < 10; i++)
+        gwy_data_field_set_val(masks[1], g_rand_int_range(rng, 0, 32), g_rand_int_range(rng, 0, 32), 1.0);
+    ck_assert(series_correction_trusted_area(&correction, masks, 3, area));
+    ck_assert_msg(area[0] == 4 && area[1] == 0 && area[2] == 28 && area[3] == 28,
+                  "seed %u: area col %d row %d, %d x %d", base_seed, area[0], area[1], area[2], area[3]);
+    /* Trusted, frame 1 shrinks it. */
+    correction.frames[1].flagged = FALSE;
+    ck_assert(series_correction_trusted_area(&correction, masks, 3, area));
+    ck_assert_msg(area[2]*area[3] < 28*28, "seed %u: %d x %d", base_seed, area[2], area[3]);
+    for (k = 0; k < 3; k++)
+        g_object_unref(masks[k]);
+    g_free(correction.frames);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* The corrected frames of a steady drift show the same content where they
  * overlap, masked where they have none; the common area is where all
  * have data. */
@@ -740,6 +774,7 @@ main(void)
     tcase_add_test(tc, test_outputs);
     tcase_add_loop_test(tc, test_featureless_frame_between, 0, 2);
     tcase_add_test(tc, test_all_frames_flagged_refused);
+    tcase_add_test(tc, test_trusted_area_leaves_flagged_frames_out);
     tcase_add_test(tc, test_frames_overlay);
     tcase_add_test(tc, test_long_series);
     tcase_set_timeout(tc, 120);

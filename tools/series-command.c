@@ -396,7 +396,7 @@ mask_union(GwyDataField **area, GwyDataField *mask)
 
 /* Every frame (and with --all-channels every channel of its file)
  * corrected; `stored` gets the new channel ids, `area` the union of the
- * frames' masks. */
+ * masks of the frames not flagged. */
 static gboolean
 correct_frames(SeriesRun *run, gboolean all_channels, GwyContainer *out,
                GArray *stored, GwyDataField **area, GError **error)
@@ -420,7 +420,10 @@ correct_frames(SeriesRun *run, gboolean all_channels, GwyContainer *out,
                                                  run->interpolation, result,
                                                  mask, error);
             if (ok) {
-                if (i == 0)
+                /* The frames the trajectory trusts decide the common area:
+                 * a flagged frame's missing pixels (1 % of NaN) cut it to
+                 * 23 x 37 px of 128 x 128 (hostile-input run). */
+                if (i == 0 && !run->correction.frames[k].flagged)
                     mask_union(area, mask);
                 id = store_corrected(out, run, k, data, source_id, result,
                                      mask);
@@ -438,8 +441,23 @@ correct_frames(SeriesRun *run, gboolean all_channels, GwyContainer *out,
     return TRUE;
 }
 
-/* Crops the corrected channels to the common area (their masks then go),
- * or drops the masks of channels with no missing pixel. */
+/* The part of field in the common area, placed where it lies. */
+static GwyDataField*
+crop_to_area(GwyDataField *field, const gint *area)
+{
+    GwyDataField *part = gwy_data_field_area_extract(field, area[0], area[1],
+                                                     area[2], area[3]);
+
+    gwy_data_field_set_xoffset(part, gwy_data_field_get_xoffset(field)
+                               + gwy_data_field_jtor(field, area[0]));
+    gwy_data_field_set_yoffset(part, gwy_data_field_get_yoffset(field)
+                               + gwy_data_field_itor(field, area[1]));
+    return part;
+}
+
+/* Crops the corrected channels to the common area, or leaves them whole;
+ * either way a mask stays only where pixels lack data (in the common area,
+ * those of flagged frames only). */
 static void
 finish_channels(const SeriesRun *run, GwyContainer *out, GArray *stored)
 {
@@ -452,18 +470,19 @@ finish_channels(const SeriesRun *run, GwyContainer *out, GArray *stored)
 
         g_snprintf(key, sizeof(key), "/%d/mask", id);
         mask = gwy_container_get_object_by_name(out, key);
-        if (run->crop || gwy_data_field_get_max(mask) <= 0.0)
+        if (run->crop) {
+            part = crop_to_area(mask, run->area);
+            gwy_container_set_object_by_name(out, key, part);
+            g_object_unref(part);
+            mask = part;
+        }
+        if (gwy_data_field_get_max(mask) <= 0.0)
             gwy_container_remove_by_name(out, key);
         if (!run->crop)
             continue;
         g_snprintf(key, sizeof(key), "/%d/data", id);
         field = gwy_container_get_object_by_name(out, key);
-        part = gwy_data_field_area_extract(field, run->area[0], run->area[1],
-                                           run->area[2], run->area[3]);
-        gwy_data_field_set_xoffset(part, gwy_data_field_get_xoffset(field)
-                                   + gwy_data_field_jtor(field, run->area[0]));
-        gwy_data_field_set_yoffset(part, gwy_data_field_get_yoffset(field)
-                                   + gwy_data_field_itor(field, run->area[1]));
+        part = crop_to_area(field, run->area);
         gwy_container_set_object_by_name(out, key, part);
         g_object_unref(part);
     }

@@ -1909,3 +1909,24 @@ series_correction_common_area(GwyDataField **masks, gint n, gint *col,
     *height = rect[3];
     return best > 0;
 }
+
+gboolean
+series_correction_trusted_area(const SeriesCorrection *correction,
+                               GwyDataField **masks, gint n, gint *area)
+{
+    GwyDataField **trusted = g_new(GwyDataField*, MAX(n, 1));
+    gboolean ok;
+    gint k, m = 0;
+
+    for (k = 0; k < n; k++) {
+        if (!correction->frames[k].flagged)
+            trusted[m++] = masks[k];
+    }
+    if (!m) {
+        for (k = 0; k < n; k++)
+            trusted[m++] = masks[k];
+    }
+    ok = series_correction_common_area(trusted, m, area, area + 1, area + 2, area + 3);
+    g_free(trusted);
+    return ok;
+}

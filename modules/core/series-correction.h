@@ -163,6 +163,13 @@ gboolean  series_correction_common_area(GwyDataField **masks,
                                         gint *row,
                                         gint *width,
                                         gint *height);
+/* The same over the masks of the frames not flagged (every frame's when
+ * all are): a flagged frame's missing pixels do not shrink the area the
+ * trusted ones share.  area gets col, row, width, height. */
+gboolean  series_correction_trusted_area(const SeriesCorrection *correction,
+                                         GwyDataField **masks,
+                                         gint n,
+                                         gint *area);
 
 G_END_DECLS
 
