@@ -2129,6 +2129,70 @@ static const ReferenceErrorCase reference_error_cases[] = {
       "gwy-localscan: --masking takes exclude, include or ignore, not \"maybe\"" },
 };
 
+/* A series whose middle frame carries a mask of the wrong size (7 x 9 px
+ * on 160 x 160): the mask is left out of OUT with a warning, not copied
+ * into the file Gwyddion is to open (the hostile-input run found it
+ * copied).  Frames: one smooth surface with noise of their own, timed by
+ * their metadata. */
+START_TEST(test_series_drops_misfit_mask)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 600);
+    gdouble zero[REF_STRIPES] = { 0 };
+    gchar *inputs[3], *output = out_path("series.gwy"), *name, start[32];
+    GwyContainer *out;
+    RefFrames rf;
+    ToolRun run;
+    gint k, i;
+
+    ref_frames_stripewise(&rf, seed + 601, zero, zero);
+    for (k = 0; k < 3; k++) {
+        GwyContainer *data = gwy_container_new(), *meta;
+        GwyDataField *field = gwy_data_field_duplicate(rf.reference);
+        gdouble *d = gwy_data_field_get_data(field);
+
+        for (i = 0; i < REF_SIZE*REF_SIZE; i++)
+            d[i] += 0.01*gwy_data_field_get_rms(rf.reference)*g_rand_double_range(rng, -1.0, 1.0);
+        add_channel(data, 0, field, "Height", NULL);
+        meta = channel_meta(data, 0, TRUE);
+        gwy_container_set_const_string_by_name(meta, "Line time (s)", (const guchar*)"0.01");
+        gwy_container_set_const_string_by_name(meta, "Slow scan", (const guchar*)"down");
+        g_snprintf(start, sizeof(start), "%d", 2*k);
+        gwy_container_set_string_by_name(meta, "Frame start (s)", (const guchar*)g_strdup(start));
+        if (k == 1) {
+            GwyDataField *mask = gwy_data_field_new(7, 9, 7.0, 9.0, TRUE);
+
+            gwy_container_set_object(data, gwy_app_get_mask_key_for_id(0), mask);
+            g_object_unref(mask);
+        }
+        name = g_strdup_printf("frame%d.gwy", k);
+        inputs[k] = in_path(name);
+        save_gwy(data, inputs[k]);
+        g_free(name);
+        g_object_unref(field);
+        g_object_unref(data);
+    }
+    run_tool(&run, (const gchar *const[]){ "series", "-o", output, inputs[0], inputs[1], inputs[2], NULL });
+    ck_assert_msg(run.status == 0, "series failed: %s", run.err);
+    ck_assert_msg(strstr(run.err, "frame1.gwy: the mask of channel 0 does not fit the channel and is left out"),
+                  "no warning of the mask: %s", run.err);
+    out = load_gwy(output);
+    for (k = 0; k < 3; k++) {
+        GObject *mask;
+
+        if (gwy_container_gis_object(out, gwy_app_get_mask_key_for_id(k), &mask))
+            ck_assert_msg(gwy_data_field_get_xres(GWY_DATA_FIELD(mask)) == REF_SIZE,
+                          "channel %d of OUT has a mask of %d px across", k,
+                          gwy_data_field_get_xres(GWY_DATA_FIELD(mask)));
+        g_free(inputs[k]);
+    }
+    g_object_unref(out);
+    tool_run_clear(&run);
+    ref_frames_clear(&rf);
+    g_free(output);
+    g_rand_free(rng);
+}
+END_TEST
+
 START_TEST(test_reference_errors)
 {
     const ReferenceErrorCase *ec = reference_error_cases + _i;
@@ -2334,6 +2398,7 @@ gwy_localscan_suite(void)
     tcase_add_loop_test(tc, test_reference_same_file, 0, 4);
     tcase_add_test(tc, test_reference_continuous);
     tcase_add_loop_test(tc, test_reference_errors, 0, G_N_ELEMENTS(reference_error_cases));
+    tcase_add_test(tc, test_series_drops_misfit_mask);
     suite_add_tcase(suite, tc);
 
     tc = tcase_create("command line and errors");

@@ -26,6 +26,7 @@
 #include "quoted-input.h"
 #include "library-log.h"
 #include "series-command.h"
+#include "missing-data.h"
 #include "series-graph.h"
 #include "localscan-intl.h"
 
@@ -55,6 +56,7 @@ typedef struct {
 typedef struct {
     FrameSeriesOptions options;
     gint n_files;
+    gchar **files;           /* the command line's, not owned */
     GwyContainer **datas;
     FrameSeries *series;
     SeriesCorrection correction;
@@ -256,6 +258,7 @@ load_series(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
     gint k;
 
     run->n_files = g_strv_length(args->files);
+    run->files = args->files;
     run->datas = g_new0(GwyContainer*, run->n_files);
     for (k = 0; k < run->n_files; k++) {
         if (!(run->datas[k] = isolated_load(args->files[k], error)))
@@ -277,8 +280,40 @@ next_free_id(GwyContainer *data)
     return next;
 }
 
+/* A mask that is no field of its channel's size (or no field at all, or
+ * one holding NaN: a file the tools write holds none) is left out of OUT,
+ * with a warning: copied, a 7 x 9 px mask on a 128 x 128 px channel went into
+ * the file the tools promise Gwyddion can open (hostile-input run). */
 static void
-copy_inputs(const SeriesRun *run, GwyContainer *out)
+drop_misfit_mask(SeriesRun *run, GwyContainer *out, gint id, gint k,
+                 gint source_id)
+{
+    GwyDataField *field = localscan_channel_item(out, id, "data");
+    gchar key[32];
+    GObject *mask;
+    gchar *name;
+
+    g_snprintf(key, sizeof(key), "/%d/mask", id);
+    if (!gwy_container_contains_by_name(out, key)
+        || (gwy_container_gis_object_by_name(out, key, &mask)
+            && GWY_IS_DATA_FIELD(mask)
+            && gwy_data_field_check_compatibility(field, GWY_DATA_FIELD(mask),
+                                                  GWY_DATA_COMPATIBILITY_RES) == 0
+            && !missing_data_count(gwy_data_field_get_data_const(GWY_DATA_FIELD(mask)),
+                                   (gsize)gwy_data_field_get_xres(field)
+                                   *gwy_data_field_get_yres(field))))
+        return;
+    gwy_container_remove_by_name(out, key);
+    name = g_path_get_basename(run->files[k]);
+    g_ptr_array_add(run->correction.warnings,
+                    g_strdup_printf(_("%s: the mask of channel %d does not "
+                                      "fit the channel and is left out"),
+                                    name, source_id));
+    g_free(name);
+}
+
+static void
+copy_inputs(SeriesRun *run, GwyContainer *out)
 {
     gint k, i, *ids;
     gchar from[32], to[32];
@@ -291,6 +326,7 @@ copy_inputs(const SeriesRun *run, GwyContainer *out)
             g_snprintf(from, sizeof(from), "/%d", ids[i]);
             g_snprintf(to, sizeof(to), "/%d", id);
             gwy_container_transfer(run->datas[k], out, from, to, TRUE);
+            drop_misfit_mask(run, out, id, k, ids[i]);
         }
         g_free(ids);
     }
