@@ -330,6 +330,41 @@ START_TEST(test_one_clock)
 }
 END_TEST
 
+/* --channels FIRST-LAST past the file's last channel: the frames there
+ * are, and a note of the ids that do not exist; a range holding none of
+ * them is refused naming the last channel there is. */
+START_TEST(test_channel_range_beyond_the_file)
+{
+    static const gdouble starts[3] = { 0.0, 1.0, 2.0 };
+    GwyContainer *data = timed_frames(starts);
+    gchar *name = g_strdup("frames.gwy");
+    FrameSeriesOptions options;
+    FrameSeries *series;
+    GError *error = NULL;
+    gboolean noted = FALSE;
+    guint i;
+
+    frame_series_options_init(&options);
+    options.first_id = 1;
+    options.last_id = 9;
+    series = frame_series_from_files(&data, &name, 1, &options, &error);
+    ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
+    ck_assert_int_eq(series->n_frames, 2);
+    for (i = 0; i < series->notes->len; i++)
+        noted |= g_str_equal(g_ptr_array_index(series->notes, i),
+                             "frames.gwy: channels 3-9 of the range 1-9 do not exist");
+    ck_assert_msg(noted, "no note of channels 3-9");
+    frame_series_free(series);
+    options.first_id = 5;
+    series = frame_series_from_files(&data, &name, 1, &options, &error);
+    ck_assert(series == NULL);
+    ck_assert_str_eq(error->message, "frames.gwy: no channel 5-9 (its last channel is 2)");
+    g_clear_error(&error);
+    g_object_unref(data);
+    g_free(name);
+}
+END_TEST
+
 /************************************************************************
  * simscan's own files: timing from simscan's metadata keys
  ************************************************************************/
@@ -457,6 +492,7 @@ main(void)
     tcase_add_test(tc_simscan, test_timing_hints_name_the_front_end);
     tcase_add_test(tc_simscan, test_frame_times_follow_dropped_duplicates);
     tcase_add_test(tc_simscan, test_one_clock);
+    tcase_add_test(tc_simscan, test_channel_range_beyond_the_file);
     if (probe) {
         tc = tcase_create("measured");
         tcase_add_test(tc, test_nanoscope_timing);

@@ -272,7 +272,7 @@ load_listed_channels(FrameSeries *series, GwyContainer *data,
         field = localscan_channel_item(data, id, "data");
         if (first && !fields_alike(first, field)) {
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
-                        _("%s: channel %d (%s) differs in size or pixel size "
+                        _("%s: channel %d (%s) differs in size, pixel size or unit "
                           "from the first frame"),
                         filename, id, localscan_channel_title(data, id));
             return FALSE;
@@ -281,6 +281,33 @@ load_listed_channels(FrameSeries *series, GwyContainer *data,
         append_channel(series, data, id, filename, 0, TRUE, *mts);
     }
     return TRUE;
+}
+
+/* A range of channels (--channels FIRST-LAST) skips the ids it holds that
+ * the file lacks; one that reaches past the file's last channel is said,
+ * and one that holds none of them is refused naming its ids (it ran on
+ * the channels there were, or said 'found 0'). */
+static void
+note_range_beyond(FrameSeries *series, const gchar *filename,
+                  const FrameSeriesOptions *options, const gint *ids, gint n,
+                  gint matched, GError **error)
+{
+    gint last = n ? ids[n-1] : -1, i;
+
+    if (options->first_id < 0 || options->last_id < 0)
+        return;
+    for (i = 0; i < n; i++)
+        last = MAX(last, ids[i]);
+    if (!matched && !options->channel)
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("%s: no channel %d-%d (its last channel is %d)"),
+                    filename, options->first_id, options->last_id, last);
+    else if (options->last_id > last)
+        g_ptr_array_add(series->notes,
+                        g_strdup_printf(_("%s: channels %d-%d of the range "
+                                          "%d-%d do not exist"), filename,
+                                        MAX(last + 1, options->first_id), options->last_id,
+                                        options->first_id, options->last_id));
 }
 
 static gboolean
@@ -325,7 +352,7 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
                 continue;
             }
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_MISMATCH,
-                        _("%s: channel %d (%s) differs in size or pixel size "
+                        _("%s: channel %d (%s) differs in size, pixel size or unit "
                           "from the first frame"),
                         filename, ids[i],
                         localscan_channel_title(data, ids[i]));
@@ -334,13 +361,15 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
         }
         append_channel(series, data, ids[i], filename, 0, TRUE, *mts);
     }
-    g_free(ids);
     if (options->channel && !matched) {
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("%s: no channel %s"), filename, options->channel);
+        g_free(ids);
         return FALSE;
     }
-    return TRUE;
+    note_range_beyond(series, filename, options, ids, n, matched, error);
+    g_free(ids);
+    return !error || !*error;
 }
 
 static gboolean
