@@ -317,19 +317,6 @@ add_corrected_channel(SeriesArgs *args, gint k, GwyDataField *result,
     return newid;
 }
 
-static GwyDataField*
-crop_to(GwyDataField *field, const gint *area)
-{
-    GwyDataField *part = gwy_data_field_area_extract(field, area[0], area[1],
-                                                     area[2], area[3]);
-
-    gwy_data_field_set_xoffset(part, gwy_data_field_get_xoffset(field)
-                               + gwy_data_field_jtor(field, area[0]));
-    gwy_data_field_set_yoffset(part, gwy_data_field_get_yoffset(field)
-                               + gwy_data_field_itor(field, area[1]));
-    return part;
-}
-
 /* Every frame corrected (with Gwyddion's wait dialog, which can cancel),
  * then added, cropped to the common area when asked. */
 static gboolean
@@ -363,8 +350,8 @@ create_outputs(SeriesArgs *args, gboolean show_progress, gdouble from,
     }
     for (k = 0; k < n && ok; k++) {
         if (crop) {
-            GwyDataField *part = crop_to(results[k], area);
-            GwyDataField *mask_part = crop_to(masks[k], area);
+            GwyDataField *part = series_correction_crop_to_area(results[k], area);
+            GwyDataField *mask_part = series_correction_crop_to_area(masks[k], area);
 
             /* Only a flagged frame may lack pixels in the area. */
             add_corrected_channel(args, k, part,

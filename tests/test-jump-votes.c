@@ -240,6 +240,25 @@ START_TEST(test_one_sided_line_needs_a_minimum)
 }
 END_TEST
 
+/* 6-20 textured lines before a jump, then 2-8 featureless ones, whose
+ * leanings are noise (10-40 times below the textured lines' match);
+ * returns that match level. */
+static gdouble
+flat_run_after_texture(LineEvidence *ev, GRand *rng, gint *n_before, gint *n_flat)
+{
+    gdouble noise, m;
+    gint i;
+
+    *n_before = g_rand_int_range(rng, 6, 21);
+    *n_flat = g_rand_int_range(rng, 2, 9);
+    noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
+    m = noise*g_rand_double_range(rng, 10.0, 40.0);
+    textured_run(ev, rng, m, 0, *n_before, *n_before, FALSE);
+    for (i = *n_before; i < *n_before + *n_flat; i++)
+        featureless_line(ev + i, rng, noise, g_rand_double_range(rng, -0.3, 0.3));
+    return m;
+}
+
 /* A run of featureless lines between textured lines before and after a
  * jump: their leanings are noise, a hundredth of a textured line's
  * evidence and less, and whatever split they choose, the loose splits
@@ -248,17 +267,11 @@ START_TEST(test_loose_splits_span_featureless_run)
 {
     GRand *rng = test_rand_salted(base_seed, 5);
     LineEvidence ev[60];
-    gint frame[60] = { 0 }, d, i, n_before, n_flat, n, first, last, lo, hi;
-    gdouble noise, m;
+    gint frame[60] = { 0 }, d, n_before, n_flat, n, first, last, lo, hi;
+    gdouble m;
 
     for (d = 0; d < N_DRAWS; d++) {
-        n_before = g_rand_int_range(rng, 6, 21);
-        n_flat = g_rand_int_range(rng, 2, 9);
-        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
-        m = noise*g_rand_double_range(rng, 10.0, 40.0);
-        textured_run(ev, rng, m, 0, n_before, n_before, FALSE);
-        for (i = n_before; i < n_before + n_flat; i++)
-            featureless_line(ev + i, rng, noise, g_rand_double_range(rng, -0.3, 0.3));
+        m = flat_run_after_texture(ev, rng, &n_before, &n_flat);
         n = n_before + n_flat + g_rand_int_range(rng, 6, 21);
         textured_run(ev, rng, m, n_before + n_flat, n, n_before + n_flat, FALSE);
         ck_assert(jump_votes_split_loose(ev, frame, n, &first, &last, &lo, &hi));
@@ -285,16 +298,10 @@ START_TEST(test_edge_line_seen_on_one_side_leaves_jump_open)
     GRand *rng = test_rand_salted(base_seed, 6);
     LineEvidence ev[60];
     gint frame[60], d, i, n_before, n_flat, edge, n, first, last, lo, hi;
-    gdouble noise, m, cost, control;
+    gdouble m, cost, control;
 
     for (d = 0; d < N_DRAWS; d++) {
-        n_before = g_rand_int_range(rng, 6, 21);
-        n_flat = g_rand_int_range(rng, 2, 9);
-        noise = 1e-19*g_rand_double_range(rng, 0.5, 2.0);
-        m = noise*g_rand_double_range(rng, 10.0, 40.0);
-        textured_run(ev, rng, m, 0, n_before, n_before, FALSE);
-        for (i = n_before; i < n_before + n_flat; i++)
-            featureless_line(ev + i, rng, noise, g_rand_double_range(rng, -0.3, 0.3));
+        m = flat_run_after_texture(ev, rng, &n_before, &n_flat);
         edge = n_before + n_flat;
         for (i = 0; i < edge; i++)
             frame[i] = 0;

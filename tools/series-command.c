@@ -477,20 +477,6 @@ correct_frames(SeriesRun *run, gboolean all_channels, GwyContainer *out,
     return TRUE;
 }
 
-/* The part of field in the common area, placed where it lies. */
-static GwyDataField*
-crop_to_area(GwyDataField *field, const gint *area)
-{
-    GwyDataField *part = gwy_data_field_area_extract(field, area[0], area[1],
-                                                     area[2], area[3]);
-
-    gwy_data_field_set_xoffset(part, gwy_data_field_get_xoffset(field)
-                               + gwy_data_field_jtor(field, area[0]));
-    gwy_data_field_set_yoffset(part, gwy_data_field_get_yoffset(field)
-                               + gwy_data_field_itor(field, area[1]));
-    return part;
-}
-
 /* Crops the corrected channels to the common area, or leaves them whole;
  * either way a mask stays only where pixels lack data (in the common area,
  * those of flagged frames only). */
@@ -507,7 +493,7 @@ finish_channels(const SeriesRun *run, GwyContainer *out, GArray *stored)
         g_snprintf(key, sizeof(key), "/%d/mask", id);
         mask = gwy_container_get_object_by_name(out, key);
         if (run->crop) {
-            part = crop_to_area(mask, run->area);
+            part = series_correction_crop_to_area(mask, run->area);
             gwy_container_set_object_by_name(out, key, part);
             g_object_unref(part);
             mask = part;
@@ -518,7 +504,7 @@ finish_channels(const SeriesRun *run, GwyContainer *out, GArray *stored)
             continue;
         g_snprintf(key, sizeof(key), "/%d/data", id);
         field = gwy_container_get_object_by_name(out, key);
-        part = crop_to_area(field, run->area);
+        part = series_correction_crop_to_area(field, run->area);
         gwy_container_set_object_by_name(out, key, part);
         g_object_unref(part);
     }

@@ -1930,3 +1930,16 @@ series_correction_trusted_area(const SeriesCorrection *correction,
     g_free(trusted);
     return ok;
 }
+
+GwyDataField*
+series_correction_crop_to_area(GwyDataField *field, const gint *area)
+{
+    GwyDataField *part = gwy_data_field_area_extract(field, area[0], area[1],
+                                                     area[2], area[3]);
+
+    gwy_data_field_set_xoffset(part, gwy_data_field_get_xoffset(field)
+                               + gwy_data_field_jtor(field, area[0]));
+    gwy_data_field_set_yoffset(part, gwy_data_field_get_yoffset(field)
+                               + gwy_data_field_itor(field, area[1]));
+    return part;
+}

@@ -170,6 +170,10 @@ gboolean  series_correction_trusted_area(const SeriesCorrection *correction,
                                          GwyDataField **masks,
                                          gint n,
                                          gint *area);
+/* The part of field inside area (col, row, width, height), placed where it
+ * lies (its offsets moved by the area's corner). */
+GwyDataField* series_correction_crop_to_area(GwyDataField *field,
+                                             const gint *area);
 
 G_END_DECLS
 
