@@ -147,7 +147,9 @@ START_TEST(test_links_written_through)
     gchar *absolute, *p;
 
     make_dir();
-    g_mkdir(path("sub"), 0700);
+    p = path("sub");
+    g_mkdir(p, 0700);
+    g_free(p);
     put("target.csv", "old\n");
     p = path("rel.csv");
     ck_assert_int_eq(symlink("target.csv", p), 0);
