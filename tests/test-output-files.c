@@ -182,6 +182,46 @@ START_TEST(test_links_written_through)
 }
 END_TEST
 
+/* A link to a file not made yet and that file are one output: the second
+ * is refused (both were written there, and the first lost).  A loop of
+ * links named as an output replaces the link named, not one met 40 steps
+ * round the loop. */
+START_TEST(test_links_named_twice_and_loops)
+{
+    OutputFiles *files = output_files_new();
+    GError *error = NULL;
+    gchar *p;
+
+    make_dir();
+    p = path("l.csv");
+    ck_assert_int_eq(symlink("t.csv", p), 0);
+    g_free(p);
+    ck_assert(add(files, "t.csv", "first", NULL));
+    ck_assert(!add(files, "l.csv", "second", &error));
+    ck_assert_msg(strstr(error->message, "are the same file"), "%s", error->message);
+    g_clear_error(&error);
+    output_files_free(files);
+
+    files = output_files_new();
+    p = path("a");
+    ck_assert_int_eq(symlink("b", p), 0);
+    g_free(p);
+    p = path("b");
+    ck_assert_int_eq(symlink("c", p), 0);
+    g_free(p);
+    p = path("c");
+    ck_assert_int_eq(symlink("a", p), 0);
+    g_free(p);
+    ck_assert(add(files, "a", "through a loop", NULL));
+    ck_assert(output_files_commit(files, NULL));
+    output_files_free(files);
+    assert_contents("a", "through a loop");
+    assert_link("b", "c");
+    assert_link("c", "a");
+    remove_dir();
+}
+END_TEST
+
 /* The last target becomes a folder after it was checked: its rename fails
  * and the targets renamed before it get their old state back. */
 START_TEST(test_failed_rename_rolls_back)
@@ -339,6 +379,7 @@ main(void)
 
     tcase_add_test(tc, test_commit_writes_all);
     tcase_add_test(tc, test_links_written_through);
+    tcase_add_test(tc, test_links_named_twice_and_loops);
     tcase_add_test(tc, test_failed_rename_rolls_back);
     tcase_add_test(tc, test_free_without_commit);
     tcase_add_test(tc, test_add_refuses_folder_and_repeats);

@@ -34,19 +34,63 @@ set_errno_error(GError **error, gint saved_errno, const gchar *filename)
                 _("cannot write %s: %s"), filename, g_strerror(saved_errno));
 }
 
+#define LINK_DEPTH_MAX 40
+
+/* Links followed to the file they name, existing or not: an output named
+ * by a symbolic link is written where the link points.  Renamed over the
+ * link itself, the new file replaced the link and left its target as it
+ * was (as root, --json /dev/stdout replaced /dev/stdout).  A link
+ * relative to its folder is read there.  A chain too long or a loop is
+ * left as named: the system would not open it either, and the rename
+ * replaces the link the user named (followed 40 steps round a loop, it
+ * replaced another). */
+static gchar*
+link_target(const gchar *filename)
+{
+    gchar *path = g_strdup(filename), *target, *dir, *next;
+    GStatBuf st;
+    gint depth;
+
+    for (depth = 0; ; depth++) {
+        if (g_lstat(path, &st) != 0 || !S_ISLNK(st.st_mode))
+            return path;
+        if (depth == LINK_DEPTH_MAX || !(target = g_file_read_link(path, NULL)))
+            break;
+        if (g_path_is_absolute(target))
+            next = target;
+        else {
+            dir = g_path_get_dirname(path);
+            next = g_build_filename(dir, target, NULL);
+            g_free(dir);
+            g_free(target);
+        }
+        g_free(path);
+        path = next;
+    }
+    g_free(path);
+    return g_strdup(filename);
+}
+
 /* The absolute path a file has or would get, its folder resolved (symbolic
  * links, .., .): a file that does not exist yet has no inode to compare,
  * and "out/../x" and "x" or a symlinked folder's name are one file. */
 static gchar*
 canonical_path(const gchar *filename)
 {
+    gchar *cwd = g_get_current_dir();
+    /* The folder as written, for the system to resolve: folding ".." by
+     * text first goes wrong past a symlinked folder. */
+    gchar *written = g_path_is_absolute(filename) ? g_strdup(filename)
+                     : g_build_filename(cwd, filename, NULL);
     gchar *absolute = g_canonicalize_filename(filename, NULL);
-    gchar *dir = g_path_get_dirname(absolute);
-    gchar *base = g_path_get_basename(absolute);
+    gchar *dir = g_path_get_dirname(written);
+    gchar *base = g_path_get_basename(written);
     gchar *real = realpath(dir, NULL);
     gchar *path;
 
     path = real ? g_build_filename(real, base, NULL) : g_strdup(absolute);
+    g_free(written);
+    g_free(cwd);
     free(real);
     g_free(dir);
     g_free(base);
@@ -58,20 +102,28 @@ gboolean
 output_files_same(const gchar *a, const gchar *b)
 {
     GStatBuf sa, sb;
-    gboolean a_exists = (g_stat(a, &sa) == 0);
-    gboolean b_exists = (g_stat(b, &sb) == 0);
+    /* Where each is written: a link to a file not made yet and that file
+     * are one output (a link named as --trajectory to the -o file wrote
+     * both there, and the .gwy was lost). */
+    gchar *ta = link_target(a), *tb = link_target(b);
+    gboolean a_exists = (g_stat(ta, &sa) == 0);
+    gboolean b_exists = (g_stat(tb, &sb) == 0);
     gchar *ca, *cb;
     gboolean same;
 
     if (a_exists && b_exists)
-        return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-    if (a_exists != b_exists)
-        return FALSE;
-    ca = canonical_path(a);
-    cb = canonical_path(b);
-    same = g_str_equal(ca, cb);
-    g_free(ca);
-    g_free(cb);
+        same = (sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino);
+    else if (a_exists != b_exists)
+        same = FALSE;
+    else {
+        ca = canonical_path(ta);
+        cb = canonical_path(tb);
+        same = g_str_equal(ca, cb);
+        g_free(ca);
+        g_free(cb);
+    }
+    g_free(ta);
+    g_free(tb);
     return same;
 }
 
@@ -206,38 +258,6 @@ static gboolean
 check_target(OutputFiles *files, const gchar *filename, GError **error)
 {
     return output_files_check_kind(filename, error) && check_new_target(files, filename, error);
-}
-
-/* Links followed to the file they name, existing or not: an output named
- * by a symbolic link is written where the link points.  Renamed over the
- * link itself, the new file replaced the link and left its target as it
- * was (as root, --json /dev/stdout replaced /dev/stdout).  A link
- * relative to its folder is read there; a chain too long for the system
- * stays a link (the rename then replaces it, as the system would refuse
- * to open it). */
-static gchar*
-link_target(const gchar *filename)
-{
-    gchar *path = g_strdup(filename), *target, *dir, *next;
-    GStatBuf st;
-    gint depth;
-
-    for (depth = 0; depth < 40; depth++) {
-        if (g_lstat(path, &st) != 0 || !S_ISLNK(st.st_mode)
-            || !(target = g_file_read_link(path, NULL)))
-            break;
-        if (g_path_is_absolute(target))
-            next = target;
-        else {
-            dir = g_path_get_dirname(path);
-            next = g_build_filename(dir, target, NULL);
-            g_free(dir);
-            g_free(target);
-        }
-        g_free(path);
-        path = next;
-    }
-    return path;
 }
 
 /* Adds filename to the set with a new temporary file beside the file it
