@@ -524,8 +524,8 @@ warned_of(const SeriesCorrection *correction, const gchar *text)
     return FALSE;
 }
 
-/* A featureless frame between two good ones (a constant, or zeros: a
- * channel that recorded nothing) is flagged, and the two others are
+/* A featureless frame between two good ones (a constant, zeros: a channel
+ * that recorded nothing, or white noise) is flagged, and the two others are
  * registered against each other as if it were absent: the drift drawn at
  * random (2-6 px per frame each way) within 0.05 px per frame.  The pairs
  * with the featureless frame registered no block, and their overall
@@ -544,7 +544,16 @@ START_TEST(test_featureless_frame_between)
     gdouble dx, dy, t;
     gint i;
 
-    gwy_data_field_fill(series->frames[1].field, _i ? 0.0 : 3e-9);
+    if (_i < 2)
+        gwy_data_field_fill(series->frames[1].field, _i ? 0.0 : 3e-9);
+    else {
+        /* White noise: its blocks score above 0 but below the least
+         * accepted. */
+        gdouble *d = gwy_data_field_get_data(series->frames[1].field);
+
+        for (i = 0; i < 96*64; i++)
+            d[i] = g_rand_double_range(rng, -1.0, 1.0);
+    }
     ck_assert_msg(series_correction_compute(series, NULL, NULL, &correction, &error),
                   "seed %u: %s", base_seed, error ? error->message : "?");
     ck_assert_msg(correction.frames[1].flagged && !correction.frames[0].flagged
@@ -772,7 +781,7 @@ main(void)
     tcase_add_test(tc, test_progress_and_cancel);
     tcase_add_loop_test(tc, test_random_walk_smooth, 0, 2);
     tcase_add_test(tc, test_outputs);
-    tcase_add_loop_test(tc, test_featureless_frame_between, 0, 2);
+    tcase_add_loop_test(tc, test_featureless_frame_between, 0, 3);
     tcase_add_test(tc, test_all_frames_flagged_refused);
     tcase_add_test(tc, test_trusted_area_leaves_flagged_frames_out);
     tcase_add_test(tc, test_frames_overlay);

@@ -140,14 +140,29 @@ register_prepared(const StripeRegistrationFrame *image,
                   gdouble *score, gdouble *global)
 {
     StripeShift whole, other_whole, *shifts = g_new0(StripeShift, n), *other = g_new0(StripeShift, n);
-    gint best = 0;
+    BlockSearch blind = { 0.0, search->uncertainty, FALSE };
+    gint best = 0, count;
 
     if (image && reference) {
         best = register_in_band(image, reference, xres, yres, n, options, guess, search, 0.0,
                                 &whole, shifts);
         if (2*best < n
-            && register_in_band(image, reference, xres, yres, n, options, guess, search,
-                                MAX(WIDER_BAND_FRACTION*MIN(xres, yres), WIDER_BAND_MIN_PX),
+            && (count = register_in_band(image, reference, xres, yres, n, options, guess, search,
+                                         MAX(WIDER_BAND_FRACTION*MIN(xres, yres), WIDER_BAND_MIN_PX),
+                                         &other_whole, other)) > best) {
+            StripeShift *kept = shifts;
+
+            whole = other_whole;
+            shifts = other;
+            other = kept;
+            best = count;
+        }
+        /* A guess chained through a pair that matched by chance (a frame
+         * of white noise between two good ones: a few of its blocks pass)
+         * centres the search wrong: a poor result is tried again with the
+         * frame searched as a consecutive pair's. */
+        if (guess && 2*best < n
+            && register_in_band(image, reference, xres, yres, n, options, NULL, &blind, 0.0,
                                 &other_whole, other) > best) {
             StripeShift *kept = shifts;
 
