@@ -345,7 +345,7 @@ create_outputs(SeriesArgs *args, gboolean show_progress, gdouble from,
     if (ok && crop && !series_correction_trusted_area(&args->correction, masks, n, area)) {
         g_set_error(error, SERIES_CORRECTION_ERROR,
                     SERIES_CORRECTION_ERROR_COMPENSATE,
-                    _("No part of the area is covered by every frame."));
+                    _("No part of the area is covered by every frame not flagged."));
         ok = FALSE;
     }
     for (k = 0; k < n && ok; k++) {

@@ -84,7 +84,8 @@ done
 check
 [ "$(grep -c '"flagged" : false' "$tmp/t.json")" -eq 3 ] || fail "not 3 unflagged frames"
 
-# --crop common: smaller corrected channels, no masks left.
+# --crop common: smaller corrected channels, no masks left (no frame is
+# flagged, so none lacks data in the area).
 check
 "$tool" series $timing --crop common -o "$tmp/crop.gwy" $frames 2>"$tmp/err" \
     || fail "--crop common exited $?: $(cat "$tmp/err")"

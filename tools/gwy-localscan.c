@@ -371,7 +371,8 @@ parse_reference(const gchar *arg, ReferenceSpec *spec, GError **error)
     gchar *file;
     gint id;
 
-    /* Not the INPUT, as ":" is: an empty name is a slip. */
+    /* An empty name is a slip, not the INPUT (":ID" names a channel of
+     * the INPUT). */
     if (!*arg) {
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
                     _("--reference: the file name is empty"));

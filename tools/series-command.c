@@ -527,7 +527,7 @@ build_output(SeriesRun *run, gboolean all_channels, GError **error)
         g_set_error(error, SERIES_CORRECTION_ERROR,
                     SERIES_CORRECTION_ERROR_COMPENSATE,
                     _("--crop common: no part of the area is covered by "
-                      "every frame"));
+                      "every frame not flagged"));
         ok = FALSE;
     }
     if (ok) {

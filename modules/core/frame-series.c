@@ -287,7 +287,7 @@ load_listed_channels(FrameSeries *series, GwyContainer *data,
  * the file lacks; one that reaches past the file's last channel is said,
  * and one that holds none of them is refused naming its ids (it ran on
  * the channels there were, or said 'found 0'). */
-static void
+static gboolean
 note_range_beyond(FrameSeries *series, const gchar *filename,
                   const FrameSeriesOptions *options, const gint *ids, gint n,
                   gint matched, GError **error)
@@ -295,19 +295,22 @@ note_range_beyond(FrameSeries *series, const gchar *filename,
     gint last = n ? ids[n-1] : -1, i;
 
     if (options->first_id < 0 || options->last_id < 0)
-        return;
+        return TRUE;
     for (i = 0; i < n; i++)
         last = MAX(last, ids[i]);
-    if (!matched && !options->channel)
+    if (!matched && !options->channel) {
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("%s: no channel %d-%d (its last channel is %d)"),
                     filename, options->first_id, options->last_id, last);
-    else if (options->last_id > last)
+        return FALSE;
+    }
+    if (options->last_id > last)
         g_ptr_array_add(series->notes,
                         g_strdup_printf(_("%s: channels %d-%d of the range "
                                           "%d-%d do not exist"), filename,
                                         MAX(last + 1, options->first_id), options->last_id,
                                         options->first_id, options->last_id));
+    return TRUE;
 }
 
 static gboolean
@@ -319,8 +322,8 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
     gint *ids = localscan_channel_ids(data);
     GwyDataField *first = NULL;
     gint i, n, matched = 0;
-    gboolean chosen = (options->channel || options->first_id >= 0
-                       || options->last_id >= 0);
+    gboolean ok, chosen = (options->channel || options->first_id >= 0
+                           || options->last_id >= 0);
 
     for (n = 0; ids[n] >= 0; n++)
         ;
@@ -367,9 +370,9 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
         g_free(ids);
         return FALSE;
     }
-    note_range_beyond(series, filename, options, ids, n, matched, error);
+    ok = note_range_beyond(series, filename, options, ids, n, matched, error);
     g_free(ids);
-    return !error || !*error;
+    return ok;
 }
 
 static gboolean
@@ -520,13 +523,14 @@ assign_line_times(FrameSeries *series, const MetaTiming *mts,
 }
 
 /* Time stamps from different clocks (one file's relative frame time,
- * another's date) put frames decades apart; a series whose frames lie more
- * than CLOCK_GAP_FRAMES frame times and CLOCK_GAP_SECONDS apart is
- * refused, not fitted.  Fast frames taken minutes apart (a time lapse of
- * 64 ms frames, 100 s apart) lie thousands of frame times apart on one
- * clock: by frame times alone they were refused. */
+ * another's date, two uptime counters) put frames days to decades apart;
+ * a series whose frames lie more than CLOCK_GAP_FRAMES frame times and
+ * CLOCK_GAP_SECONDS apart is refused, not fitted.  Fast frames taken
+ * minutes apart (a time lapse of 64 ms frames, 100 s apart) lie thousands
+ * of frame times apart on one clock: by frame times alone they were
+ * refused.  A day covers a night's time lapse. */
 #define CLOCK_GAP_FRAMES 1000.0
-#define CLOCK_GAP_SECONDS (365.0*86400.0)
+#define CLOCK_GAP_SECONDS 86400.0
 
 static gboolean
 check_one_clock(const FrameSeries *series, const FrameSeriesOptions *options,

@@ -55,7 +55,9 @@ typedef struct {
 /* Options: anything given here overrides the metadata. */
 typedef struct {
     gdouble line_time;            /* s; <= 0: metadata */
-    gdouble *frame_times;         /* s, one per kept frame; NULL: metadata */
+    gdouble *frame_times;         /* s, one per frame as given (a frame dropped
+                                     as a duplicate takes its own); NULL:
+                                     metadata */
     gint n_frame_times;
     gint direction;               /* -1: metadata (else down), or ScanDirection */
     gint fallback_direction;      /* where the metadata is silent: -1 down,

@@ -203,7 +203,8 @@ subset_stride(gint count, gint most, gint n_blocks)
  * frames.  From one pair (two frames, or three with the middle one
  * flagged), a jump between its frames is the velocity over again, any
  * size of it fits, and refusing it is nothing the user needs to hear
- * ("a jump of 2.04e+03 nm was fitted and refused" on two clean frames). */
+ * ("a jump of 2.04e+03 nm was fitted and refused" on two clean frames);
+ * other effects refused are told whatever the pairs. */
 static gboolean
 several_pairs_used(const DriftMeasurement *meas, gint n)
 {
@@ -242,9 +243,10 @@ fit_models(SeriesCorrection *correction, const gdouble *weights, gint n_blocks)
      * fit of the rounds said it before, twice where a frame was flagged. */
     correction->refused_type = -1;
     fit->chosen = plausible_choice(correction, fit->fits, fit->n_fits, fit->chosen,
-                                   several_pairs_used(fit->meas, fit->n_meas)
-                                   ? &correction->refused_type : NULL,
-                                   &correction->refused_nm);
+                                   &correction->refused_type, &correction->refused_nm);
+    if (correction->refused_type == DRIFT_MODEL_JUMP
+        && !several_pairs_used(fit->meas, fit->n_meas))
+        correction->refused_type = -1;
     for (i = 0; i < fit->n_meas; i++) {
         if (!kept[i])
             fit->meas[i].weight = 0.0;
@@ -1478,6 +1480,7 @@ series_correction_compute_progress(const FrameSeries *series,
     guint i;
 
     memset(correction, 0, sizeof(SeriesCorrection));
+    correction->refused_type = -1;
     correction->n_frames = series->n_frames;
     correction->frames = g_new0(SeriesFrameVerdict, series->n_frames);
     correction->warnings = g_ptr_array_new_with_free_func(g_free);
