@@ -48,6 +48,16 @@ put(const gchar *name, const gchar *text)
     g_free(p);
 }
 
+/* A symbolic link name -> target in the folder. */
+static void
+make_link(const gchar *name, const gchar *target)
+{
+    gchar *p = path(name);
+
+    ck_assert_int_eq(symlink(target, p), 0);
+    g_free(p);
+}
+
 static void
 assert_contents(const gchar *name, const gchar *expected)
 {
@@ -151,19 +161,11 @@ START_TEST(test_links_written_through)
     g_mkdir(p, 0700);
     g_free(p);
     put("target.csv", "old\n");
-    p = path("rel.csv");
-    ck_assert_int_eq(symlink("target.csv", p), 0);
-    g_free(p);
-    p = path("sub/up.csv");
-    ck_assert_int_eq(symlink("../chained.csv", p), 0);
-    g_free(p);
-    p = path("chain.csv");
-    ck_assert_int_eq(symlink("sub/up.csv", p), 0);
-    g_free(p);
+    make_link("rel.csv", "target.csv");
+    make_link("sub/up.csv", "../chained.csv");
+    make_link("chain.csv", "sub/up.csv");
     absolute = path("fresh.csv");
-    p = path("abs.csv");
-    ck_assert_int_eq(symlink(absolute, p), 0);
-    g_free(p);
+    make_link("abs.csv", absolute);
     ck_assert(add(files, "rel.csv", "through a relative link", NULL));
     ck_assert(add(files, "chain.csv", "through a chain", NULL));
     ck_assert(add(files, "abs.csv", "through a dangling absolute link", NULL));
@@ -190,12 +192,9 @@ START_TEST(test_links_named_twice_and_loops)
 {
     OutputFiles *files = output_files_new();
     GError *error = NULL;
-    gchar *p;
 
     make_dir();
-    p = path("l.csv");
-    ck_assert_int_eq(symlink("t.csv", p), 0);
-    g_free(p);
+    make_link("l.csv", "t.csv");
     ck_assert(add(files, "t.csv", "first", NULL));
     ck_assert(!add(files, "l.csv", "second", &error));
     ck_assert_msg(strstr(error->message, "are the same file"), "%s", error->message);
@@ -203,15 +202,9 @@ START_TEST(test_links_named_twice_and_loops)
     output_files_free(files);
 
     files = output_files_new();
-    p = path("a");
-    ck_assert_int_eq(symlink("b", p), 0);
-    g_free(p);
-    p = path("b");
-    ck_assert_int_eq(symlink("c", p), 0);
-    g_free(p);
-    p = path("c");
-    ck_assert_int_eq(symlink("a", p), 0);
-    g_free(p);
+    make_link("a", "b");
+    make_link("b", "c");
+    make_link("c", "a");
     ck_assert(add(files, "a", "through a loop", NULL));
     ck_assert(output_files_commit(files, NULL));
     output_files_free(files);
