@@ -1208,8 +1208,12 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
         fit->nonlinear = jump_within_ties(fit->nonlinear, when, ends, n,
                                           first, last, t_lo, t_hi);
         correction->jump_tied_lines = hi - lo;
-        correction->jump_window[0] = (lo > 0) ? ends[lo-1] : t_lo;
-        correction->jump_window[1] = (hi < n) ? when[hi] : t_hi;
+        /* The lines either side of the tie may hold the jump themselves
+         * (5.6 ms into the first line after it, the jump lay outside a
+         * window that ended where that line began: seed 800000458 of
+         * test-series-correction): the window takes them in. */
+        correction->jump_window[0] = (lo > 0) ? when[lo-1] : t_lo;
+        correction->jump_window[1] = (hi < n) ? ends[hi] : t_hi;
     }
     g_free(evidence);
     g_free(frame);
