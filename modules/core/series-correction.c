@@ -1007,8 +1007,8 @@ nearby_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
  * the previous one may not show the line's content) with the drift
  * without the step and with it.  Frames that show the line's content
  * under both count alone when there are any: content seen under one only
- * is compared with nothing under the other.  line is work space of 4
- * rows. */
+ * is compared with nothing under the other.  line is work space of 3
+ * rows and a fourth of zeros. */
 static void
 line_costs(const SeriesCorrection *correction, const FrameSeries *series,
            gint k, gint r, gdouble *line, LineEvidence *ev)
@@ -1021,9 +1021,6 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     gdouble et, ta = 0.0, tb = 0.0;
     gdouble *u = line + xres, *d = u + xres, *zeros = d + xres;
     const gdouble *ref;
-
-    for (j = 0; j < xres; j++)
-        zeros[j] = 0.0;
 
     for (j = k - JUMP_PARTNER_REACH; j <= k + JUMP_PARTNER_REACH; j++) {
         if (j == k || j < 0 || j >= series->n_frames
@@ -1180,7 +1177,8 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
                        JUMP_SEARCH_BLOCKS*block_span, &t_lo, &t_hi);
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
-    line = g_new(gdouble, 4*series->frames[0].timing.xres);
+    /* Its fourth row stays zero: line_costs() compares lines with it. */
+    line = g_new0(gdouble, 4*series->frames[0].timing.xres);
     when = g_new(gdouble, 2*most);
     ends = when + most;
     frame = g_new(gint, most);
