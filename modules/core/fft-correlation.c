@@ -128,6 +128,31 @@ fft_correlation_run(FFTCorrelation *fc)
     return fc->result;
 }
 
+void
+fft_mean_row_power(const gdouble *rows, gint nrows, gint len, gdouble *power)
+{
+    gdouble *line = fftw_alloc_real(MAX(len, 1));
+    fftw_complex *spectrum = fftw_alloc_complex(len/2 + 1);
+    fftw_plan forward;
+    gint r, k;
+
+    G_LOCK(fftw_planner);
+    forward = fftw_plan_dft_r2c_1d(len, line, spectrum, FFTW_ESTIMATE);
+    G_UNLOCK(fftw_planner);
+    memset(power, 0, (len/2 + 1)*sizeof(gdouble));
+    for (r = 0; r < nrows; r++) {
+        memcpy(line, rows + (gsize)r*len, len*sizeof(gdouble));
+        fftw_execute(forward);
+        for (k = 0; k <= len/2; k++)
+            power[k] += (creal(spectrum[k])*creal(spectrum[k]) + cimag(spectrum[k])*cimag(spectrum[k]))/nrows;
+    }
+    G_LOCK(fftw_planner);
+    fftw_destroy_plan(forward);
+    G_UNLOCK(fftw_planner);
+    fftw_free(line);
+    fftw_free(spectrum);
+}
+
 gint
 fft_correlation_nice_size(gint size)
 {

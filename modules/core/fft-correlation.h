@@ -36,6 +36,13 @@ void            fft_correlation_set_template (FFTCorrelation *fc);
  * The returned buffer belongs to fc and is overwritten by the next run. */
 const gdouble*  fft_correlation_run          (FFTCorrelation *fc);
 
+/* The power spectrum |X_k|^2 (k = 0 .. len/2) of each of nrows rows of len
+ * values, averaged over the rows (power has len/2 + 1 entries). */
+void            fft_mean_row_power           (const gdouble *rows,
+                                              gint nrows,
+                                              gint len,
+                                              gdouble *power);
+
 /* The smallest size >= size with only the factors 2, 3, 5 and 7. */
 gint            fft_correlation_nice_size    (gint size);
 

@@ -14,6 +14,7 @@
 #include "stripe-correlation.h"
 #include "stripe-geometry.h"
 #include "stripe-subpixel.h"
+#include "registration-binning.h"
 #include "localscan-intl.h"
 #include "median.h"
 
@@ -1046,14 +1047,13 @@ condition_pair(const gdouble *image, const gdouble *reference, gint xres, gint y
     return TRUE;
 }
 
-gboolean
-stripe_registration_measure(const gdouble *image, const gdouble *reference, gint xres, gint yres, gint n,
-                            const StripeRegistrationOptions *options, StripeShift *shifts, GError **error)
+static gboolean
+measure_at_resolution(const gdouble *image, const gdouble *reference, gint xres, gint yres, gint n,
+                      const StripeRegistrationOptions *options, StripeShift *shifts, GError **error)
 {
     ConditionedFrame *cimage, *creference;
     gboolean ok;
 
-    g_return_val_if_fail(image && reference && shifts, FALSE);
     if (!condition_pair(image, reference, xres, yres, options ? options->pixel_aspect : 1.0,
                         &cimage, &creference, error))
         return FALSE;
@@ -1061,6 +1061,56 @@ stripe_registration_measure(const gdouble *image, const gdouble *reference, gint
     conditioned_frame_free(cimage);
     conditioned_frame_free(creference);
     return ok;
+}
+
+/* The registration of both frames binned by factor, its shifts in px of
+ * the frames as given.  A stripe's rows in the binned frames are its rows
+ * here to within a block. */
+static gboolean
+measure_binned(const gdouble *image, const gdouble *reference, gint xres, gint yres, gint n, gint factor,
+               const StripeRegistrationOptions *options, StripeShift *shifts, GError **error)
+{
+    StripeRegistrationOptions binned_options;
+    gdouble *binned_image = registration_bin_frame(image, xres, yres, factor);
+    gdouble *binned_reference = registration_bin_frame(reference, xres, yres, factor);
+    gboolean ok;
+    gint s;
+
+    if (options)
+        binned_options = *options;
+    else
+        stripe_registration_options_init(&binned_options);
+    if (binned_options.search_x > 0.0)
+        binned_options.search_x /= factor;
+    if (binned_options.search_y > 0.0)
+        binned_options.search_y /= factor;
+    ok = measure_at_resolution(binned_image, binned_reference, xres/factor, yres/factor, n, &binned_options,
+                               shifts, error);
+    for (s = 0; ok && s < n; s++) {
+        shifts[s].dx *= factor;
+        shifts[s].dy *= factor;
+        shifts[s].sigma *= factor;
+    }
+    g_free(binned_image);
+    g_free(binned_reference);
+    return ok;
+}
+
+gboolean
+stripe_registration_measure(const gdouble *image, const gdouble *reference, gint xres, gint yres, gint n,
+                            const StripeRegistrationOptions *options, StripeShift *shifts, GError **error)
+{
+    gint factor;
+
+    g_return_val_if_fail(image && reference && shifts, FALSE);
+    /* Sizes and counts are checked at full resolution, so that a refusal
+     * names the frames as given. */
+    if (xres >= 4 && yres >= 4 && n >= 1 && n <= yres
+        && (factor = registration_binning_factor(image, reference, xres, yres, n)) > 1) {
+        g_debug("registration: %d x %d px binned by %d", xres, yres, factor);
+        return measure_binned(image, reference, xres, yres, n, factor, options, shifts, error);
+    }
+    return measure_at_resolution(image, reference, xres, yres, n, options, shifts, error);
 }
 
 gboolean
