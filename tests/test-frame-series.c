@@ -473,6 +473,87 @@ START_TEST(test_simscan_fit_reads_simscan_timing)
 }
 END_TEST
 
+/* Two frames whose second has a line time (or a start) key with a value
+ * no instrument gives: the refusal names the key and its value, cut
+ * short and made valid UTF-8, instead of "not in the metadata". */
+static void
+check_unusable_meta(const gchar *key, const gchar *value, const gchar *usable,
+                    const gchar *other_key, const gchar *other_value, const gchar *expected)
+{
+    GwyContainer *data = gwy_container_new();
+    gchar *name = g_strdup("frames.gwy"), *wanted;
+    FrameSeriesOptions options;
+    FrameSeries *series;
+    GError *error = NULL;
+    gint k;
+
+    for (k = 0; k < 2; k++) {
+        GwyDataField *field = gwy_data_field_new(16, 16, 16e-9, 16e-9, TRUE);
+        GwyContainer *meta = gwy_container_new();
+        gchar metakey[32];
+
+        gwy_data_field_set_val(field, 3, 5, k*1e-9);
+        gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
+        gwy_container_set_const_string_by_name(meta, other_key, (const guchar*)other_value);
+        gwy_container_set_const_string_by_name(meta, key, (const guchar*)(k ? value : usable));
+        g_snprintf(metakey, sizeof(metakey), "/%d/meta", k);
+        gwy_container_set_object_by_name(data, metakey, meta);
+        g_object_unref(meta);
+        g_object_unref(field);
+    }
+    frame_series_options_init(&options);
+    series = frame_series_from_files(&data, &name, 1, &options, &error);
+    ck_assert(series == NULL);
+    ck_assert_int_eq(error->code, FRAME_SERIES_ERROR_TIMING);
+    wanted = g_strdup_printf("frames.gwy channel 1: %s", expected);
+    ck_assert_msg(g_str_equal(error->message, wanted), "'%s', expected '%s'", error->message, wanted);
+    ck_assert(g_utf8_validate(error->message, -1, NULL));
+    g_clear_error(&error);
+    g_free(wanted);
+    g_object_unref(data);
+    g_free(name);
+}
+
+START_TEST(test_unusable_timing_named)
+{
+    /* A start may be any number (its clock's), a line time not. */
+    static const gchar *const bad_line_times[] = { "nan", "-0.01", "1e300", "10 parsecs", "inf s" };
+    static const gchar *const bad_starts[] = { "nan", "-inf", "10 parsecs", "12 o'clock" };
+    GRand *rng = test_rand_salted(test_seed, 7);
+    const gchar *bad = bad_line_times[g_rand_int_range(rng, 0, G_N_ELEMENTS(bad_line_times))];
+    GString *junk = g_string_new(NULL);
+    gchar *expected;
+    gint i;
+
+    expected = g_strdup_printf("the metadata gives no usable line time ('Line time (s)' is '%s'); "
+                               "give --line-time", bad);
+    check_unusable_meta("Line time (s)", bad, "0.01", "Frame start (s)", "0", expected);
+    g_free(expected);
+    bad = bad_starts[g_rand_int_range(rng, 0, G_N_ELEMENTS(bad_starts))];
+    expected = g_strdup_printf("the metadata gives no usable start time of the frame ('Frame start (s)' is "
+                               "'%s'); give --frame-times", bad);
+    check_unusable_meta("Frame start (s)", bad, "0", "Line time (s)", "0.01", expected);
+    g_free(expected);
+    /* Bytes no UTF-8 text holds (0xf8-0xff), far more than a message
+     * shows: 40 characters shown, each byte as U+FFFD. */
+    for (i = 0; i < 300; i++)
+        g_string_append_c(junk, (gchar)g_rand_int_range(rng, 0xf8, 0x100));
+    check_unusable_meta("Line time (s)", junk->str, "0.01", "Frame start (s)", "0",
+                        "the metadata gives no usable line time ('Line time (s)' is "
+                        "'\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"
+                        "\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"
+                        "\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"
+                        "\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"
+                        "\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"
+                        "\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"
+                        "\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"
+                        "\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd...'); "
+                        "give --line-time");
+    g_string_free(junk, TRUE);
+    g_rand_free(rng);
+}
+END_TEST
+
 int
 main(void)
 {
@@ -490,6 +571,7 @@ main(void)
     tcase_add_test(tc_simscan, test_simscan_fit_reads_simscan_timing);
     tcase_add_test(tc_simscan, test_title_base);
     tcase_add_test(tc_simscan, test_timing_hints_name_the_front_end);
+    tcase_add_test(tc_simscan, test_unusable_timing_named);
     tcase_add_test(tc_simscan, test_frame_times_follow_dropped_duplicates);
     tcase_add_test(tc_simscan, test_one_clock);
     tcase_add_test(tc_simscan, test_channel_range_beyond_the_file);

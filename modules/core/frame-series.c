@@ -22,6 +22,11 @@ typedef struct {
     gint direction;
     gboolean start_is_end;   /* the stamp marks the end of the frame */
     gdouble given_start;     /* the frame's time in options->frame_times */
+    /* Where the line time or the start is absent though a key of it is
+     * there: that key and its value (scan_timing_meta_unusable), so that
+     * the refusal says what the file holds; empty otherwise. */
+    gchar line_time_seen[256];
+    gchar start_seen[256];
 } MetaTiming;
 
 GQuark
@@ -102,6 +107,16 @@ frame_series_dy(const FrameSeries *series)
     return gwy_data_field_get_dy(series->frames[0].field);
 }
 
+static void
+keep_unusable(GwyContainer *meta, ScanMetaFound found, ScanMetaFound part, gchar *seen, gsize size)
+{
+    gchar *text = (found & part) ? NULL : scan_timing_meta_unusable(meta, part);
+
+    /* SCAN_META_SHOWN_CHARS characters and a key fit. */
+    g_strlcpy(seen, text ? text : "", size);
+    g_free(text);
+}
+
 /* The core's reader (scan-timing-meta.h) knows every format's keys,
  * simscan's own among them. */
 static void
@@ -118,6 +133,8 @@ read_meta_timing(GwyContainer *meta, gint yres, MetaTiming *mt)
     mt->start = (found & SCAN_META_FRAME_START) ? timing.frame_start : NAN;
     mt->direction = (found & SCAN_META_DIRECTION) ? (gint)timing.direction : -1;
     mt->start_is_end = (found & SCAN_META_FRAME_START) && timing.start_is_end;
+    keep_unusable(meta, found, SCAN_META_LINE_TIME, mt->line_time_seen, sizeof(mt->line_time_seen));
+    keep_unusable(meta, found, SCAN_META_FRAME_START, mt->start_seen, sizeof(mt->start_seen));
 }
 
 gchar*
@@ -487,6 +504,12 @@ assign_line_times(FrameSeries *series, const MetaTiming *mts,
             frame->timing.line_time = mts[i].line_time;
             frame->line_time_source = FRAME_TIME_METADATA;
         }
+        else if (*mts[i].line_time_seen) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                        _("%s: the metadata gives no usable line time (%s); %s"),
+                        frame->label, mts[i].line_time_seen, timing_hint(options, HINT_LINE_TIME));
+            return FALSE;
+        }
         else {
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
                         _("%s: the line time is not in the metadata; %s"),
@@ -584,6 +607,12 @@ assign_start_times(FrameSeries *series, const MetaTiming *mts,
             SeriesFrame *frame = series->frames + i;
             gdouble t = mts[i].start;
 
+            if (!isfinite(t) && *mts[i].start_seen) {
+                g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                            _("%s: the metadata gives no usable start time of the frame (%s); %s"),
+                            frame->label, mts[i].start_seen, timing_hint(options, HINT_FRAME_TIMES));
+                return FALSE;
+            }
             if (!isfinite(t)) {
                 g_set_error(error, FRAME_SERIES_ERROR,
                             FRAME_SERIES_ERROR_TIMING,

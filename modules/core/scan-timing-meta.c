@@ -99,14 +99,17 @@ meta_positive(GwyContainer *meta, const gchar *const *keys, const gchar *unit, g
     return TRUE;
 }
 
+static const gchar *const line_time_keys[] = { "Line time (s)", "Line time", "Line Time", NULL };
+static const gchar *const line_rate_keys[] = { "Scan rate", "Scan Rate", "ScanRate", NULL };
+static const gchar *const frame_time_keys[] = { "Frame time (s)", NULL };
+static const gchar *const frame_start_keys[] = {
+    "Frame start (s)", "Time since first kept frame (s)", "Relative frame time", NULL
+};
+static const gchar *const frame_date_keys[] = { "TimeStamp", "Date", NULL };
+
 static gboolean
 meta_line_time(GwyContainer *meta, gint yres, gdouble *line_time)
 {
-    static const gchar *const line_time_keys[] = {
-        "Line time (s)", "Line time", "Line Time", NULL
-    };
-    static const gchar *const line_rate_keys[] = { "Scan rate", "Scan Rate", "ScanRate", NULL };
-    static const gchar *const frame_time_keys[] = { "Frame time (s)", NULL };
     gdouble v, t;
 
     if (meta_positive(meta, line_time_keys, "s", &v))
@@ -199,13 +202,10 @@ parse_iso_time(const gchar *text, gdouble *t)
 static gboolean
 meta_frame_start(GwyContainer *meta, ScanMetaTiming *timing)
 {
-    static const gchar *const keys[] = {
-        "Frame start (s)", "Time since first kept frame (s)", "Relative frame time", NULL
-    };
     const gchar *text;
     gdouble t;
 
-    if (meta_quantity(meta, keys, "s", &t)) {
+    if (meta_quantity(meta, frame_start_keys, "s", &t)) {
         timing->frame_start = t;
         timing->start_is_end = timing->wall_clock = FALSE;
         return TRUE;
@@ -257,4 +257,49 @@ scan_timing_meta_read_channel(GwyContainer *data, gint id, ScanMetaTiming *timin
     if (!gwy_container_gis_object_by_name(data, key, &meta) || !GWY_IS_CONTAINER(meta))
         return 0;
     return scan_timing_meta_read(meta, yres, timing);
+}
+
+/* The first of keys that meta holds, as "'KEY' is 'VALUE'". */
+static gchar*
+describe_first_key(GwyContainer *meta, const gchar *const *keys)
+{
+    const gchar *text;
+    gchar *valid, *shown;
+    glong len;
+
+    for (; *keys; keys++) {
+        if (!(text = meta_string(meta, *keys)))
+            continue;
+        /* A damaged file's value may be any bytes, and of any length. */
+        valid = g_utf8_make_valid(text, -1);
+        len = g_utf8_strlen(valid, -1);
+        shown = g_utf8_substring(valid, 0, MIN(len, SCAN_META_SHOWN_CHARS));
+        g_free(valid);
+        valid = g_strdup_printf("'%s' is '%s%s'", *keys, shown, (len > SCAN_META_SHOWN_CHARS) ? "..." : "");
+        g_free(shown);
+        return valid;
+    }
+    return NULL;
+}
+
+gchar*
+scan_timing_meta_unusable(GwyContainer *meta, ScanMetaFound part)
+{
+    const gchar *const *const line_time[] = { line_time_keys, line_rate_keys, frame_time_keys, NULL };
+    const gchar *const *const frame_start[] = { frame_start_keys, frame_date_keys, NULL };
+    const gchar *const *const direction[] = { NULL };
+    const gchar *const *const *lists;
+    gchar *found = NULL;
+
+    if (!meta)
+        return NULL;
+    if (part == SCAN_META_LINE_TIME)
+        lists = line_time;
+    else if (part == SCAN_META_FRAME_START)
+        lists = frame_start;
+    else
+        lists = direction;
+    for (; *lists && !found; lists++)
+        found = describe_first_key(meta, *lists);
+    return found;
 }

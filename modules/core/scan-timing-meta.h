@@ -49,6 +49,17 @@ typedef struct {
 ScanMetaFound scan_timing_meta_read        (GwyContainer *meta,
                                             gint yres,
                                             ScanMetaTiming *timing);
+/* Where the line time or the frame start (part) was not found although
+ * one of its keys is there (a value that does not parse, or a line time
+ * no instrument has): the first such key and its value, "'Line time (s)'
+ * is 'nan'", newly allocated, valid UTF-8, the value cut to
+ * SCAN_META_SHOWN_CHARS characters; NULL when none of its keys is there
+ * (and for the direction). */
+#define SCAN_META_SHOWN_CHARS 40
+
+gchar*        scan_timing_meta_unusable    (GwyContainer *meta,
+                                            ScanMetaFound part);
+
 /* The same for channel id of data (its metadata and its field's rows). */
 ScanMetaFound scan_timing_meta_read_channel(GwyContainer *data,
                                             gint id,
