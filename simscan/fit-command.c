@@ -17,6 +17,7 @@
 #include "series-options.h"
 #include "fit-command.h"
 #include "quoted-input.h"
+#include "option-parse.h"
 
 #define FIT_MAX_FRAMES 16
 
@@ -88,7 +89,7 @@ choose_blocks(const FrameSeries *series, gint wanted, gint *n_blocks,
 }
 
 static gboolean
-args_to_options(const FitArgs *args, FrameSeriesOptions *options,
+args_to_options(FitArgs *args, FrameSeriesOptions *options,
                 FitNumbers *numbers, GError **error)
 {
     return (series_args_to_options(&args->series, options, error)
@@ -126,7 +127,7 @@ check_frame_count(gint n, GError **error)
 }
 
 static gboolean
-run_fit(const FitArgs *args, gchar **files, gint n_files, GError **error)
+run_fit(FitArgs *args, gchar **files, gint n_files, GError **error)
 {
     FrameSeriesOptions soptions;
     DisplacementOptions doptions;
@@ -232,7 +233,7 @@ simscan_fit_main(int argc, char **argv)
     g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
     g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
     series_args_add_entries(context, &args.series);
-    if (!g_option_context_parse(context, &argc, &argv, &error))
+    if (!option_parse_naming(context, &argc, &argv, &error))
         goto end;
     if (!files || !files[0]) {
         g_set_error(&error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,

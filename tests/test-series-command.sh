@@ -39,7 +39,9 @@ timing="--line-time 0.5 --frame-times 0,64,128 --direction down"
 
 # A good run: exit 0, nothing on stderr beyond warnings, three outputs.
 check
-"$tool" series $timing -o "$tmp/out.gwy" --trajectory "$tmp/t.csv" \
+# Space around the numbers is no part of them ("0.5 " from a variable).
+"$tool" series --line-time '0.5 ' --frame-times ' 0, 64 ,128' --direction down \
+    -o "$tmp/out.gwy" --trajectory "$tmp/t.csv" \
     --json "$tmp/t.json" $frames >"$tmp/out" 2>"$tmp/err" \
     || fail "good run exited $?: $(cat "$tmp/err")"
 check
@@ -115,6 +117,10 @@ bad_case 2 "--crop must be common or none" $timing --crop some -o "$tmp/bad.gwy"
 bad_case 2 "needs one file per frame" $timing --all-channels -o "$tmp/bad.gwy" "$tmp/f0.gwy"
 bad_case 2 "--line-time must be a number of seconds" --line-time 0 --frame-times 0,64,128 -o "$tmp/bad.gwy" $frames
 bad_case 2 "unknown direction" --line-time 1 --frame-times 0,64,128 --direction sideways -o "$tmp/bad.gwy" $frames
+# Bytes no text holds, as an option's value: the refusal names the option
+# (GLib's own words named none).
+bad_case 2 "the value of --line-time is not text" --line-time "$(printf '\377')" --frame-times 0,64,128 -o "$tmp/bad.gwy" $frames
+bad_case 2 "the value of --direction is not text" --line-time 1 --frame-times 0,64,128 --direction="$(printf '\376\377')" -o "$tmp/bad.gwy" $frames
 bad_case 2 "f0.gwy" $timing -o "$tmp/f0.gwy" $frames
 # A frame named twice (also through a link), a channel given empty, an
 # output that is a folder: slips of the command line.

@@ -29,6 +29,7 @@
 #include "safe-output.h"
 #include "series-command.h"
 #include "series-options.h"
+#include "option-parse.h"
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -100,7 +101,7 @@ static GOptionEntry option_table[] = {
     { "drift", 'd', 0, G_OPTION_ARG_FILENAME, &options.table_file,
       N_("Read the drift table from TABLE.csv instead of the one stored "
          "with the channel"), N_("TABLE.csv") },
-    { "channel", 'c', 0, G_OPTION_ARG_STRING, &options.channel_arg,
+    { "channel", 'c', 0, G_OPTION_ARG_FILENAME, &options.channel_arg,
       N_("Compensate channel ID, or the channel titled TITLE (default: the first channel)"),
       N_("ID|TITLE") },
     { "mode", 'm', 0, G_OPTION_ARG_STRING, &options.mode_name,
@@ -271,7 +272,7 @@ parse_options(gint *argc, gchar ***argv, GError **error)
         _("Exit status: 0 on success, 1 on any error, 2 on a bad command "
           "line.\nOn error nothing is written."));
     g_option_context_add_main_entries(context, option_table, GETTEXT_PACKAGE);
-    ok = g_option_context_parse(context, argc, argv, error);
+    ok = option_parse_naming(context, argc, argv, error);
     g_option_context_free(context);
     g_free(help);
     g_free(kernel_help);
@@ -497,7 +498,8 @@ check_command_line(GError **error)
                     LOCALSCAN_STRIPES_MIN, LOCALSCAN_STRIPES_MAX, options.stripes);
         return NULL;
     }
-    if (options.channel_arg && !parse_channel(options.channel_arg, error))
+    if (options.channel_arg
+        && (!option_value_to_utf8(&options.channel_arg, "-c", error) || !parse_channel(options.channel_arg, error)))
         return NULL;
     if (options.reference && !parse_reference(options.reference, &reference_spec, error))
         return NULL;

@@ -29,6 +29,7 @@
 #include "missing-data.h"
 #include "series-graph.h"
 #include "localscan-intl.h"
+#include "option-parse.h"
 
 #define COMMAND_NAME "gwy-localscan series"
 
@@ -115,7 +116,7 @@ parse_args(SeriesCommandArgs *args, gint *argc, gchar ***argv,
           "line.\nOn error nothing is written."));
     g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
     series_args_add_entries(context, &args->series);
-    ok = g_option_context_parse(context, argc, argv, error);
+    ok = option_parse_naming(context, argc, argv, error);
     g_option_context_free(context);
     return ok;
 }
@@ -194,7 +195,7 @@ check_frame_files(gchar **files, gint n, GError **error)
 }
 
 static gboolean
-check_args(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
+check_args(SeriesCommandArgs *args, SeriesRun *run, GError **error)
 {
     gint n_files = args->files ? g_strv_length(args->files) : 0, i;
     OutputFilesRole *roles;

@@ -10,6 +10,7 @@
 #include "localscan-params.h"
 #include "series-options.h"
 #include "localscan-intl.h"
+#include "option-parse.h"
 
 void
 series_args_add_entries(GOptionContext *context, SeriesArgs *args)
@@ -24,7 +25,7 @@ series_args_add_entries(GOptionContext *context, SeriesArgs *args)
         { "direction", 0, 0, G_OPTION_ARG_STRING, &args->direction,
           N_("Slow-scan direction (default: the metadata, else down)"),
           N_("down|up") },
-        { "channel", 'c', 0, G_OPTION_ARG_STRING, &args->channel,
+        { "channel", 'c', 0, G_OPTION_ARG_FILENAME, &args->channel,
           N_("Channel id or title of the frames (a one-file series: the "
              "title followed by a number matches too)"), N_("ID|TITLE") },
         { "channels", 0, 0, G_OPTION_ARG_STRING, &args->channels,
@@ -62,6 +63,10 @@ series_options_parse_seconds(const gchar *option, const gchar *text,
      * types. */
     if (strpbrk(text, "xX"))
         end = (gchar*)text;
+    /* Space around the number is no part of it ("1 " from a script's
+     * variable; strtod skips the space before). */
+    while (end != text && g_ascii_isspace(*end))
+        end++;
     if (end == text || *end || !isfinite(v) || v < min || v > max) {
         quoted = quoted_input_excerpt(text, -1);
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
@@ -175,7 +180,7 @@ parse_channels(const gchar *text, FrameSeriesOptions *options,
 }
 
 gboolean
-series_args_to_options(const SeriesArgs *args, FrameSeriesOptions *options,
+series_args_to_options(SeriesArgs *args, FrameSeriesOptions *options,
                        GError **error)
 {
     gint id;
@@ -196,6 +201,8 @@ series_args_to_options(const SeriesArgs *args, FrameSeriesOptions *options,
         && !parse_frame_times(args->frame_times, options, error))
         return FALSE;
     if (args->channels && !parse_channels(args->channels, options, error))
+        return FALSE;
+    if (!option_value_to_utf8(&args->channel, "-c", error))
         return FALSE;
     /* An empty title matches no channel: said as such, not as a frame's
      * missing channel. */

@@ -43,8 +43,10 @@ void      series_args_add_entries (GOptionContext *context,
                                    SeriesArgs *args);
 
 /* Checks the options into options (initialised here); the frame time and
- * channel id arrays belong to options until series_args_clear(). */
-gboolean  series_args_to_options  (const SeriesArgs *args,
+ * channel id arrays belong to options until series_args_clear().  The
+ * channel's text, taken as bytes, is made UTF-8 in args
+ * (option_value_to_utf8). */
+gboolean  series_args_to_options  (SeriesArgs *args,
                                    FrameSeriesOptions *options,
                                    GError **error);
 

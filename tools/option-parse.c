@@ -1,0 +1,94 @@
+/*
+ *  GLib's command-line parsing for the tools, with a refusal that names
+ *  the option whose value is not text.
+ *  Copyright (C) 2026 The gwy-localscan authors.
+ *  SPDX-License-Identifier: GPL-2.0-or-later
+ */
+#include "config.h"
+#include <string.h>
+#include "option-parse.h"
+#include "localscan-intl.h"
+
+/* The option an argument is the value of: the name before '=' of a long
+ * option written with its value, else the argument before it when that is
+ * an option written alone; NULL for an argument of its own. */
+static gchar*
+option_of_value(gchar **args, gint i)
+{
+    const gchar *eq;
+
+    gchar *option = NULL, *shown;
+
+    if (g_str_has_prefix(args[i], "--") && (eq = strchr(args[i], '=')))
+        option = g_strndup(args[i], eq - args[i]);
+    else if (i > 1 && args[i-1][0] == '-' && args[i-1][1] && !strchr(args[i-1], '='))
+        option = g_strdup(args[i-1]);
+    if (!option)
+        return NULL;
+    /* The option's own name may be bytes of any kind too. */
+    shown = g_utf8_make_valid(option, -1);
+    g_free(option);
+    return shown;
+}
+
+gchar*
+option_parse_unconvertible(gchar **args, const gchar *reason)
+{
+    gchar *text, *option, *message;
+    gint i;
+
+    for (i = 1; args && args[i]; i++) {
+        if ((text = g_locale_to_utf8(args[i], -1, NULL, NULL, NULL))) {
+            g_free(text);
+            continue;
+        }
+        if ((option = option_of_value(args, i)))
+            message = g_strdup_printf(_("the value of %s is not text in this locale's encoding (%s)"),
+                                      option, reason);
+        else
+            message = g_strdup_printf(_("argument %d is not text in this locale's encoding (%s)"), i, reason);
+        g_free(option);
+        return message;
+    }
+    return NULL;
+}
+
+gboolean
+option_parse_naming(GOptionContext *context, gint *argc, gchar ***argv, GError **error)
+{
+    /* The parse takes what it reads out of argv. */
+    gchar **given = g_strdupv(*argv), *message;
+    GError *err = NULL;
+    gboolean ok;
+
+    ok = g_option_context_parse(context, argc, argv, &err);
+    if (!ok && err->domain == G_CONVERT_ERROR
+        && (message = option_parse_unconvertible(given, err->message))) {
+        g_clear_error(&err);
+        g_set_error_literal(&err, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE, message);
+        g_free(message);
+    }
+    if (err)
+        g_propagate_error(error, err);
+    g_strfreev(given);
+    return ok;
+}
+
+gboolean
+option_value_to_utf8(gchar **value, const gchar *option, GError **error)
+{
+    GError *err = NULL;
+    gchar *text;
+
+    if (!*value || g_utf8_validate(*value, -1, NULL))
+        return TRUE;
+    if (!(text = g_locale_to_utf8(*value, -1, NULL, NULL, &err))) {
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("the value of %s is not text in this locale's encoding (%s)"), option, err->message);
+        g_clear_error(&err);
+        return FALSE;
+    }
+    g_free(*value);
+    *value = text;
+    return TRUE;
+}
