@@ -11,6 +11,7 @@
 #include <libgwyddion/gwyddion.h>
 #include <libprocess/gwyprocess.h>
 #include "reference-choice.h"
+#include "localscan-channel.h"
 #include "test-common.h"
 
 static void
@@ -87,6 +88,40 @@ START_TEST(test_labels)
 }
 END_TEST
 
+/* A channel of another quantity (another value unit) is no reference:
+ * not offered, and refused naming both units. */
+START_TEST(test_other_quantity_refused)
+{
+    static const gchar *const units[] = { "V", "deg", "A", "" };
+    GRand *rng = test_rand_salted(test_seed_from_env("test-reference-choice"), 1);
+    const gchar *unit = units[g_rand_int_range(rng, 0, G_N_ELEMENTS(units))];
+    GwyContainer *data = gwy_container_new();
+    GwyDataField *image, *reference;
+    GError *error = NULL;
+    gchar *expected;
+
+    add_channel(data, 0, 30, "Height", "0");
+    add_channel(data, 1, 30, "Phase", "64");
+    add_channel(data, 2, 30, "Height", "64");
+    image = GWY_DATA_FIELD(gwy_container_get_object_by_name(data, "/0/data"));
+    reference = GWY_DATA_FIELD(gwy_container_get_object_by_name(data, "/1/data"));
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(image), "m");
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(reference), unit);
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(GWY_DATA_FIELD(gwy_container_get_object_by_name(data, "/2/data"))), "m");
+    ck_assert(!localscan_reference_fits(image, reference));
+    ck_assert_int_eq(reference_choice_rank(data, 0, data, 1), REFERENCE_RANK_UNFIT);
+    ck_assert_int_eq(reference_choice_rank(data, 0, data, 2), REFERENCE_RANK_OTHER_TIME);
+    ck_assert(!localscan_reference_check(image, "img", reference, "ref", 4, &error));
+    expected = g_strdup_printf("the reference ref holds values in %s, the image img in m: register against a "
+                               "channel of the same quantity", *unit ? unit : "no unit");
+    ck_assert_msg(g_str_equal(error->message, expected), "'%s'", error->message);
+    g_clear_error(&error);
+    g_free(expected);
+    g_object_unref(data);
+    g_rand_free(rng);
+}
+END_TEST
+
 int
 main(void)
 {
@@ -95,5 +130,6 @@ main(void)
 
     tcase_add_test(tc, test_ranks);
     tcase_add_test(tc, test_labels);
+    tcase_add_test(tc, test_other_quantity_refused);
     return test_run_suite(suite);
 }

@@ -122,13 +122,40 @@ format_field_size(GwyDataField *field)
     return text;
 }
 
-gboolean
-localscan_reference_fits(GwyDataField *image, GwyDataField *reference)
+static gboolean
+reference_same_scan(GwyDataField *image, GwyDataField *reference)
 {
     return !gwy_data_field_check_compatibility(image, reference,
                                                GWY_DATA_COMPATIBILITY_RES
                                                | GWY_DATA_COMPATIBILITY_REAL
                                                | GWY_DATA_COMPATIBILITY_LATERAL);
+}
+
+/* A channel of another quantity (the phase for a height image) shows the
+ * sample with another contrast, inverted or changed where materials
+ * differ: its features match the image's in places only, which the
+ * stripes' scores do not always reveal. */
+static gboolean
+reference_same_quantity(GwyDataField *image, GwyDataField *reference)
+{
+    return !gwy_data_field_check_compatibility(image, reference, GWY_DATA_COMPATIBILITY_VALUE);
+}
+
+gboolean
+localscan_reference_fits(GwyDataField *image, GwyDataField *reference)
+{
+    return reference_same_scan(image, reference) && reference_same_quantity(image, reference);
+}
+
+static gchar*
+value_unit_text(GwyDataField *field)
+{
+    gchar *unit = gwy_si_unit_get_string(gwy_data_field_get_si_unit_z(field), GWY_SI_UNIT_FORMAT_PLAIN);
+
+    if (*unit)
+        return unit;
+    g_free(unit);
+    return g_strdup(_("no unit"));
 }
 
 gboolean
@@ -139,11 +166,22 @@ localscan_reference_check(GwyDataField *image, const gchar *image_name,
     gint yres = gwy_data_field_get_yres(image);
     gchar *size, *refsize;
 
-    if (!localscan_reference_fits(image, reference)) {
+    if (!reference_same_scan(image, reference)) {
         size = format_field_size(image);
         refsize = format_field_size(reference);
         g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE,
                     _("the reference %s (%s) is not a scan of the size of the image %s (%s)"),
+                    reference_name, refsize, image_name, size);
+        g_free(refsize);
+        g_free(size);
+        return FALSE;
+    }
+    if (!reference_same_quantity(image, reference)) {
+        size = value_unit_text(image);
+        refsize = value_unit_text(reference);
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_REFERENCE,
+                    _("the reference %s holds values in %s, the image %s in %s: register against a "
+                      "channel of the same quantity"),
                     reference_name, refsize, image_name, size);
         g_free(refsize);
         g_free(size);

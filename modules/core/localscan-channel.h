@@ -196,8 +196,8 @@ gint         localscan_table_stated_px       (const DriftTable *table,
                                               GError **error);
 
 /* Registration compares the image with another scan of the same area:
- * TRUE when reference has the image's pixels, physical size and lateral
- * unit. */
+ * TRUE when reference has the image's pixels, physical size, lateral
+ * unit and value unit (the same quantity). */
 gboolean     localscan_reference_fits        (GwyDataField *image,
                                               GwyDataField *reference);
 /* The same with a message naming both, and n_stripes (< 1: not checked)
