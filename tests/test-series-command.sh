@@ -124,11 +124,11 @@ bad_case 2 "the value of --direction is not text" --line-time 1 --frame-times 0,
 bad_case 2 "f0.gwy" $timing -o "$tmp/f0.gwy" $frames
 # A frame named twice (also through a link), a channel given empty, an
 # output that is a folder: slips of the command line.
-bad_case 2 "f0.gwy is given twice, as frames 1 and 3" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/f1.gwy" "$tmp/f0.gwy"
+bad_case 2 "f0.gwy is given twice, as frames 0 and 2" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/f1.gwy" "$tmp/f0.gwy"
 ln -s f1.gwy "$tmp/f9.gwy"
-bad_case 2 "f9.gwy is given twice, as frames 2 and 3" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/f1.gwy" "$tmp/f9.gwy"
+bad_case 2 "f9.gwy is given twice, as frames 1 and 2" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/f1.gwy" "$tmp/f9.gwy"
 rm -f "$tmp/f9.gwy"
-bad_case 2 "frame 3: the file name is empty" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/f1.gwy" ""
+bad_case 2 "frame 2: the file name is empty" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/f1.gwy" ""
 bad_case 2 "--json: the file name is empty" $timing -o "$tmp/bad.gwy" --json "" $frames
 mkdir "$tmp/outdir"
 bad_case 2 "it is a folder" $timing -o "$tmp/outdir" $frames

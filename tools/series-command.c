@@ -166,9 +166,11 @@ check_frame_files(gchar **files, gint n, GError **error)
     gboolean ok = TRUE;
     gint i;
 
+    /* Frames are counted from 0 here as in the warnings, the JSON and the
+     * trajectory (a refusal counting from 1 named the frame after). */
     for (i = 0; i < n && ok; i++) {
         if (!*files[i]) {
-            message = g_strdup_printf(_("frame %d: the file name is empty"), i + 1);
+            message = g_strdup_printf(_("frame %d: the file name is empty"), i);
             refuse_usage(error, message);
             g_free(message);
             ok = FALSE;
@@ -181,7 +183,7 @@ check_frame_files(gchar **files, gint n, GError **error)
         if (g_hash_table_lookup_extended(seen, key, NULL, &first)) {
             message = g_strdup_printf(_("%s is given twice, as frames %d and %d: "
                                         "one scan cannot be two frames"),
-                                      files[i], GPOINTER_TO_INT(first) + 1, i + 1);
+                                      files[i], GPOINTER_TO_INT(first), i);
             refuse_usage(error, message);
             g_free(message);
             g_free(key);
