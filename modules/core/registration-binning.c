@@ -70,6 +70,19 @@ detrend_and_taper(gdouble *v, gint len)
     }
 }
 
+/* The i-th of count lines sampled across size: one in each of count
+ * equal parts, at a place within it that varies from part to part (the
+ * golden ratio's multiples): evenly spaced lines see a lattice whose period
+ * divides their spacing at one phase, where it may vanish (a 4 px lattice
+ * sampled every 8 columns read as no texture along y). */
+static gint
+sampled_line(gint i, gint count, gint size)
+{
+    gdouble where = i + fmod(0.5 + i*0.6180339887498949, 1.0);
+
+    return CLAMP((gint)(where*size/count), 0, size - 1);
+}
+
 /* Sampled lines along x (rows) or y (columns), each whole (no missing
  * pixel); columns with each row's median over the sampled columns taken
  * out first, as the scan lines' offsets (white along y, they would be
@@ -91,7 +104,7 @@ sample_lines(const gdouble *data, gint xres, gint yres, gboolean along_x, gdoubl
             gint m = 0;
 
             for (i = 0; i < count; i++) {
-                gdouble v = data[(gsize)j*xres + (gint)((i + 0.5)*xres/count)];
+                gdouble v = data[(gsize)j*xres + sampled_line(i, count, xres)];
 
                 if (isfinite(v))
                     buf[m++] = v;
@@ -101,7 +114,7 @@ sample_lines(const gdouble *data, gint xres, gint yres, gboolean along_x, gdoubl
         g_free(buf);
     }
     for (i = 0; i < count; i++) {
-        at = (gint)((i + 0.5)*across/count);
+        at = sampled_line(i, count, across);
         whole = TRUE;
         for (j = 0; j < len && whole; j++) {
             line[j] = along_x ? data[(gsize)at*xres + j] : data[(gsize)j*xres + at] - row_level[j];

@@ -923,6 +923,26 @@ check_frames(const ConditionedFrame *image, const ConditionedFrame *reference, g
     return TRUE;
 }
 
+/* The fine search reaches past the coarse stage's peak by room for a jump,
+ * so a stripe could be given a shift beyond the bounds the user set
+ * (--search): such a stripe is left empty.  Half a pixel is the sub-pixel
+ * match's room at the bound. */
+static void
+reject_beyond_search(const StripeRegistrationOptions *options, StripeShift *shifts, gint n)
+{
+    gint s;
+
+    for (s = 0; s < n; s++) {
+        if (shifts[s].accepted
+            && ((options->search_x > 0.0 && fabs(shifts[s].dx) > options->search_x + 0.5)
+                || (options->search_y > 0.0 && fabs(shifts[s].dy) > options->search_y + 0.5))) {
+            g_debug("registration: stripe %d/%d at (%.2f, %.2f) px, beyond the search bounds: rejected",
+                    s, n, shifts[s].dx, shifts[s].dy);
+            shifts[s].accepted = FALSE;
+        }
+    }
+}
+
 /* stripe_registration_measure() for frames conditioned already. */
 static gboolean
 measure_conditioned(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
@@ -952,6 +972,7 @@ measure_conditioned(const ConditionedFrame *image, const ConditionedFrame *refer
         radius = MIN(fine_radius(factor), MIN(image->xres, image->yres)/2);
         measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, REFINE_MATCH_SIGMA, TRUE,
                      shifts);
+        reject_beyond_search(options, shifts, n);
         for (s = 0; s < n; s++)
             shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres, pdy[s], pdx[s]);
     }
