@@ -197,6 +197,22 @@ END_TEST
 /* A file whose frames carry no timing: the refusal tells the user what to
  * do in the words of the front end that asked (the dialog has no
  * --line-time). */
+/* Channels 0 and 1 of data: two frames of 16 x 16 px alike but not
+ * identical (identical ones are dropped), without metadata. */
+static void
+add_two_alike_frames(GwyContainer *data)
+{
+    gint k;
+
+    for (k = 0; k < 2; k++) {
+        GwyDataField *field = gwy_data_field_new(16, 16, 16e-9, 16e-9, TRUE);
+
+        gwy_data_field_set_val(field, 3, 5, k*1e-9);
+        gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
+        g_object_unref(field);
+    }
+}
+
 START_TEST(test_timing_hints_name_the_front_end)
 {
     GwyContainer *data = gwy_container_new();
@@ -204,16 +220,8 @@ START_TEST(test_timing_hints_name_the_front_end)
     FrameSeriesOptions options;
     FrameSeries *series;
     GError *error = NULL;
-    gint k;
 
-    for (k = 0; k < 2; k++) {
-        GwyDataField *field = gwy_data_field_new(16, 16, 16e-9, 16e-9, TRUE);
-
-        /* Frames alike but not identical (identical ones are dropped). */
-        gwy_data_field_set_val(field, 3, 5, k*1e-9);
-        gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
-        g_object_unref(field);
-    }
+    add_two_alike_frames(data);
     frame_series_options_init(&options);
     series = frame_series_from_files(&data, &name, 1, &options, &error);
     ck_assert(series == NULL);
@@ -487,19 +495,16 @@ check_unusable_meta(const gchar *key, const gchar *value, const gchar *usable,
     GError *error = NULL;
     gint k;
 
+    add_two_alike_frames(data);
     for (k = 0; k < 2; k++) {
-        GwyDataField *field = gwy_data_field_new(16, 16, 16e-9, 16e-9, TRUE);
         GwyContainer *meta = gwy_container_new();
         gchar metakey[32];
 
-        gwy_data_field_set_val(field, 3, 5, k*1e-9);
-        gwy_container_set_object(data, gwy_app_get_data_key_for_id(k), field);
         gwy_container_set_const_string_by_name(meta, other_key, (const guchar*)other_value);
         gwy_container_set_const_string_by_name(meta, key, (const guchar*)(k ? value : usable));
         g_snprintf(metakey, sizeof(metakey), "/%d/meta", k);
         gwy_container_set_object_by_name(data, metakey, meta);
         g_object_unref(meta);
-        g_object_unref(field);
     }
     frame_series_options_init(&options);
     series = frame_series_from_files(&data, &name, 1, &options, &error);
