@@ -1,8 +1,9 @@
 /*
  *  Local Scan Series Drift: the channels of the open file that are scanned
- *  like the current one are the frames of a series, corrected from one
- *  fitted drift trajectory (docs/series.md), the process function beside
- *  Local Scan Drift.
+ *  like the current one are the frames of a series (those the dialog's
+ *  frame chooser leaves checked), corrected from one fitted drift
+ *  trajectory (docs/series.md), the process function beside Local Scan
+ *  Drift.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -20,6 +21,7 @@
 #include "dialog-tooltips.h"
 #include "series-graph.h"
 #include "localscan-channel.h"
+#include "scan-timing-meta.h"
 #include "series-process.h"
 
 #undef _
@@ -31,6 +33,10 @@
 #define SERIES_MEASURE_SHARE 0.8
 #define GRAPH_WIDTH 480
 #define GRAPH_HEIGHT 240
+/* The frame chooser: Gwyddion's channel lists' small thumbnails, and room
+ * for about five rows before it scrolls. */
+#define THUMBNAIL_SIZE 24
+#define FRAME_LIST_HEIGHT 160
 
 enum {
     PARAM_LINE_TIME,
@@ -40,12 +46,15 @@ enum {
     PARAM_CROP,
     PARAM_ADD_GRAPH,
     INFO_TIMING_USE,
+    WIDGET_FRAMES,
 };
 
 typedef struct {
     GwyParams *params;
     GwyContainer *data;
     gint id;
+    GArray *candidates;        /* channel ids scanned like this one (frame_ids) */
+    gboolean *checked;         /* per candidate: a frame of the series */
     FrameSeries *series;
     SeriesCorrection correction;
     gboolean computed;
@@ -59,6 +68,8 @@ typedef struct {
     GwyParamTable *table;
     GwyGraphModel *gmodel;
     GtkWidget *summary;
+    GtkListStore *frames;      /* the candidates, LOCALSCAN_SERIES_FRAME_COLUMN_* */
+    gboolean any_start;        /* some candidate's metadata gives its start */
 } SeriesGUI;
 
 /* Which of the timing settings the frames need. */
@@ -152,9 +163,10 @@ is_corrected(GwyContainer *data, gint id)
     return compensation_marker_get(data, id) != NULL;
 }
 
-/* The frames: the current channel and every other scanned like it (the
- * same pixels and area, the same title but for a trailing number, as the
- * command line's -c names frames: "Height", "Height 12"), in id order.
+/* The candidate frames: the current channel and every other scanned like
+ * it (the same pixels and area, the same title but for a trailing number,
+ * as the command line's -c names frames: "Height", "Height 12"), in id
+ * order.
  * Channels a drift correction made are no frames: run again, the
  * correction took its own results for seven more frames. */
 static GArray*
@@ -185,33 +197,76 @@ frame_ids(GwyContainer *data, gint current)
     return ids;
 }
 
-/* The series from the metadata's timing, else from the params': frames
+/* Why fewer than two checked frames make no series: the dialog's summary
+ * says it, and so does a run given them all the same. */
+static const gchar*
+too_few_checked_message(void)
+{
+    return _("Fewer than two frames are checked: check at least two to measure the series.");
+}
+
+/* Fewer than two frames left where the user unchecked some (a channel
+ * with no partner at all is the core's to refuse, naming the file); none
+ * checked is always too few: no ids would mean every channel. */
+static gboolean
+too_few_checked(const SeriesArgs *args)
+{
+    gint i, n = 0, n_candidates = args->candidates->len;
+
+    for (i = 0; i < n_candidates; i++)
+        n += !!args->checked[i];
+    return n < 2 && (n < n_candidates || !n);
+}
+
+/* The checked candidates' channel ids and their places among all the
+ * candidates, in id order; returns how many.  The settings' frame times
+ * count every candidate: a frame left out still took its time to scan. */
+static gint
+checked_frames(const SeriesArgs *args, gint *ids, gint *places)
+{
+    gint i, n = 0;
+
+    for (i = 0; i < (gint)args->candidates->len; i++) {
+        if (!args->checked[i])
+            continue;
+        ids[n] = g_array_index(args->candidates, gint, i);
+        places[n++] = i;
+    }
+    return n;
+}
+
+/* The checked frames, with the metadata's timing, else the params': frames
  * back to back or a frame interval apart. */
 static FrameSeries*
 load_series(SeriesArgs *args, GError **error)
 {
-    GArray *ids = frame_ids(args->data, args->id);
+    gint size = MAX(args->candidates->len, 1);
+    gint *ids = g_new(gint, size), *places = g_new(gint, size);
+    gint n = checked_frames(args, ids, places), yres, k;
     const gchar *filename = NULL;
-    gchar *name;
+    gchar *name = NULL;
     FrameSeriesOptions options;
-    FrameSeries *series;
+    FrameSeries *series = NULL;
     GError *err = NULL;
     gdouble line_time, interval;
-    gint yres, k;
 
     if (is_corrected(args->data, args->id)) {
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("This channel is the result of a drift correction: run the series "
                       "correction on the frames as they were measured."));
-        g_array_free(ids, TRUE);
-        return NULL;
+        goto end;
+    }
+    if (too_few_checked(args)) {
+        g_set_error_literal(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                            too_few_checked_message());
+        goto end;
     }
     gwy_container_gis_string_by_name(args->data, "/filename",
                                      (const guchar**)&filename);
     name = g_strdup(filename ? filename : _("Untitled"));
     frame_series_options_init(&options);
-    options.channel_ids = (gint*)ids->data;
-    options.n_channel_ids = ids->len;
+    options.channel_ids = ids;
+    options.n_channel_ids = n;
     options.hints_for_dialog = TRUE;
     /* Where the metadata gives the timing but not the direction. */
     options.fallback_direction = gwy_params_get_enum(args->params, PARAM_DIRECTION);
@@ -230,10 +285,10 @@ load_series(SeriesArgs *args, GError **error)
             interval = yres*line_time;
         options.line_time = line_time;
         options.direction = gwy_params_get_enum(args->params, PARAM_DIRECTION);
-        options.n_frame_times = ids->len;
-        options.frame_times = g_new(gdouble, ids->len);
-        for (k = 0; k < (gint)ids->len; k++)
-            options.frame_times[k] = k*interval;
+        options.n_frame_times = n;
+        options.frame_times = g_new(gdouble, n);
+        for (k = 0; k < n; k++)
+            options.frame_times[k] = places[k]*interval;
         args->timing_assumed = TRUE;
         series = frame_series_from_files(&args->data, &name, 1, &options,
                                          &err);
@@ -241,7 +296,10 @@ load_series(SeriesArgs *args, GError **error)
     }
     if (err)
         g_propagate_error(error, err);
-    g_array_free(ids, TRUE);
+
+end:
+    g_free(ids);
+    g_free(places);
     g_free(name);
     return series;
 }
@@ -575,6 +633,71 @@ show_timing_use(SeriesGUI *gui)
     g_free(text);
 }
 
+/* What was measured no longer holds: the series is read and measured
+ * again, the old result is no longer shown, and OK and Update are greyed
+ * while too few frames are checked (the summary says why). */
+static void
+drop_measurement(SeriesGUI *gui)
+{
+    gboolean too_few = too_few_checked(gui->args);
+
+    series_args_reset(gui->args);
+    gwy_graph_model_remove_all_curves(gui->gmodel);
+    gtk_label_set_text(GTK_LABEL(gui->summary),
+                       too_few ? too_few_checked_message()
+                       : _("Press Update to measure the series."));
+    gtk_dialog_set_response_sensitive(GTK_DIALOG(gui->dialog), GTK_RESPONSE_OK, !too_few);
+    gtk_dialog_set_response_sensitive(GTK_DIALOG(gui->dialog), GWY_RESPONSE_UPDATE, !too_few);
+}
+
+/* Another set of frames: the series measured was of the old set, and OK
+ * must not write it; the timing the new set's metadata gives may differ. */
+static void
+frames_changed(SeriesGUI *gui)
+{
+    drop_measurement(gui);
+    gwy_dialog_invalidate(GWY_DIALOG(gui->dialog));
+    show_timing_use(gui);
+}
+
+/* A click on a frame's checkbox; path is its row, the candidate's index. */
+static void
+frame_toggled(SeriesGUI *gui, const gchar *path)
+{
+    SeriesArgs *args = gui->args;
+    GtkTreeIter iter;
+    gint i = (gint)g_ascii_strtoll(path, NULL, 10);
+
+    if (i < 0 || i >= (gint)args->candidates->len
+        || !gtk_tree_model_get_iter_from_string(GTK_TREE_MODEL(gui->frames), &iter, path))
+        return;
+    args->checked[i] = !args->checked[i];
+    gtk_list_store_set(gui->frames, &iter,
+                       LOCALSCAN_SERIES_FRAME_COLUMN_CHECKED, args->checked[i], -1);
+    frames_changed(gui);
+}
+
+/* Reset checks every frame again, as the dialog opens with all. */
+static void
+check_all_frames(SeriesGUI *gui)
+{
+    SeriesArgs *args = gui->args;
+    GtkTreeIter iter;
+    gboolean changed = FALSE;
+    gint i;
+
+    for (i = 0; i < (gint)args->candidates->len; i++) {
+        if (args->checked[i])
+            continue;
+        args->checked[i] = changed = TRUE;
+        if (gtk_tree_model_iter_nth_child(GTK_TREE_MODEL(gui->frames), &iter, NULL, i))
+            gtk_list_store_set(gui->frames, &iter,
+                               LOCALSCAN_SERIES_FRAME_COLUMN_CHECKED, TRUE, -1);
+    }
+    if (changed)
+        frames_changed(gui);
+}
+
 static void
 param_changed(SeriesGUI *gui, gint id)
 {
@@ -583,9 +706,136 @@ param_changed(SeriesGUI *gui, gint id)
     if (id < 0 || id == PARAM_LINE_TIME || id == PARAM_FRAME_INTERVAL
         || id == PARAM_DIRECTION) {
         if (gui->args->timing_assumed || id < 0 || id == PARAM_DIRECTION)
-            series_args_reset(gui->args);
+            drop_measurement(gui);
         gwy_dialog_invalidate(GWY_DIALOG(gui->dialog));
     }
+    if (id < 0)
+        check_all_frames(gui);
+}
+
+/* Each candidate's start in seconds after the earliest given, as text;
+ * empty where its metadata does not give it.  Returns whether any does. */
+static gboolean
+frame_start_texts(GwyContainer *data, GArray *ids, gchar **texts)
+{
+    gint n = ids->len, i;
+    gdouble *t = g_new(gdouble, MAX(n, 1)), t0 = G_MAXDOUBLE;
+    ScanMetaTiming timing;
+
+    for (i = 0; i < n; i++) {
+        gwy_clear(&timing, 1);
+        t[i] = NAN;
+        if (scan_timing_meta_read_channel(data, g_array_index(ids, gint, i), &timing)
+            & SCAN_META_FRAME_START) {
+            t[i] = timing.frame_start;
+            t0 = MIN(t0, t[i]);
+        }
+    }
+    for (i = 0; i < n; i++)
+        texts[i] = isfinite(t[i]) ? g_strdup_printf("%g", t[i] - t0) : g_strdup("");
+    g_free(t);
+    return t0 < G_MAXDOUBLE;
+}
+
+/* The candidates as the chooser's rows, checked as args says. */
+static GtkListStore*
+frame_store_new(SeriesGUI *gui)
+{
+    SeriesArgs *args = gui->args;
+    GtkListStore *store = gtk_list_store_new(LOCALSCAN_SERIES_FRAME_NCOLUMNS,
+                                             G_TYPE_BOOLEAN, G_TYPE_INT, G_TYPE_STRING,
+                                             G_TYPE_STRING, GDK_TYPE_PIXBUF);
+    gchar **starts = g_new0(gchar*, args->candidates->len + 1), *title;
+    gint i, id;
+
+    gui->any_start = frame_start_texts(args->data, args->candidates, starts);
+    for (i = 0; i < (gint)args->candidates->len; i++) {
+        id = g_array_index(args->candidates, gint, i);
+        title = gwy_app_get_data_field_title(args->data, id);
+        gtk_list_store_insert_with_values(store, NULL, i,
+                                          LOCALSCAN_SERIES_FRAME_COLUMN_CHECKED, args->checked[i],
+                                          LOCALSCAN_SERIES_FRAME_COLUMN_ID, id,
+                                          LOCALSCAN_SERIES_FRAME_COLUMN_TITLE, title,
+                                          LOCALSCAN_SERIES_FRAME_COLUMN_START, starts[i],
+                                          -1);
+        g_free(title);
+    }
+    g_strfreev(starts);
+    return store;
+}
+
+/* A row's thumbnail is made when the row is first drawn: a long series
+ * shows few rows at a time. */
+static void
+render_thumbnail(G_GNUC_UNUSED GtkTreeViewColumn *column, GtkCellRenderer *renderer,
+                 GtkTreeModel *model, GtkTreeIter *iter, gpointer user_data)
+{
+    SeriesGUI *gui = (SeriesGUI*)user_data;
+    GdkPixbuf *pixbuf = NULL;
+    gint id;
+
+    gtk_tree_model_get(model, iter, LOCALSCAN_SERIES_FRAME_COLUMN_THUMBNAIL, &pixbuf,
+                       LOCALSCAN_SERIES_FRAME_COLUMN_ID, &id, -1);
+    if (!pixbuf
+        && (pixbuf = gwy_app_get_channel_thumbnail(gui->args->data, id,
+                                                   THUMBNAIL_SIZE, THUMBNAIL_SIZE)))
+        gtk_list_store_set(GTK_LIST_STORE(model), iter,
+                           LOCALSCAN_SERIES_FRAME_COLUMN_THUMBNAIL, pixbuf, -1);
+    g_object_set(renderer, "pixbuf", pixbuf, NULL);
+    if (pixbuf)
+        g_object_unref(pixbuf);
+}
+
+static GtkTreeViewColumn*
+add_text_column(GtkWidget *view, const gchar *title, gint column_id)
+{
+    GtkCellRenderer *renderer = gtk_cell_renderer_text_new();
+    GtkTreeViewColumn *column;
+
+    column = gtk_tree_view_column_new_with_attributes(title, renderer, "text", column_id, NULL);
+    gtk_tree_view_append_column(GTK_TREE_VIEW(view), column);
+    return column;
+}
+
+/* The frame chooser: per candidate a checkbox, a thumbnail, the channel id,
+ * title and, where the metadata gives it, its start, the way Gwyddion's
+ * own channel lists show channels. */
+static GtkWidget*
+create_frame_chooser(gpointer user_data)
+{
+    SeriesGUI *gui = (SeriesGUI*)user_data;
+    GtkWidget *view = gtk_tree_view_new_with_model(GTK_TREE_MODEL(gui->frames)), *scroll;
+    GtkTreeViewColumn *column;
+    GtkCellRenderer *renderer;
+
+    gtk_widget_set_name(view, LOCALSCAN_SERIES_FRAMES_WIDGET_NAME);
+    gtk_widget_set_tooltip_text(view, _("The channels scanned like this one.  Uncheck a frame "
+                                        "to leave it out of the series: it is neither "
+                                        "measured nor corrected"));
+    renderer = gtk_cell_renderer_toggle_new();
+    g_signal_connect_swapped(renderer, "toggled", G_CALLBACK(frame_toggled), gui);
+    column = gtk_tree_view_column_new_with_attributes(NULL, renderer, "active",
+                                                      LOCALSCAN_SERIES_FRAME_COLUMN_CHECKED,
+                                                      NULL);
+    gtk_tree_view_append_column(GTK_TREE_VIEW(view), column);
+    renderer = gtk_cell_renderer_pixbuf_new();
+    column = gtk_tree_view_column_new();
+    gtk_tree_view_column_pack_start(column, renderer, FALSE);
+    gtk_tree_view_column_set_cell_data_func(column, renderer, render_thumbnail, gui, NULL);
+    gtk_tree_view_append_column(GTK_TREE_VIEW(view), column);
+    add_text_column(view, _("Id"), LOCALSCAN_SERIES_FRAME_COLUMN_ID);
+    column = add_text_column(view, _("Title"), LOCALSCAN_SERIES_FRAME_COLUMN_TITLE);
+    gtk_tree_view_column_set_expand(column, TRUE);
+    column = add_text_column(view, _("Start (s)"), LOCALSCAN_SERIES_FRAME_COLUMN_START);
+    gtk_tree_view_column_set_visible(column, gui->any_start);
+
+    scroll = gtk_scrolled_window_new(NULL, NULL);
+    gtk_scrolled_window_set_policy(GTK_SCROLLED_WINDOW(scroll), GTK_POLICY_NEVER,
+                                   GTK_POLICY_AUTOMATIC);
+    gtk_scrolled_window_set_shadow_type(GTK_SCROLLED_WINDOW(scroll), GTK_SHADOW_IN);
+    gtk_widget_set_size_request(scroll, -1, FRAME_LIST_HEIGHT);
+    gtk_container_add(GTK_CONTAINER(scroll), view);
+    return scroll;
 }
 
 /* Curves appended from another model do not bring its units. */
@@ -638,6 +888,9 @@ run_gui(SeriesArgs *args)
     gtk_box_pack_start(GTK_BOX(vbox), gui.summary, FALSE, FALSE, 0);
 
     table = gui.table = gwy_param_table_new(args->params);
+    gui.frames = frame_store_new(&gui);
+    gwy_param_table_append_header(table, -1, _("Frames"));
+    gwy_param_table_append_foreign(table, WIDGET_FRAMES, create_frame_chooser, &gui, NULL);
     gwy_param_table_append_header(table, -1, _("Timing the file does not give"));
     gwy_param_table_append_entry(table, PARAM_LINE_TIME);
     gwy_param_table_set_unitstr(table, PARAM_LINE_TIME, "s");
@@ -663,6 +916,7 @@ run_gui(SeriesArgs *args)
                                 &gui, NULL);
     outcome = gwy_dialog_run(dialog);
     g_object_unref(gui.gmodel);
+    g_object_unref(gui.frames);
     return outcome;
 }
 
@@ -675,6 +929,7 @@ localscan_series(GwyContainer *data, GwyRunType runtype,
     SeriesArgs args;
     gboolean ok, show_progress;
     gdouble share;
+    gint k;
 
     g_return_if_fail(runtype & SERIES_RUN_MODES);
     gwy_clear(&args, 1);
@@ -682,6 +937,13 @@ localscan_series(GwyContainer *data, GwyRunType runtype,
     g_return_if_fail(args.id >= 0);
     args.data = data;
     args.params = gwy_params_new_from_settings(define_series_params());
+    /* Every candidate is a frame until the dialog unchecks some.  The
+     * choice is not kept with the settings: channel ids of this file mean
+     * nothing in the next (Repeat last, pygwy), so those runs take all. */
+    args.candidates = frame_ids(data, args.id);
+    args.checked = g_new(gboolean, MAX(args.candidates->len, 1));
+    for (k = 0; k < (gint)args.candidates->len; k++)
+        args.checked[k] = TRUE;
     if (runtype == GWY_RUN_INTERACTIVE) {
         outcome = run_gui(&args);
         gwy_params_save_to_settings(args.params);
@@ -709,6 +971,8 @@ localscan_series(GwyContainer *data, GwyRunType runtype,
 end:
     g_clear_error(&error);
     series_args_reset(&args);
+    g_array_free(args.candidates, TRUE);
+    g_free(args.checked);
     g_object_unref(args.params);
 }
 

@@ -1,7 +1,7 @@
 /*
  *  What the dialog tests on a (virtual) X display share: finding the
- *  dialog and its widgets, letting GTK draw, photographing a window and
- *  counting a file's channels.
+ *  dialog and its widgets, letting GTK draw, photographing a window,
+ *  clicking a list's cell and counting a file's channels.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -107,4 +107,31 @@ gui_count_channels(GwyContainer *data)
         n++;
     g_free(ids);
     return n;
+}
+
+/* The row scrolled into view and drawn first: a click lands where the
+ * cell is shown, in the view's bin window. */
+gboolean
+gui_click_tree_cell(GtkTreeView *view, gint row, gint column)
+{
+    GtkTreePath *path = gtk_tree_path_new_from_indices(row, -1);
+    GtkTreeViewColumn *col = gtk_tree_view_get_column(view, column);
+    GdkWindow *bin = gtk_tree_view_get_bin_window(view);
+    GdkRectangle cell;
+    gboolean ok = FALSE;
+    gint x, y;
+
+    if (col && bin) {
+        gtk_tree_view_scroll_to_cell(view, path, NULL, FALSE, 0.0, 0.0);
+        gui_flush_drawing();
+        gtk_tree_view_get_cell_area(view, path, col, &cell);
+        x = cell.x + cell.width/2;
+        y = cell.y + cell.height/2;
+        ok = (cell.height > 0
+              && gdk_test_simulate_button(bin, x, y, 1, 0, GDK_BUTTON_PRESS)
+              && gdk_test_simulate_button(bin, x, y, 1, 0, GDK_BUTTON_RELEASE));
+        gui_flush_drawing();
+    }
+    gtk_tree_path_free(path);
+    return ok;
 }

@@ -1,7 +1,7 @@
 /*
  *  What the dialog tests on a (virtual) X display share: finding the
- *  dialog and its widgets, letting GTK draw, photographing a window and
- *  counting a file's channels.
+ *  dialog and its widgets, letting GTK draw, photographing a window,
+ *  clicking a list's cell and counting a file's channels.
  *  Copyright (C) 2026 The gwy-localscan authors.
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
@@ -22,5 +22,11 @@ gboolean   gui_save_screenshot    (GtkWidget *widget,
                                    gint *width,
                                    gint *height);
 gint       gui_count_channels     (GwyContainer *data);
+/* A click of mouse button 1 on the cell of row and column, as the X
+ * server delivers it; FALSE when the row is not shown or the click could
+ * not be sent. */
+gboolean   gui_click_tree_cell    (GtkTreeView *view,
+                                   gint row,
+                                   gint column);
 
 #endif

@@ -25,6 +25,8 @@
 #include "test-common.h"
 #include "gui-widgets.h"
 #include "series-process.h"
+#include "frame-series.h"
+#include "series-correction.h"
 
 #define SCREENSHOT TEST_BUILDDIR "/tests/gui-dialog.png"
 #define SCREENSHOT_DE TEST_BUILDDIR "/tests/gui-dialog-de.png"
@@ -33,6 +35,8 @@
 #define SCREENSHOT_LARGE TEST_BUILDDIR "/tests/gui-large-preview.png"
 #define SCREENSHOT_WAIT TEST_BUILDDIR "/tests/gui-cancel-wait.png"
 #define SCREENSHOT_SERIES TEST_BUILDDIR "/tests/gui-series-dialog.png"
+#define SCREENSHOT_FRAMES TEST_BUILDDIR "/tests/gui-series-frames.png"
+#define SCREENSHOT_TOO_FEW TEST_BUILDDIR "/tests/gui-series-too-few.png"
 /* A large image: previewed on a reduced copy, made in the wait dialog. */
 #define LARGE_RES 2048
 #define TEST_LOCALEDIR TEST_BUILDDIR "/tests/locale"
@@ -62,6 +66,8 @@ typedef struct {
     gchar *reference_active;     /* its preselected label */
     GString *missing_tooltips;   /* when set: settings without a tooltip */
     gint sensitive_entries;      /* text entries the user can type into */
+    GString *frame_starts;       /* when set: the series frame chooser's
+                                    start column (describe_frame_starts) */
 } DialogProbe;
 
 /************************************************************************
@@ -174,6 +180,7 @@ inspect_reference(GtkWidget *dialog, DialogProbe *probe)
 }
 
 static void collect_missing_tooltips(GtkWidget *widget, GString *missing);
+static void describe_frame_starts(GtkWidget *dialog, GString *starts);
 
 static gint
 count_sensitive_entries(GtkWidget *widget)
@@ -220,6 +227,8 @@ probe_dialog(gpointer user_data)
     if (probe->missing_tooltips)
         collect_missing_tooltips(dialog, probe->missing_tooltips);
     probe->sensitive_entries = count_sensitive_entries(dialog);
+    if (probe->frame_starts)
+        describe_frame_starts(dialog, probe->frame_starts);
     probe->saved = probe->screenshot
                    && gui_save_screenshot(dialog, probe->screenshot, &probe->width, &probe->height);
     gtk_dialog_response(GTK_DIALOG(dialog), probe->response);
@@ -403,7 +412,7 @@ collect_missing_tooltips(GtkWidget *widget, GString *missing)
 
     if (!gtk_widget_get_visible(widget))
         return;
-    settable = (GTK_IS_TOGGLE_BUTTON(widget) || GTK_IS_COMBO_BOX(widget)
+    settable = (GTK_IS_TOGGLE_BUTTON(widget) || GTK_IS_COMBO_BOX(widget) || GTK_IS_TREE_VIEW(widget)
                 || GTK_IS_SPIN_BUTTON(widget) || GTK_IS_FILE_CHOOSER_BUTTON(widget)
                 || GWY_IS_COLOR_BUTTON(widget) || (GTK_IS_ENTRY(widget)
                                                    && !GTK_IS_SPIN_BUTTON(widget)));
@@ -664,8 +673,9 @@ make_series_data(gdouble line_time)
 }
 
 /* The series dialog, too, says what each of its settings does (it had no
- * tooltip at all), and that the timing settings are used when the file
- * lacks the timing (all of them sensitive); Cancel adds nothing. */
+ * tooltip at all; its frame chooser too), and that the timing settings
+ * are used when the file lacks the timing (all of them sensitive), where
+ * the chooser has no start to show; Cancel adds nothing. */
 START_TEST(test_series_dialog_tooltips)
 {
     GwyContainer *data = make_series_data(0.0);
@@ -675,8 +685,11 @@ START_TEST(test_series_dialog_tooltips)
     init_application();
     probe_init(&probe, "Interpolation", SCREENSHOT_SERIES, GTK_RESPONSE_CANCEL);
     probe.missing_tooltips = missing;
+    probe.frame_starts = g_string_new(NULL);
     gwy_app_data_browser_add(data);
     run_function_dialog_on(LOCALSCAN_SERIES_FUNCTION_NAME, data, 0, &probe);
+    ck_assert_str_eq(probe.frame_starts->str, "Start (s) shown: no\n0: \n1: \n2: \n");
+    g_string_free(probe.frame_starts, TRUE);
     printf("test-gui-dialog: the series dialog shows:\n%s", probe.texts->str);
     ck_assert_msg(probe.ready, "no series dialog; it shows:\n%s", probe.texts->str);
     ck_assert_msg(!missing->len, "series settings without a tooltip: %s", missing->str);
@@ -694,7 +707,7 @@ END_TEST
 
 /* Frames whose metadata gives the timing: the dialog says the timing
  * settings are not used and greys their entries (they looked as if they
- * mattered). */
+ * mattered); the frame chooser shows each frame's start (1.8 s apart). */
 START_TEST(test_series_dialog_timing_from_file)
 {
     GwyContainer *data = make_series_data(0.02);
@@ -702,12 +715,17 @@ START_TEST(test_series_dialog_timing_from_file)
 
     init_application();
     probe_init(&probe, "Interpolation", NULL, GTK_RESPONSE_CANCEL);
+    probe.frame_starts = g_string_new(NULL);
     gwy_app_data_browser_add(data);
     run_function_dialog_on(LOCALSCAN_SERIES_FUNCTION_NAME, data, 0, &probe);
     ck_assert_msg(probe.ready, "no series dialog; it shows:\n%s", probe.texts->str);
     ck_assert_msg(strstr(probe.texts->str, "The file gives the timing: these settings are not used."),
                   "the dialog does not say the file gives the timing:\n%s", probe.texts->str);
     ck_assert_int_eq(probe.sensitive_entries, 0);
+    printf("test-gui-dialog: the frame chooser of frames the metadata times:\n%s",
+           probe.frame_starts->str);
+    ck_assert_str_eq(probe.frame_starts->str, "Start (s) shown: yes\n0: 0\n1: 1.8\n2: 3.6\n");
+    g_string_free(probe.frame_starts, TRUE);
     gwy_app_data_browser_remove(data);
     g_object_unref(data);
     probe_clear(&probe);
@@ -844,6 +862,476 @@ START_TEST(test_series_update_cancelled)
 }
 END_TEST
 
+/************************************************************************
+ * The series dialog's frame chooser
+ ************************************************************************/
+
+/* Channels' pixels of make_movie_data()'s frames, and the line time the
+ * frame chooser's tests set (the frames carry no timing). */
+#define MOVIE_RES 96
+#define MOVIE_LINE_TIME 0.5
+
+/* GLib criticals (a failed g_return_if_fail) seen while a test runs. */
+static gint criticals_seen = 0;
+
+static void
+count_criticals(const gchar *domain, GLogLevelFlags level, const gchar *message,
+                gpointer user_data)
+{
+    if (level & G_LOG_LEVEL_CRITICAL)
+        criticals_seen++;
+    g_log_default_handler(domain, level, message, user_data);
+}
+
+static void
+watch_criticals(void)
+{
+    static const gchar *domains[] = {
+        "GLib", "GLib-GObject", "Gtk", "Gdk", "GdkPixbuf",
+        "Gwyddion", "GwyProcess", "GwyDraw", "GwyDgets", "GwyApp", "GwyModule",
+    };
+    guint i;
+
+    criticals_seen = 0;
+    g_log_set_default_handler(count_criticals, NULL);
+    for (i = 0; i < G_N_ELEMENTS(domains); i++)
+        g_log_set_handler(domains[i], G_LOG_LEVEL_CRITICAL | G_LOG_FLAG_FATAL
+                          | G_LOG_FLAG_RECURSION, count_criticals, NULL);
+}
+
+/* The timing the frames lack, given by the settings as a user types it;
+ * the trajectory graph added, no crop, B-spline interpolation. */
+static void
+set_series_settings(void)
+{
+    GwyContainer *settings = gwy_app_settings_get();
+
+    gwy_container_set_double_by_name(settings, "/module/localscan_series/line_time",
+                                     MOVIE_LINE_TIME);
+    gwy_container_set_double_by_name(settings, "/module/localscan_series/frame_interval", 0.0);
+    gwy_container_set_boolean_by_name(settings, "/module/localscan_series/add_graph", TRUE);
+    gwy_container_set_boolean_by_name(settings, "/module/localscan_series/crop", FALSE);
+    gwy_container_set_enum_by_name(settings, "/module/localscan_series/interpolation",
+                                   GWY_INTERPOLATION_BSPLINE);
+}
+
+static GtkTreeView*
+find_frame_chooser(GtkWidget *dialog)
+{
+    GtkWidget *widget = gui_find_named_widget(dialog, LOCALSCAN_SERIES_FRAMES_WIDGET_NAME);
+
+    return (widget && GTK_IS_TREE_VIEW(widget)) ? GTK_TREE_VIEW(widget) : NULL;
+}
+
+/* The chooser's rows, "[x] ID TITLE" (checked) or "[ ] ID TITLE" a line. */
+static void
+describe_frames(GtkTreeView *view, GString *rows)
+{
+    GtkTreeModel *model = gtk_tree_view_get_model(view);
+    GtkTreeIter iter;
+    gboolean more, checked;
+    gchar *title;
+    gint id;
+
+    g_string_truncate(rows, 0);
+    for (more = gtk_tree_model_get_iter_first(model, &iter); more;
+         more = gtk_tree_model_iter_next(model, &iter)) {
+        gtk_tree_model_get(model, &iter, LOCALSCAN_SERIES_FRAME_COLUMN_CHECKED, &checked,
+                           LOCALSCAN_SERIES_FRAME_COLUMN_ID, &id,
+                           LOCALSCAN_SERIES_FRAME_COLUMN_TITLE, &title, -1);
+        g_string_append_printf(rows, "[%c] %d %s\n", checked ? 'x' : ' ', id, title);
+        g_free(title);
+    }
+}
+
+/* Whether the chooser shows its start column, then "ID: START" a row. */
+static void
+describe_frame_starts(GtkWidget *dialog, GString *starts)
+{
+    GtkTreeView *view = find_frame_chooser(dialog);
+    GtkTreeViewColumn *column;
+    GtkTreeModel *model;
+    GtkTreeIter iter;
+    gboolean more;
+    gchar *start;
+    gint id;
+
+    if (!view)
+        return;
+    column = gtk_tree_view_get_column(view, 4);
+    g_string_append_printf(starts, "%s shown: %s\n",
+                           column ? gtk_tree_view_column_get_title(column) : "no column",
+                           column && gtk_tree_view_column_get_visible(column) ? "yes" : "no");
+    model = gtk_tree_view_get_model(view);
+    for (more = gtk_tree_model_get_iter_first(model, &iter); more;
+         more = gtk_tree_model_iter_next(model, &iter)) {
+        gtk_tree_model_get(model, &iter, LOCALSCAN_SERIES_FRAME_COLUMN_ID, &id,
+                           LOCALSCAN_SERIES_FRAME_COLUMN_START, &start, -1);
+        g_string_append_printf(starts, "%d: %s\n", id, start);
+        g_free(start);
+    }
+}
+
+/* Clicks the checkbox of each row (ended by -1); FALSE unless each click
+ * got through and unchecked its frame. */
+static gboolean
+uncheck_frames(GtkTreeView *view, const gint *rows)
+{
+    GtkTreeModel *model = gtk_tree_view_get_model(view);
+    GtkTreeIter iter;
+    gboolean checked = TRUE;
+    gint i;
+
+    for (i = 0; rows[i] >= 0; i++) {
+        if (!gui_click_tree_cell(view, rows[i], 0)
+            || !gtk_tree_model_iter_nth_child(model, &iter, NULL, rows[i]))
+            return FALSE;
+        gtk_tree_model_get(model, &iter, LOCALSCAN_SERIES_FRAME_COLUMN_CHECKED, &checked, -1);
+        if (checked)
+            return FALSE;
+    }
+    return TRUE;
+}
+
+static gboolean
+response_sensitive(GtkWidget *dialog, gint response)
+{
+    GtkWidget *button = gtk_dialog_get_widget_for_response(GTK_DIALOG(dialog), response);
+
+    return button && gtk_widget_is_sensitive(button);
+}
+
+/* The step of a frame chooser's test that answers OK until the dialog
+ * goes. */
+#define STEP_OK 99
+
+/* What a frame chooser's test saw at each of its steps. */
+typedef struct {
+    gint step;
+    gint ticks;
+    gboolean stopped;            /* its timeout source is gone */
+    const gint *uncheck;         /* the rows to uncheck, ended by -1 */
+    GString *texts;              /* every visible label of the dialog */
+    GString *opened;             /* the chooser's rows as the dialog opened */
+    GString *measured;           /* the labels after Update */
+    GString *rows;               /* the chooser's rows after the clicks */
+    GString *after;              /* the labels after the clicks */
+    GString *updated;            /* the labels after an Update with too few */
+    GString *reset;              /* the chooser's rows after Reset */
+    gboolean clicked;
+    gboolean ok_sensitive, update_sensitive;
+    gboolean ok_sensitive_reset;
+    gboolean saved;
+    gint width, height;
+} FrameProbe;
+
+static void
+frame_probe_init(FrameProbe *probe, const gint *uncheck)
+{
+    gwy_clear(probe, 1);
+    probe->uncheck = uncheck;
+    probe->texts = g_string_new(NULL);
+    probe->opened = g_string_new(NULL);
+    probe->measured = g_string_new(NULL);
+    probe->rows = g_string_new(NULL);
+    probe->after = g_string_new(NULL);
+    probe->updated = g_string_new(NULL);
+    probe->reset = g_string_new(NULL);
+}
+
+static void
+frame_probe_clear(FrameProbe *probe)
+{
+    g_string_free(probe->texts, TRUE);
+    g_string_free(probe->opened, TRUE);
+    g_string_free(probe->measured, TRUE);
+    g_string_free(probe->rows, TRUE);
+    g_string_free(probe->after, TRUE);
+    g_string_free(probe->updated, TRUE);
+    g_string_free(probe->reset, TRUE);
+}
+
+/* OK until the dialog takes it: sent while GwyDialog is between two runs
+ * of its loop (its wait cursor put away after a preview lets the probe
+ * run), the answer is dropped, as update_then_cancel() found for Cancel. */
+static gboolean
+answer_ok_until_gone(FrameProbe *probe)
+{
+    GtkWidget *dialog = gui_find_titled_dialog("Local Scan Series Drift");
+
+    if (!dialog || ++probe->ticks >= 2*MAX_TICKS) {
+        probe->stopped = TRUE;
+        return FALSE;
+    }
+    gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_OK);
+    return TRUE;
+}
+
+/* The series dialog at rest (no wait dialog over it), its labels in
+ * probe->texts; NULL while it is not, and the dialog cancelled (the probe
+ * stopped) when it never got where the test waits for. */
+static GtkWidget*
+series_dialog_at_rest(FrameProbe *probe)
+{
+    GtkWidget *dialog = gui_find_titled_dialog("Local Scan Series Drift");
+
+    if (++probe->ticks >= MAX_TICKS) {
+        if (dialog)
+            gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
+        probe->stopped = TRUE;
+        return NULL;
+    }
+    if (!dialog || gui_find_titled_dialog("Please wait"))
+        return NULL;
+    g_string_truncate(probe->texts, 0);
+    collect_texts(dialog, probe->texts);
+    return dialog;
+}
+
+/* Update on every frame, then one frame unchecked after the measurement,
+ * then OK. */
+static gboolean
+measure_then_leave_out(gpointer user_data)
+{
+    FrameProbe *probe = (FrameProbe*)user_data;
+    GtkWidget *dialog;
+    GtkTreeView *view;
+
+    if (probe->step == STEP_OK)
+        return answer_ok_until_gone(probe);
+    if (!(dialog = series_dialog_at_rest(probe)))
+        return !probe->stopped;
+    if (!(view = find_frame_chooser(dialog))) {
+        gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
+        probe->stopped = TRUE;
+        return FALSE;
+    }
+    if (probe->step == 0) {
+        describe_frames(view, probe->opened);
+        probe->step++;
+        gtk_dialog_response(GTK_DIALOG(dialog), GWY_RESPONSE_UPDATE);
+        return TRUE;
+    }
+    if (!strstr(probe->texts->str, " frames, typical residual"))
+        return TRUE;
+    g_string_assign(probe->measured, probe->texts->str);
+    probe->clicked = uncheck_frames(view, probe->uncheck);
+    describe_frames(view, probe->rows);
+    collect_texts(dialog, probe->after);
+    probe->ok_sensitive = response_sensitive(dialog, GTK_RESPONSE_OK);
+    probe->saved = gui_save_screenshot(dialog, SCREENSHOT_FRAMES, &probe->width, &probe->height);
+    probe->step = STEP_OK;
+    return answer_ok_until_gone(probe);
+}
+
+/* The core's correction of channels ids[] of data (n of them) against the
+ * channels from first_new on, which OK made: their titles and every value.
+ * The frames carry no timing: MOVIE_LINE_TIME s per line and the frames
+ * back to back, each in its place among all candidates (places[]), which
+ * is gwy-localscan series --channels IDS --line-time 0.5 --frame-times
+ * PLACE*48,... */
+static void
+assert_core_correction(GwyContainer *data, const gint *ids, const gint *places, gint n,
+                       gint first_new)
+{
+    gdouble *times = g_new(gdouble, n);
+    gchar *name = (gchar*)"Untitled";
+    FrameSeriesOptions options;
+    SeriesCorrection correction;
+    FrameSeries *series;
+    GError *error = NULL;
+    gint k;
+
+    for (k = 0; k < n; k++)
+        times[k] = places[k]*MOVIE_RES*MOVIE_LINE_TIME;
+    frame_series_options_init(&options);
+    options.channel_ids = ids;
+    options.n_channel_ids = n;
+    options.line_time = MOVIE_LINE_TIME;
+    options.direction = SCAN_DIRECTION_DOWN;
+    options.frame_times = times;
+    options.n_frame_times = n;
+    series = frame_series_from_files(&data, &name, 1, &options, &error);
+    ck_assert_msg(series, "the core cannot read the frames: %s", error ? error->message : "?");
+    ck_assert_int_eq(series->n_frames, n);
+    ck_assert(series_correction_compute(series, NULL, NULL, &correction, NULL));
+    for (k = 0; k < n; k++) {
+        GwyDataField *want = gwy_data_field_new_alike(series->frames[k].field, FALSE);
+        GwyDataField *mask = gwy_data_field_new_alike(want, FALSE), *made = NULL;
+        gchar *title = g_strdup_printf("Height %d (drift corrected)", ids[k]);
+        const guchar *made_title = NULL;
+
+        ck_assert(series_correction_correct_frame(&correction, series, k,
+                                                  GWY_INTERPOLATION_BSPLINE, want, mask, NULL));
+        ck_assert(gwy_container_gis_string(data, gwy_app_get_data_title_key_for_id(first_new + k),
+                                           &made_title));
+        ck_assert_str_eq((const gchar*)made_title, title);
+        ck_assert(gwy_container_gis_object(data, gwy_app_get_data_key_for_id(first_new + k),
+                                           &made));
+        gwy_data_field_subtract_fields(want, want, made);
+        ck_assert_msg(gwy_data_field_get_max(want) < 1e-15 && gwy_data_field_get_min(want) > -1e-15,
+                      "channel %d differs from the core's correction of channel %d (seed %u)",
+                      first_new + k, ids[k], seed);
+        g_object_unref(want);
+        g_object_unref(mask);
+        g_free(title);
+    }
+    series_correction_clear(&correction);
+    frame_series_free(series);
+    g_free(times);
+}
+
+/* Five frames measured with Update, then frame 2 (a disturbed frame, say)
+ * unchecked and OK: the measurement of five frames is dropped, and the
+ * result is the four checked frames corrected as the core corrects them,
+ * frame 2 still taking its time in the series' clock.  Repeat last then
+ * takes all five again: the choice is not kept. */
+START_TEST(test_series_frame_left_out)
+{
+    static const gint uncheck[] = { 2, -1 };
+    static const gint ids[] = { 0, 1, 3, 4 };
+    GwyContainer *data = make_movie_data(5, MOVIE_RES);
+    FrameProbe probe;
+    GError *error;
+    guint timeout;
+
+    init_application();
+    watch_criticals();
+    set_series_settings();
+    frame_probe_init(&probe, uncheck);
+    gwy_app_data_browser_add(data);
+    gwy_app_data_browser_select_data_field(data, 0);
+    timeout = g_timeout_add(TICK_MS, measure_then_leave_out, &probe);
+    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
+    if (!probe.stopped)
+        g_source_remove(timeout);
+    printf("test-gui-dialog: the frame chooser as the series dialog opened:\n%s"
+           "after Update on them:\n%sand after frame 2 was unchecked (%s, %d x %d):\n%s%s",
+           probe.opened->str, probe.measured->str, SCREENSHOT_FRAMES, probe.width, probe.height,
+           probe.rows->str, probe.after->str);
+    fflush(stdout);
+    ck_assert_str_eq(probe.opened->str, "[x] 0 Height 0\n[x] 1 Height 1\n[x] 2 Height 2\n"
+                                        "[x] 3 Height 3\n[x] 4 Height 4\n");
+    ck_assert_msg(strstr(probe.measured->str, "; 5 frames,"),
+                  "Update did not measure five frames:\n%s", probe.measured->str);
+    ck_assert_msg(probe.clicked, "the click did not uncheck frame 2:\n%s", probe.rows->str);
+    ck_assert_str_eq(probe.rows->str, "[x] 0 Height 0\n[x] 1 Height 1\n[ ] 2 Height 2\n"
+                                      "[x] 3 Height 3\n[x] 4 Height 4\n");
+    ck_assert_msg(strstr(probe.after->str, "Press Update to measure the series.")
+                  && !strstr(probe.after->str, " frames, typical residual"),
+                  "the five frames' result is still shown:\n%s", probe.after->str);
+    ck_assert(probe.ok_sensitive);
+    ck_assert_msg(probe.saved, "no screenshot");
+    error = localscan_run_error_take(data);
+    ck_assert_msg(!error, "the run failed: %s", error ? error->message : "");
+    ck_assert_int_eq(gui_count_channels(data), 5 + G_N_ELEMENTS(ids));
+    assert_core_correction(data, ids, ids, G_N_ELEMENTS(ids), 5);
+    ck_assert(gwy_container_contains_by_name(data, "/0/graph/graph/1"));
+
+    gwy_app_data_browser_select_data_field(data, 0);
+    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_IMMEDIATE);
+    error = localscan_run_error_take(data);
+    ck_assert_msg(!error, "Repeat last failed: %s", error ? error->message : "");
+    ck_assert_int_eq(gui_count_channels(data), 5 + G_N_ELEMENTS(ids) + 5);
+    ck_assert_int_eq(criticals_seen, 0);
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+    frame_probe_clear(&probe);
+}
+END_TEST
+
+/* Two of three frames unchecked: the summary says it, OK and Update are
+ * greyed; Update all the same says it again; Reset checks them all; two
+ * unchecked again and OK all the same: the run says it and adds nothing. */
+static gboolean
+leave_too_few(gpointer user_data)
+{
+    FrameProbe *probe = (FrameProbe*)user_data;
+    GtkWidget *dialog;
+    GtkTreeView *view;
+
+    if (probe->step == STEP_OK)
+        return answer_ok_until_gone(probe);
+    if (!(dialog = series_dialog_at_rest(probe)))
+        return !probe->stopped;
+    if (!(view = find_frame_chooser(dialog))) {
+        gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
+        probe->stopped = TRUE;
+        return FALSE;
+    }
+    if (probe->step == 0) {
+        describe_frames(view, probe->opened);
+        probe->clicked = uncheck_frames(view, probe->uncheck);
+        describe_frames(view, probe->rows);
+        collect_texts(dialog, probe->after);
+        probe->ok_sensitive = response_sensitive(dialog, GTK_RESPONSE_OK);
+        probe->update_sensitive = response_sensitive(dialog, GWY_RESPONSE_UPDATE);
+        probe->saved = gui_save_screenshot(dialog, SCREENSHOT_TOO_FEW, &probe->width,
+                                           &probe->height);
+        probe->step++;
+        gtk_dialog_response(GTK_DIALOG(dialog), GWY_RESPONSE_UPDATE);
+        return TRUE;
+    }
+    if (probe->step == 1) {
+        g_string_assign(probe->updated, probe->texts->str);
+        probe->step++;
+        gtk_dialog_response(GTK_DIALOG(dialog), GWY_RESPONSE_RESET);
+        return TRUE;
+    }
+    describe_frames(view, probe->reset);
+    probe->ok_sensitive_reset = response_sensitive(dialog, GTK_RESPONSE_OK);
+    probe->clicked = probe->clicked && uncheck_frames(view, probe->uncheck);
+    probe->step = STEP_OK;
+    return answer_ok_until_gone(probe);
+}
+
+START_TEST(test_series_too_few_frames)
+{
+    static const gint uncheck[] = { 1, 2, -1 };
+    static const gchar *too_few = "Fewer than two frames are checked: check at least two "
+                                  "to measure the series.";
+    GwyContainer *data = make_movie_data(3, MOVIE_RES);
+    FrameProbe probe;
+    GError *error;
+    guint timeout;
+
+    init_application();
+    watch_criticals();
+    set_series_settings();
+    frame_probe_init(&probe, uncheck);
+    gwy_app_data_browser_add(data);
+    gwy_app_data_browser_select_data_field(data, 0);
+    timeout = g_timeout_add(TICK_MS, leave_too_few, &probe);
+    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
+    if (!probe.stopped)
+        g_source_remove(timeout);
+    printf("test-gui-dialog: one frame of three checked (%s, %d x %d):\n%s%s",
+           SCREENSHOT_TOO_FEW, probe.width, probe.height, probe.rows->str, probe.after->str);
+    fflush(stdout);
+    ck_assert_msg(probe.clicked, "the clicks did not uncheck frames 1 and 2:\n%s", probe.rows->str);
+    ck_assert_str_eq(probe.rows->str, "[x] 0 Height 0\n[ ] 1 Height 1\n[ ] 2 Height 2\n");
+    ck_assert_msg(strstr(probe.after->str, too_few), "the dialog does not say too few frames "
+                  "are checked:\n%s", probe.after->str);
+    ck_assert_msg(!probe.ok_sensitive && !probe.update_sensitive,
+                  "OK or Update can be pressed with one frame checked");
+    ck_assert_msg(probe.saved, "no screenshot");
+    ck_assert_msg(strstr(probe.updated->str, too_few), "Update with one frame does not say "
+                  "why it measures nothing:\n%s", probe.updated->str);
+    ck_assert_str_eq(probe.reset->str, "[x] 0 Height 0\n[x] 1 Height 1\n[x] 2 Height 2\n");
+    ck_assert_msg(probe.ok_sensitive_reset, "OK stays greyed after Reset checked every frame");
+    error = localscan_run_error_take(data);
+    ck_assert_msg(error, "OK with one frame checked did not fail");
+    printf("test-gui-dialog: OK with one frame checked: %s\n", error->message);
+    ck_assert_str_eq(error->message, too_few);
+    g_error_free(error);
+    ck_assert_int_eq(gui_count_channels(data), 3);
+    ck_assert_int_eq(criticals_seen, 0);
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+    frame_probe_clear(&probe);
+}
+END_TEST
+
 int
 main(void)
 {
@@ -866,5 +1354,7 @@ main(void)
     tcase_add_test(tc, test_series_dialog_tooltips);
     tcase_add_test(tc, test_series_dialog_timing_from_file);
     tcase_add_test(tc, test_series_update_cancelled);
+    tcase_add_test(tc, test_series_frame_left_out);
+    tcase_add_test(tc, test_series_too_few_frames);
     return test_run_suite(suite);
 }
