@@ -37,6 +37,10 @@
  * for about five rows before it scrolls. */
 #define THUMBNAIL_SIZE 24
 #define FRAME_LIST_HEIGHT 160
+/* The line saying which timing settings are used wraps at this width:
+ * unwrapped, the reason the file lacks the timing (a file's name, the
+ * channel's) made the dialog 1378 px wide, its OK off a 1280 px screen. */
+#define TIMING_USE_WIDTH 380
 
 enum {
     PARAM_LINE_TIME,
@@ -68,6 +72,7 @@ typedef struct {
     GwyParamTable *table;
     GwyGraphModel *gmodel;
     GtkWidget *summary;
+    GtkWidget *timing_use;     /* which timing settings are used, wrapped */
     GtkListStore *frames;      /* the candidates, LOCALSCAN_SERIES_FRAME_COLUMN_* */
     gboolean any_start;        /* some candidate's metadata gives its start */
 } SeriesGUI;
@@ -629,8 +634,20 @@ show_timing_use(SeriesGUI *gui)
                                  "are used."), gui->args->timing_reason);
     else
         text = g_strdup(_("Used only if the file lacks them."));
-    gwy_param_table_set_label(table, INFO_TIMING_USE, text);
+    gtk_label_set_text(GTK_LABEL(gui->timing_use), text);
     g_free(text);
+}
+
+static GtkWidget*
+create_timing_use_label(gpointer user_data)
+{
+    SeriesGUI *gui = user_data;
+
+    gui->timing_use = gtk_label_new(NULL);
+    gtk_misc_set_alignment(GTK_MISC(gui->timing_use), 0.0, 0.5);
+    gtk_label_set_line_wrap(GTK_LABEL(gui->timing_use), TRUE);
+    gtk_widget_set_size_request(gui->timing_use, TIMING_USE_WIDTH, -1);
+    return gui->timing_use;
 }
 
 /* What was measured no longer holds: the series is read and measured
@@ -898,7 +915,7 @@ run_gui(SeriesArgs *args)
     gwy_param_table_set_unitstr(table, PARAM_FRAME_INTERVAL, "s");
     gwy_param_table_append_combo(table, PARAM_DIRECTION);
     /* The fields look as if they mattered: say when they do. */
-    gwy_param_table_append_message(table, INFO_TIMING_USE, NULL);
+    gwy_param_table_append_foreign(table, INFO_TIMING_USE, create_timing_use_label, &gui, NULL);
     gwy_param_table_append_header(table, -1, _("Output"));
     gwy_param_table_append_combo(table, PARAM_INTERPOLATION);
     gwy_param_table_append_checkbox(table, PARAM_CROP);

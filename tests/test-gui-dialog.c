@@ -1222,6 +1222,9 @@ START_TEST(test_series_frame_left_out)
                   "the five frames' result is still shown:\n%s", probe.after->str);
     ck_assert(probe.ok_sensitive);
     ck_assert_msg(probe.saved, "no screenshot");
+    /* On a 1280 px screen with room to spare: the unwrapped line saying
+     * why the timing settings are used made it 1378 px, OK off screen. */
+    ck_assert_msg(probe.width <= 1024, "the dialog is %d px wide", probe.width);
     error = localscan_run_error_take(data);
     ck_assert_msg(!error, "the run failed: %s", error ? error->message : "");
     ck_assert_int_eq(gui_count_channels(data), 5 + G_N_ELEMENTS(ids));
