@@ -51,7 +51,7 @@ if [ $# -eq 0 ]; then
         test-simscan-measured-sample test-continuous-compensate \
         test-drift-trajectory test-drift-fit-creep test-continuous-blocks \
         test-height-keeping test-frame-series test-benchmark.sh \
-        test-continuous-simscan test-stripe-registration \
+        test-continuous-simscan test-stripe-registration test-registration-binning \
         test-paper-compensate test-module-immediate test-simscan-cli.sh \
         test-series-command.sh test-series-module test-series-correction \
         test-hostile-input test-module-dialog test-gui-dialog.sh \
