@@ -64,6 +64,9 @@ typedef struct {
                               stripe_registration_measure_around_frames) */
     gboolean centred;      /* the guess is the frame's shift to within the
                               radius: the frame as a whole is not searched */
+    gboolean doubtful;     /* the guess is chained through a pair that
+                              registered fewer than half its blocks: the
+                              frame is searched blind too, the better kept */
 } BlockSearch;
 
 static gdouble
@@ -140,15 +143,22 @@ register_prepared(const StripeRegistrationFrame *image,
                   gdouble *score, gdouble *global)
 {
     StripeShift whole, other_whole, *shifts = g_new0(StripeShift, n), *other = g_new0(StripeShift, n);
-    BlockSearch blind = { 0.0, search->uncertainty, FALSE };
+    BlockSearch blind = { 0.0, search->uncertainty, FALSE, FALSE };
     gint best = 0, count;
 
     if (image && reference) {
         best = register_in_band(image, reference, xres, yres, n, options, guess, search, 0.0,
                                 &whole, shifts);
-        if (2*best < n
-            && (count = register_in_band(image, reference, xres, yres, n, options, guess, search,
-                                         MAX(WIDER_BAND_FRACTION*MIN(xres, yres), WIDER_BAND_MIN_PX),
+        /* A guess chained through a pair that matched by chance (a frame
+         * of white noise between two good ones: a few of its blocks pass)
+         * centres the search wrong: a doubtful guess, or a poor result, is
+         * tried again with the frame searched as a consecutive pair's.
+         * Doubtful: on 8 blocks of 96 x 64 px frames, 4 matched chance
+         * content around such a guess, frames correlating at 0.40 there;
+         * 6 of 496 seeds 3-44 px off.  Before the wider band, whose
+         * smoother frames match chance content more often. */
+        if (guess && (2*best < n || search->doubtful)
+            && (count = register_in_band(image, reference, xres, yres, n, options, NULL, &blind, 0.0,
                                          &other_whole, other)) > best) {
             StripeShift *kept = shifts;
 
@@ -156,14 +166,13 @@ register_prepared(const StripeRegistrationFrame *image,
             shifts = other;
             other = kept;
             best = count;
+            guess = NULL;
+            search = &blind;
         }
-        /* A guess chained through a pair that matched by chance (a frame
-         * of white noise between two good ones: a few of its blocks pass)
-         * centres the search wrong: a poor result is tried again with the
-         * frame searched as a consecutive pair's. */
-        if (guess && 2*best < n
-            && register_in_band(image, reference, xres, yres, n, options, NULL, &blind, 0.0,
-                                &other_whole, other) > best) {
+        if (2*best < n
+            && (count = register_in_band(image, reference, xres, yres, n, options, guess, search,
+                                         MAX(WIDER_BAND_FRACTION*MIN(xres, yres), WIDER_BAND_MIN_PX),
+                                         &other_whole, other)) > best) {
             StripeShift *kept = shifts;
 
             whole = other_whole;
@@ -200,7 +209,7 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
     DisplacementOptions defaults;
     /* A single pair is the judge's (benchmark-score.c) or a study's: a
      * block as uncertain as its window is rejected. */
-    BlockSearch search = { 0.0, TRUE, FALSE };
+    BlockSearch search = { 0.0, TRUE, FALSE, FALSE };
     StripeRegistrationFrame *a, *b;
 
     if (!options) {
@@ -258,6 +267,9 @@ typedef struct {
     gboolean *prepared;                /* held in frames */
     gdouble *step;                     /* 3 per frame: the consecutive pair's
                                           overall shift and correlation */
+    gboolean *weak;                    /* per frame: its consecutive pair
+                                          registered fewer than half its
+                                          blocks */
     gdouble *spread;                   /* per frame: how far (px) the
                                           consecutive pair's blocks lay from
                                           its overall shift; < 0: unknown */
@@ -337,9 +349,11 @@ block_spread(const gdouble *dx, const gdouble *dy, const gdouble *score, gint n,
 
 /* Registers frame ka against frame kb in n blocks (at most the options'
  * n_blocks) into pair slot `pair` of meas (the slots beyond n stay empty),
- * blocks searched within radius px (<= 0: block_range of the frame);
- * global gets the frame's overall shift and spread (may be NULL) how far
- * the blocks lay from it.  A frame no longer held is prepared for this
+ * blocks searched within radius px (<= 0: block_range of the frame),
+ * the frame blind too where the guess is doubtful; global gets the
+ * frame's overall shift and spread (may be NULL) how far the blocks lay
+ * from it; returns how many blocks count.  A frame no longer held is
+ * prepared for this
  * pair alone.  The fit weighs blocks by their correlation, so their
  * sigma, which costs more than their match, is not computed (a 1000-frame
  * series 22 % faster, its trajectory the same to the digit).  Nor are
@@ -349,9 +363,9 @@ block_spread(const gdouble *dx, const gdouble *dy, const gdouble *score, gint n,
  * where without it 0.23 px; the benchmark's 64 x 64 movie (14-movie) is
  * the one case that reads better with it (0.70 against 0.88 px, full
  * set). */
-static void
+static gint
 measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
-             const gdouble *guess, gdouble radius, gdouble *global, gdouble *spread,
+             const gdouble *guess, gdouble radius, gboolean doubtful, gdouble *global, gdouble *spread,
              gint pair)
 {
     const FrameSeries *series = reg->series;
@@ -366,8 +380,8 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
      * matters: on the three raw FastScan frames, whose consecutive pairs
      * register few blocks, the 06->16 pair centred on it left 8.9 px RMS
      * between the measurements against 7.4 px with the frame searched. */
-    BlockSearch search = { radius, FALSE, radius > 0.0 && reg->reach > 0 };
-    gint s;
+    BlockSearch search = { radius, FALSE, radius > 0.0 && reg->reach > 0, doubtful };
+    gint s, accepted = 0;
 
     if (!reg->prepared[ka])
         own_a = prepare_series_frame(reg, ka);
@@ -401,10 +415,12 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
         m->frame_a = ka;
         m->frame_b = kb;
         m->span = (r1 - r0)*fa->timing.line_time;
+        accepted += (m->weight > 0.0);
     }
     g_free(dx);
     g_free(dy);
     g_free(score);
+    return accepted;
 }
 
 /* Consecutive pairs come first in meas, frame k's as pair k - 1. */
@@ -412,9 +428,9 @@ static void
 consecutive_task(gpointer data, gint k)
 {
     SeriesRegistration *reg = data;
+    gint n = reg->options->n_blocks;
 
-    measure_pair(reg, k, k-1, reg->options->n_blocks, NULL, 0.0, reg->step + 3*k, reg->spread + k,
-                 k-1);
+    reg->weak[k] = 2*measure_pair(reg, k, k-1, n, NULL, 0.0, FALSE, reg->step + 3*k, reg->spread + k, k-1) < n;
 }
 
 static gint
@@ -485,6 +501,20 @@ displacement_tall_blocks(gint n_blocks)
 /* Frame k against its older frames, the nearest first: the overall shifts
  * of the consecutive pairs between, chained, tell where to look in an
  * older frame, whose shift may exceed any blind search range. */
+/* Whether a consecutive pair from frame j + 1 to frame k registered fewer
+ * than half its blocks: the guess chained through it is doubtful. */
+static gboolean
+weak_chain(const SeriesRegistration *reg, gint k, gint j)
+{
+    gint i;
+
+    for (i = j + 1; i <= k; i++) {
+        if (reg->weak[i])
+            return TRUE;
+    }
+    return FALSE;
+}
+
 static void
 older_task(gpointer data, gint k)
 {
@@ -508,7 +538,7 @@ older_task(gpointer data, gint k)
          * as a consecutive pair's. */
         radius = older_pair_radius(reg, k, j);
         measure_pair(reg, k, j, older_pair_blocks(reg, k, j), (radius > 0.0) ? guess : NULL, radius,
-                     global, NULL, nf - 1 + reg->far_first[k] + (k-2 - j));
+                     weak_chain(reg, k, j), global, NULL, nf - 1 + reg->far_first[k] + (k-2 - j));
     }
 }
 
@@ -554,6 +584,7 @@ displacement_measure_series_progress(const FrameSeries *series,
     reg.prepared = g_new0(gboolean, MAX(nf, 1));
     reg.step = g_new0(gdouble, 3*MAX(nf, 1));
     reg.spread = g_new0(gdouble, MAX(nf, 1));
+    reg.weak = g_new0(gboolean, MAX(nf, 1));
     reg.far_first = g_new0(gint, MAX(nf, 1) + 1);
     /* Every consecutive pair first, then the older pairs frame by frame
      * (the fit of a long series takes a spread subset by order). */
@@ -578,6 +609,7 @@ displacement_measure_series_progress(const FrameSeries *series,
     g_free(reg.prepared);
     g_free(reg.step);
     g_free(reg.spread);
+    g_free(reg.weak);
     g_free(reg.far_first);
     if (!go_on) {
         g_free(reg.meas);
