@@ -186,12 +186,14 @@ END_TEST
 
 /* A link to a file not made yet and that file are one output: the second
  * is refused (both were written there, and the first lost).  A loop of
- * links named as an output replaces the link named, not one met 40 steps
- * round the loop. */
+ * links, or a chain longer than the system follows, named as an output is
+ * refused, every link kept (the link named was replaced by a file, and at
+ * the end of a chain of 45 the file was left as it was). */
 START_TEST(test_links_named_twice_and_loops)
 {
     OutputFiles *files = output_files_new();
     GError *error = NULL;
+    gint i;
 
     make_dir();
     make_link("l.csv", "t.csv");
@@ -205,12 +207,30 @@ START_TEST(test_links_named_twice_and_loops)
     make_link("a", "b");
     make_link("b", "c");
     make_link("c", "a");
-    ck_assert(add(files, "a", "through a loop", NULL));
-    ck_assert(output_files_commit(files, NULL));
+    ck_assert(!add(files, "a", "through a loop", &error));
+    ck_assert_msg(strstr(error->message, "its symbolic links loop or are nested too deep"), "%s",
+                  error->message);
+    g_clear_error(&error);
     output_files_free(files);
-    assert_contents("a", "through a loop");
+    assert_link("a", "b");
     assert_link("b", "c");
     assert_link("c", "a");
+
+    files = output_files_new();
+    for (i = 0; i < 45; i++) {
+        gchar *name = g_strdup_printf("chain%02d", i), *next = g_strdup_printf("chain%02d", i + 1);
+
+        make_link(name, next);
+        g_free(name);
+        g_free(next);
+    }
+    put("chain45", "end");
+    ck_assert(!add(files, "chain00", "through 45 links", &error));
+    ck_assert_msg(strstr(error->message, "nested too deep"), "%s", error->message);
+    g_clear_error(&error);
+    output_files_free(files);
+    assert_link("chain00", "chain01");
+    assert_contents("chain45", "end");
     remove_dir();
 }
 END_TEST

@@ -41,9 +41,8 @@ set_errno_error(GError **error, gint saved_errno, const gchar *filename)
  * link itself, the new file replaced the link and left its target as it
  * was (as root, --json /dev/stdout replaced /dev/stdout).  A link
  * relative to its folder is read there.  A chain too long or a loop is
- * left as named: the system would not open it either, and the rename
- * replaces the link the user named (followed 40 steps round a loop, it
- * replaced another). */
+ * left as named here (followed 40 steps round a loop, it named another);
+ * output_files_check_kind() refuses such an output. */
 static gchar*
 link_target(const gchar *filename)
 {
@@ -148,7 +147,20 @@ output_files_check_kind(const gchar *filename, GError **error)
 {
     GStatBuf st;
 
-    if (!filename || g_stat(filename, &st) != 0 || S_ISREG(st.st_mode))
+    if (!filename)
+        return TRUE;
+    if (g_stat(filename, &st) != 0) {
+        /* A loop of links, or a chain longer than the system follows:
+         * renamed over, the link named was replaced by a file, and the
+         * file at the end of a long chain was left as it was. */
+        if (errno == ELOOP) {
+            g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_LOOP,
+                        _("cannot write %s: its symbolic links loop or are nested too deep"), filename);
+            return FALSE;
+        }
+        return TRUE;
+    }
+    if (S_ISREG(st.st_mode))
         return TRUE;
     g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_ISDIR,
                 S_ISDIR(st.st_mode)
