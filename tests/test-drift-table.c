@@ -263,6 +263,25 @@ END_TEST
 
 /* Refusals, each with its exact message. */
 
+/* A NUL byte ends the text a C string holds: the rows after it were
+ * dropped unread (four stripes read as one, exit status 0).  Named by the
+ * line it lies on, wherever it lies. */
+START_TEST(test_refuse_nul_byte)
+{
+    static const gchar text[] = "stripe,dx,dy\n0,1,0\0\n1,0,0\n2,5,5\n3,nan,0\n";
+    static const gchar first[] = "\0stripe,dx,dy\n0,1,0\n";
+    GError *error = NULL;
+
+    ck_assert(!drift_table_parse(text, sizeof(text) - 1, "t.csv", &error));
+    ck_assert_str_eq(error->message, "t.csv:2: a NUL byte: this is not a text table");
+    ck_assert(g_error_matches(error, DRIFT_TABLE_ERROR, DRIFT_TABLE_ERROR_SYNTAX));
+    g_clear_error(&error);
+    ck_assert(!drift_table_parse(first, sizeof(first) - 1, "t.csv", &error));
+    ck_assert_str_eq(error->message, "t.csv:1: a NUL byte: this is not a text table");
+    g_clear_error(&error);
+}
+END_TEST
+
 START_TEST(test_refuse_syntax)
 {
     assert_parse_error("0,1,2\n", DRIFT_TABLE_ERROR_SYNTAX,
@@ -703,6 +722,7 @@ main(void)
     tcase_add_test(tc, test_tolerant_input);
     tcase_add_test(tc, test_unit_names);
     tcase_add_test(tc, test_refuse_syntax);
+    tcase_add_test(tc, test_refuse_nul_byte);
     tcase_add_test(tc, test_refuse_values);
     tcase_add_test(tc, test_refuse_stripes);
     tcase_add_test(tc, test_refuse_units);

@@ -625,6 +625,19 @@ drift_table_parse(const gchar *text, gssize length, const gchar *source_name,
     g_return_val_if_fail(text || !length, NULL);
     g_return_val_if_fail(!error || !*error, NULL);
 
+    /* A NUL byte ends a C string: the rows after it were dropped unread
+     * (a table of four stripes read as one, with exit status 0). */
+    if (text && length > 0 && memchr(text, '\0', length)) {
+        const gchar *nul = memchr(text, '\0', length), *p;
+        gint line = 1;
+
+        for (p = text; p < nul; p++)
+            line += (*p == '\n');
+        set_line_error(error, DRIFT_TABLE_ERROR_SYNTAX,
+                       source_name ? source_name : _(DEFAULT_SOURCE_NAME), line,
+                       _("a NUL byte: this is not a text table"));
+        return NULL;
+    }
     table = drift_table_new(0, DRIFT_UNIT_PX);
     table->source_name = g_strdup(source_name ? source_name
                                   : _(DEFAULT_SOURCE_NAME));
