@@ -400,6 +400,27 @@ write_outputs(const gchar *json, const gchar *svg, const gchar *summary,
     return ok;
 }
 
+/* The scores are never written into the folders read: --json
+ * truth/benchmark.json replaced the manifest, the next score failed. */
+static gboolean
+check_outputs_outside(const gchar *json, const gchar *svg, const gchar *truth, gchar **results,
+                      GError **error)
+{
+    const gchar *outputs[2] = { json, svg }, *roles[2] = { "--json", "--svg" };
+    gint i, r;
+
+    for (i = 0; i < 2; i++) {
+        if (!output_files_check_outside(roles[i], outputs[i], truth, _("the truth folder"), error))
+            return FALSE;
+        for (r = 0; results && results[r]; r++) {
+            if (!output_files_check_outside(roles[i], outputs[i], results[r], _("the result folder"),
+                                            error))
+                return FALSE;
+        }
+    }
+    return TRUE;
+}
+
 int
 simscan_score_main(int argc, char **argv)
 {
@@ -434,6 +455,8 @@ simscan_score_main(int argc, char **argv)
                     _("give --truth DIR and at least one RESULT folder"));
         goto end;
     }
+    if (!check_outputs_outside(json, svg, truth, results, &error))
+        goto end;
     if (!(cases = read_manifest(truth, &summary, &error)))
         goto end;
     if (!(methods = method_names(results, &error)))

@@ -116,6 +116,25 @@ expect_failure 09-raw-channel "beyond"
 expect_failure 10-missing-pixels "result.json frame 0"
 expect_failure 11-disturbed-frame "no flagged true or false"
 
+# The scores are never written into a folder score reads: --json over the
+# manifest replaced it (the next score failed), --svg over a case's truth,
+# also through a link; refused with one line, the manifest unchanged.
+sum_before=$(cksum <"$tmp/a/benchmark.json")
+ln -s "$tmp/a/benchmark.json" "$tmp/scores-link.json"
+for out in "--json $tmp/a/benchmark.json" "--svg $tmp/a/01-constant/truth.csv" \
+           "--json $tmp/r/truth/x.json" "--json $tmp/scores-link.json"; do
+    check
+    # shellcheck disable=SC2086
+    "$simscan" score --truth "$tmp/a" $out "$tmp/r/truth" >"$tmp/out" 2>"$tmp/err" \
+        && fail "score $out was not refused"
+    [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q "folder .*: write it elsewhere, that folder is read" "$tmp/err" \
+        || fail "score $out: $(cat "$tmp/err")"
+done
+check
+[ "$(cksum <"$tmp/a/benchmark.json")" = "$sum_before" ] || fail "the manifest changed"
+[ ! -e "$tmp/r/truth/x.json" ] || fail "a score was written into a result folder"
+rm -f "$tmp/scores-link.json"
+
 # The series correction's own result on one case: its corrected frames are
 # scored against the drift-free truth, well under a pixel.  $1 holds the
 # cases, $2 gets the result and $3 the scores.

@@ -127,6 +127,31 @@ output_files_same(const gchar *a, const gchar *b)
 }
 
 gboolean
+output_files_check_outside(const gchar *role, const gchar *filename, const gchar *folder,
+                           const gchar *folder_role, GError **error)
+{
+    gchar *target, *written, *real_folder, *prefix;
+    gboolean inside;
+
+    if (!filename || !folder || !(real_folder = realpath(folder, NULL)))
+        return TRUE;
+    target = link_target(filename);
+    written = canonical_path(target);
+    prefix = g_str_has_suffix(real_folder, G_DIR_SEPARATOR_S) ? g_strdup(real_folder)
+             : g_strconcat(real_folder, G_DIR_SEPARATOR_S, NULL);
+    inside = g_str_has_prefix(written, prefix);
+    if (inside)
+        g_set_error(error, G_FILE_ERROR, G_FILE_ERROR_EXIST,
+                    _("%s %s lies in %s %s: write it elsewhere, that folder is read"),
+                    role, filename, folder_role, folder);
+    free(real_folder);
+    g_free(prefix);
+    g_free(written);
+    g_free(target);
+    return !inside;
+}
+
+gboolean
 output_files_check_names_given(const gchar *const *what, const gchar *const *names, guint n,
                                GError **error)
 {

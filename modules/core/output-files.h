@@ -28,6 +28,17 @@ typedef struct {
 gboolean      output_files_same         (const gchar *a,
                                          const gchar *b);
 
+/* Refuses (one line naming both) an output (role, as messages name it)
+ * that would be written inside folder, a folder the command reads
+ * (folder_role names it: "the truth folder"): a benchmark's scores written
+ * over its manifest or a case's truth.  TRUE when either is NULL or the
+ * folder does not exist. */
+gboolean      output_files_check_outside(const gchar *role,
+                                         const gchar *filename,
+                                         const gchar *folder,
+                                         const gchar *folder_role,
+                                         GError **error);
+
 /* Refuses, naming what[i], a file name names[i] given empty ("-o ''"): a
  * slip of the command line, not a file that cannot be opened.  NULL
  * names were not given. */
