@@ -523,11 +523,7 @@ format_registration_status(const MeasuredDrift *measured)
 static GwyDataField*
 channel_mask(GwyContainer *data, gint id)
 {
-    GwyDataField *mask = NULL;
-
-    if (data && id >= 0)
-        gwy_container_gis_object(data, gwy_app_get_mask_key_for_id(id), (GObject**)&mask);
-    return mask;
+    return (data && id >= 0) ? localscan_channel_mask(data, id) : NULL;
 }
 
 /* Whether the last registration had this reference, stripe count and
@@ -823,7 +819,8 @@ compensate_own_mask(ModuleArgs *args, gint id, const LocalscanOptions *options,
     LocalscanOptions mask_options = *options;
     gboolean ok;
 
-    if (!gwy_container_gis_object(args->data, gwy_app_get_mask_key_for_id(id), &own))
+    /* Anything else stored as its mask (another size, no field) is none. */
+    if (!(own = localscan_channel_mask(args->data, id)))
         return TRUE;
     mask_options.interpolation = GWY_INTERPOLATION_ROUND;
     mask_options.fill = LOCALSCAN_FILL_ZERO;
@@ -854,6 +851,8 @@ compensate_sibling(ModuleArgs *args, gint id, const LocalscanOptions *options, G
     sibling.mask = gwy_data_field_new_alike(field, FALSE);
     if (!localscan_compensate_field(field, args->table, options, sibling.result, sibling.mask,
                                     &applied, error)) {
+        /* Said of the image, the refusal blamed a channel that is fine. */
+        g_prefix_error(error, _("the other channel %d of the scan: "), id);
         g_object_unref(sibling.result);
         g_object_unref(sibling.mask);
         return FALSE;

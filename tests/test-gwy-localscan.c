@@ -2131,6 +2131,73 @@ static const ReferenceErrorCase reference_error_cases[] = {
       "gwy-localscan: --masking takes exclude, include or ignore, not \"maybe\"" },
 };
 
+/* A single image whose channels carry masks that are none (a field of
+ * 7 x 9 px on 40 x 30, a container): compensated with every channel of
+ * the scan, they are not moved as masks (a container gave criticals and a
+ * refusal blaming the image's pixel size), and OUT leaves them out with a
+ * warning each.  A channel of the scan too large for arithmetic is
+ * refused by its id, not as the image. */
+START_TEST(test_single_image_misfit_masks)
+{
+    GRand *rng = g_rand_new_with_seed(seed + 700);
+    GwyDataField *height = random_field(rng, 40, 30, 2e-9, 3e-9), *phase = random_field(rng, 40, 30, 2e-9, 3e-9);
+    GwyDataField *small = gwy_data_field_new(7, 9, 7.0, 9.0, TRUE);
+    GwyContainer *data = gwy_container_new(), *odd = gwy_container_new(), *out;
+    DriftTable *table = random_table(rng, 5, 4, 0);
+    gchar *text = drift_table_to_string(table), *input = in_path("masks.gwy"), *output = out_path("masks.gwy");
+    ToolRun run;
+    gint *ids, i, results = 0;
+
+    add_channel(data, 0, height, "Height", text);
+    add_channel(data, 1, phase, "Phase", NULL);
+    gwy_container_set_object(data, gwy_app_get_mask_key_for_id(0), odd);
+    gwy_container_set_object(data, gwy_app_get_mask_key_for_id(1), small);
+    save_gwy(data, input);
+    run_tool(&run, (const gchar *const[]){ "--all-channels", "-o", output, input, NULL });
+    ck_assert_msg(run.status == 0, "exit %d: %s", run.status, run.err);
+    for (i = 0; i < 2; i++) {
+        gchar *line = g_strdup_printf("gwy-localscan: warning: the mask of channel %d does not fit the channel "
+                                      "and is left out of %s\n", i, output);
+
+        ck_assert_msg(strstr(run.err, line), "no warning of channel %d's mask: %s", i, run.err);
+        g_free(line);
+    }
+    out = load_gwy(output);
+    ids = gwy_app_data_browser_get_data_ids(out);
+    for (i = 0; ids[i] >= 0; i++) {
+        GObject *mask = NULL;
+
+        results += (g_str_has_suffix(localscan_channel_title(out, ids[i]), TITLE_SUFFIX));
+        if (gwy_container_gis_object(out, gwy_app_get_mask_key_for_id(ids[i]), &mask))
+            ck_assert_msg(GWY_IS_DATA_FIELD(mask) && gwy_data_field_get_xres(GWY_DATA_FIELD(mask)) == 40,
+                          "channel %d of OUT has a mask that is none", ids[i]);
+    }
+    ck_assert_int_eq(results, 2);
+    g_free(ids);
+    g_object_unref(out);
+    tool_run_clear(&run);
+
+    /* The other channel near the largest double. */
+    gwy_data_field_set_val(phase, 3, 4, 1.5e308);
+    save_gwy(data, input);
+    run_tool(&run, (const gchar *const[]){ "--all-channels", "-o", output, input, NULL });
+    ck_assert_int_eq(run.status, 1);
+    ck_assert_msg(g_str_has_prefix(run.err, "gwy-localscan: the other channel 1 of the scan: ")
+                  && strstr(run.err, "holds the value 1.5e+308, beyond 1e+150 in magnitude"), "%s", run.err);
+    tool_run_clear(&run);
+    g_free(text);
+    g_free(input);
+    g_free(output);
+    drift_table_free(table);
+    g_object_unref(small);
+    g_object_unref(odd);
+    g_object_unref(height);
+    g_object_unref(phase);
+    g_object_unref(data);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* A series whose middle frame carries a mask of the wrong size (7 x 9 px
  * on 160 x 160): the mask is left out of OUT with a warning, not copied
  * into the file Gwyddion is to open (the hostile-input run found it
@@ -2401,6 +2468,7 @@ gwy_localscan_suite(void)
     tcase_add_test(tc, test_reference_continuous);
     tcase_add_loop_test(tc, test_reference_errors, 0, G_N_ELEMENTS(reference_error_cases));
     tcase_add_test(tc, test_series_drops_misfit_mask);
+    tcase_add_test(tc, test_single_image_misfit_masks);
     suite_add_tcase(suite, tc);
 
     tc = tcase_create("command line and errors");

@@ -191,6 +191,38 @@ START_TEST(test_missing_refused_past_half)
 }
 END_TEST
 
+/* A finite value too large for arithmetic (the mean of values near the
+ * largest double overflowed, and the result held infinite pixels) is
+ * refused by its value, wherever it lies; 1e150 itself is kept. */
+START_TEST(test_values_beyond_range_refused)
+{
+    GRand *rng = g_rand_new_with_seed(seed ^ 5);
+    enum { N = 4096 };
+    gdouble *a = g_new(gdouble, N), v;
+    GError *error = NULL;
+    gchar *expected;
+    gint i, at;
+
+    for (i = 0; i < N; i++)
+        a[i] = g_rand_double_range(rng, -1e-9, 1e-9);
+    a[g_rand_int_range(rng, 0, N)] = MISSING_DATA_VALUE_MAX;
+    a[g_rand_int_range(rng, 0, N)] = NAN;
+    ck_assert(missing_data_check(a, 64, 64, "a", NULL));
+    at = g_rand_int_range(rng, 0, N);
+    v = (g_rand_boolean(rng) ? 1.0 : -1.0)*pow(10.0, g_rand_double_range(rng, 150.01, 308.25));
+    a[at] = v;
+    ck_assert(!missing_data_check(a, 64, 64, "the image", &error));
+    ck_assert(g_error_matches(error, MISSING_DATA_ERROR, MISSING_DATA_ERROR_RANGE));
+    expected = g_strdup_printf("the image holds the value %g, beyond 1e+150 in magnitude: no arithmetic on "
+                               "such values stays finite", v);
+    ck_assert_str_eq(error->message, expected);
+    g_clear_error(&error);
+    g_free(expected);
+    g_free(a);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* Whatever the bytes, an excerpt is short, valid and printable. */
 START_TEST(test_excerpts)
 {
@@ -439,6 +471,7 @@ hostile_core_suite(void)
     tcase_add_test(tc, test_paper_missing_pixels);
     tcase_add_test(tc, test_continuous_missing_pixels);
     tcase_add_test(tc, test_missing_refused_past_half);
+    tcase_add_test(tc, test_values_beyond_range_refused);
     tcase_add_test(tc, test_excerpts);
     tcase_add_test(tc, test_screening_truncations);
     tcase_add_test(tc, test_screening_gzip_truncations);

@@ -757,8 +757,8 @@ measure_reference_table(GwyContainer *data, const gchar *filename, gint id,
     image = gwy_container_get_object(data, gwy_app_get_data_key_for_id(id));
     reference = gwy_container_get_object(refdata,
                                          gwy_app_get_data_key_for_id(refid));
-    gwy_container_gis_object(data, gwy_app_get_mask_key_for_id(id), (GObject**)&image_mask);
-    gwy_container_gis_object(refdata, gwy_app_get_mask_key_for_id(refid), (GObject**)&reference_mask);
+    image_mask = localscan_channel_mask(data, id);
+    reference_mask = localscan_channel_mask(refdata, refid);
     if (localscan_reference_check(image, image_name, reference, reference_name,
                                   options.stripes, error)) {
         table = register_stripes(image, image_mask, image_name, reference, reference_mask,
@@ -911,7 +911,15 @@ save_results(GwyContainer *data, const DriftTable *table, GError **error)
     OutputFiles *files = output_files_new();
     gchar *text;
     gboolean ok;
+    gint *dropped, i;
 
+    /* What INPUT stored as a channel's mask but is none goes no further
+     * than it: OUT is a file Gwyddion opens. */
+    dropped = localscan_channels_drop_misfit_masks(data);
+    for (i = 0; dropped[i] >= 0; i++)
+        g_printerr(_("gwy-localscan: warning: the mask of channel %d does not fit the channel and is left "
+                     "out of %s\n"), dropped[i], options.output);
+    g_free(dropped);
     /* The channels copied from INPUT too hold no NaN (docs/missing-data.md). */
     localscan_channels_fill_missing(data);
     ok = headless_run_add_gwy(files, data, options.output, error);

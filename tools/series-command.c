@@ -291,20 +291,11 @@ static void
 drop_misfit_mask(SeriesRun *run, GwyContainer *out, gint id, gint k,
                  gint source_id)
 {
-    GwyDataField *field = localscan_channel_item(out, id, "data");
     gchar key[32];
-    GObject *mask;
     gchar *name;
 
     g_snprintf(key, sizeof(key), "/%d/mask", id);
-    if (!gwy_container_contains_by_name(out, key)
-        || (gwy_container_gis_object_by_name(out, key, &mask)
-            && GWY_IS_DATA_FIELD(mask)
-            && gwy_data_field_check_compatibility(field, GWY_DATA_FIELD(mask),
-                                                  GWY_DATA_COMPATIBILITY_RES) == 0
-            && !missing_data_count(gwy_data_field_get_data_const(GWY_DATA_FIELD(mask)),
-                                   (gsize)gwy_data_field_get_xres(field)
-                                   *gwy_data_field_get_yres(field))))
+    if (!gwy_container_contains_by_name(out, key) || localscan_channel_mask(out, id))
         return;
     gwy_container_remove_by_name(out, key);
     name = g_path_get_basename(run->files[k]);

@@ -601,6 +601,37 @@ localscan_run_error_take(GwyContainer *data)
     return g_object_steal_data(G_OBJECT(data), RUN_ERROR_DATA);
 }
 
+GwyDataField*
+localscan_channel_mask(GwyContainer *data, gint id)
+{
+    GwyDataField *field = localscan_channel_item(data, id, "data");
+    GObject *mask = localscan_channel_item(data, id, "mask");
+
+    if (!GWY_IS_DATA_FIELD(field) || !GWY_IS_DATA_FIELD(mask)
+        || gwy_data_field_check_compatibility(field, GWY_DATA_FIELD(mask), GWY_DATA_COMPATIBILITY_RES)
+        || missing_data_count(gwy_data_field_get_data_const(GWY_DATA_FIELD(mask)),
+                              (gsize)gwy_data_field_get_xres(field)*gwy_data_field_get_yres(field)))
+        return NULL;
+    return GWY_DATA_FIELD(mask);
+}
+
+gint*
+localscan_channels_drop_misfit_masks(GwyContainer *data)
+{
+    gint *ids = localscan_channel_ids(data), i, n = 0;
+    gchar key[32];
+
+    for (i = 0; ids[i] != -1; i++) {
+        g_snprintf(key, sizeof(key), "/%d/mask", ids[i]);
+        if (gwy_container_contains_by_name(data, key) && !localscan_channel_mask(data, ids[i])) {
+            gwy_container_remove_by_name(data, key);
+            ids[n++] = ids[i];
+        }
+    }
+    ids[n] = -1;
+    return ids;
+}
+
 static gsize
 fill_missing_of_channel(GwyContainer *data, gint id)
 {

@@ -246,6 +246,17 @@ const gchar* localscan_channel_meta_string   (GwyContainer *data,
 /* The channel's title ("/ID/data/title"), or NULL. */
 const gchar* localscan_channel_title         (GwyContainer *data,
                                               gint id);
+/* The channel's mask when it is one: a data field of the channel's pixels
+ * holding no NaN; NULL when there is none or when something else is
+ * stored there (a field of another size, a container: a damaged or
+ * hand-made file), which no step may treat as a mask. */
+GwyDataField* localscan_channel_mask         (GwyContainer *data,
+                                              gint id);
+/* Removes from data every mask that is not one of its channel (see
+ * localscan_channel_mask), for a file the tools write and Gwyddion
+ * opens; returns the ids of the channels that lost one, -1 terminated
+ * (g_free() it). */
+gint*        localscan_channels_drop_misfit_masks(GwyContainer *data);
 /* Missing pixels (NaN, infinite; docs/missing-data.md) of every image
  * channel of data are replaced by the mean of the channel's present pixels
  * and marked in its mask (made, or added to), as Gwyddion's importers do:

@@ -26,10 +26,29 @@ missing_data_count(const gdouble *a, gsize n)
 }
 
 gboolean
+missing_data_check_range(const gdouble *a, gsize n, const gchar *what, GError **error)
+{
+    gsize i;
+
+    for (i = 0; i < n; i++) {
+        if (isfinite(a[i]) && fabs(a[i]) > MISSING_DATA_VALUE_MAX) {
+            g_set_error(error, MISSING_DATA_ERROR, MISSING_DATA_ERROR_RANGE,
+                        _("%s holds the value %g, beyond %g in magnitude: no arithmetic on such values "
+                          "stays finite"),
+                        what, a[i], MISSING_DATA_VALUE_MAX);
+            return FALSE;
+        }
+    }
+    return TRUE;
+}
+
+gboolean
 missing_data_check(const gdouble *a, gint xres, gint yres, const gchar *what, GError **error)
 {
     gsize n = (gsize)xres*yres, missing = missing_data_count(a, n);
 
+    if (!missing_data_check_range(a, n, what, error))
+        return FALSE;
     if (missing <= MISSING_DATA_MAX_FRACTION*n)
         return TRUE;
     g_set_error(error, MISSING_DATA_ERROR, MISSING_DATA_ERROR_TOO_MANY,

@@ -17,10 +17,17 @@ G_BEGIN_DECLS
  * and any drift measured from the rest would describe too little of it. */
 #define MISSING_DATA_MAX_FRACTION 0.5
 
+/* Finite values beyond this magnitude are refused: the mean, the
+ * interpolation kernels and the registration's squares of such values
+ * overflow (values near the largest double gave infinite result pixels).
+ * No quantity an instrument records comes near it in SI units. */
+#define MISSING_DATA_VALUE_MAX 1e150
+
 #define MISSING_DATA_ERROR missing_data_error_quark()
 
 typedef enum {
     MISSING_DATA_ERROR_TOO_MANY,   /* more than MISSING_DATA_MAX_FRACTION */
+    MISSING_DATA_ERROR_RANGE,      /* a value beyond MISSING_DATA_VALUE_MAX */
 } MissingDataError;
 
 GQuark   missing_data_error_quark  (void);
@@ -30,10 +37,18 @@ gsize    missing_data_count        (const gdouble *a,
                                     gsize n);
 
 /* Refuses (what names the image in the message) an image of xres x yres
- * with more than MISSING_DATA_MAX_FRACTION of its pixels missing. */
+ * with more than MISSING_DATA_MAX_FRACTION of its pixels missing, or with
+ * a value beyond MISSING_DATA_VALUE_MAX (missing_data_check_range). */
 gboolean missing_data_check        (const gdouble *a,
                                     gint xres,
                                     gint yres,
+                                    const gchar *what,
+                                    GError **error);
+
+/* Refuses (what names the data) a finite value among a[0..n-1] beyond
+ * MISSING_DATA_VALUE_MAX in magnitude. */
+gboolean missing_data_check_range  (const gdouble *a,
+                                    gsize n,
                                     const gchar *what,
                                     GError **error);
 

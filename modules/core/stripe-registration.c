@@ -17,6 +17,7 @@
 #include "registration-binning.h"
 #include "localscan-intl.h"
 #include "median.h"
+#include "missing-data.h"
 
 /*
  * How it works (docs/registration.md tells it with figures).
@@ -1376,6 +1377,11 @@ stripe_registration_measure_fields(GwyDataField *image, GwyDataField *reference,
         || !check_mask_size(reference, opts.reference_mask, TRUE, error))
         return FALSE;
     opts.pixel_aspect = gwy_data_field_get_dy(image)/gwy_data_field_get_dx(image);
+    if (!missing_data_check_range(gwy_data_field_get_data_const(image), (gsize)xres*yres, _("the image"),
+                                  error)
+        || !missing_data_check_range(gwy_data_field_get_data_const(reference), (gsize)xres*yres,
+                                     _("the reference"), error))
+        return FALSE;
     image_data = data_without_masked(image, opts.image_mask, opts.masking);
     reference_data = data_without_masked(reference, opts.reference_mask, opts.masking);
     if (!check_mask_leaves_data(image_data, (gsize)xres*yres, FALSE, opts.masking, error)
