@@ -12,6 +12,7 @@
 #include "fit-command.h"
 #include "benchmark-command.h"
 #include "simscan-i18n.h"
+#include "output-files.h"
 #include "library-log.h"
 
 /* --verbose, anywhere before "--", shows what libraries logged
@@ -48,14 +49,14 @@ main(int argc, char **argv)
 
     /* A subcommand is the first argument; without one, simulate. */
     if (argc > 1 && strcmp(argv[1], "sweep") == 0)
-        return simscan_sweep_main(argc - 1, argv + 1);
+        return output_files_finish_stdout("simscan sweep", simscan_sweep_main(argc - 1, argv + 1));
     if (argc > 1 && strcmp(argv[1], "compare") == 0)
-        return simscan_compare_main(argc - 1, argv + 1);
+        return output_files_finish_stdout("simscan compare", simscan_compare_main(argc - 1, argv + 1));
     if (argc > 1 && strcmp(argv[1], "fit") == 0)
-        return simscan_fit_main(argc - 1, argv + 1);
+        return output_files_finish_stdout("simscan fit", simscan_fit_main(argc - 1, argv + 1));
     if (argc > 1 && strcmp(argv[1], "benchmark") == 0)
-        return simscan_benchmark_main(argc - 1, argv + 1);
+        return output_files_finish_stdout("simscan benchmark", simscan_benchmark_main(argc - 1, argv + 1));
     if (argc > 1 && strcmp(argv[1], "score") == 0)
-        return simscan_score_main(argc - 1, argv + 1);
-    return simscan_generate_main(argc, argv);
+        return output_files_finish_stdout("simscan score", simscan_score_main(argc - 1, argv + 1));
+    return output_files_finish_stdout("simscan", simscan_generate_main(argc, argv));
 }

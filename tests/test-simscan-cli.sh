@@ -160,6 +160,15 @@ check
 strict_json "$tmp/fit.json" || fail "fit JSON does not parse: $(cat "$tmp/fit.json")"
 check
 grep -q '"effect"' "$tmp/fit.json" || fail "fit JSON has no effect"
+# Its report written to a full disk (or a closed pipe) is an error like
+# any other: one line, exit 1 (it exited 0, the report lost).
+if [ -w /dev/full ]; then
+    check
+    "$simscan" fit --line-time 1 --frame-times 0,100,200 $fit_frames >/dev/full 2>"$tmp/err" \
+        && fail "fit to a full standard output exited 0"
+    [ "$(wc -l <"$tmp/err")" -eq 1 ] && grep -q "^simscan fit: cannot write to the standard output: " "$tmp/err" \
+        || fail "fit to a full standard output: $(cat "$tmp/err")"
+fi
 check
 strict_json "$tmp/a.json" || fail "simscan's JSON does not parse"
 

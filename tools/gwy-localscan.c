@@ -1066,7 +1066,7 @@ main(int argc, char *argv[])
     if (argc > 1 && strcmp(argv[1], "series") == 0) {
         status = series_command_main(argc - 1, argv + 1);
         gwy_app_settings_free();
-        return status;
+        return output_files_finish_stdout(PROGRAM_NAME " series", status);
     }
     if (!parse_options(&argc, &argv, &error)) {
         status = EXIT_USAGE;
@@ -1103,5 +1103,5 @@ end:
         g_error_free(error);
     }
     free_options();
-    return status;
+    return output_files_finish_stdout(PROGRAM_NAME, status);
 }

@@ -6,6 +6,7 @@
 #include "config.h"
 #include <string.h>
 #include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 #include <sys/stat.h>
@@ -124,6 +125,20 @@ output_files_same(const gchar *a, const gchar *b)
     g_free(ta);
     g_free(tb);
     return same;
+}
+
+gint
+output_files_finish_stdout(const gchar *program, gint status)
+{
+    gint failed = (fflush(stdout) != 0 || ferror(stdout));
+    gint saved_errno = errno;
+
+    /* `simscan fit ... > /dev/full' lost its JSON with exit status 0. */
+    if (!failed)
+        return status;
+    fprintf(stderr, _("%s: cannot write to the standard output: %s\n"), program,
+            g_strerror(saved_errno ? saved_errno : EIO));
+    return 1;
 }
 
 gboolean

@@ -39,6 +39,13 @@ gboolean      output_files_check_outside(const gchar *role,
                                          const gchar *folder_role,
                                          GError **error);
 
+/* For the end of a program's main(): what it printed to the standard
+ * output reaches it (flushed; a full disk or a closed pipe is an error
+ * like any other), else one line on standard error naming program, and 1.
+ * Returns status otherwise. */
+gint          output_files_finish_stdout(const gchar *program,
+                                         gint status);
+
 /* Refuses, naming what[i], a file name names[i] given empty ("-o ''"): a
  * slip of the command line, not a file that cannot be opened.  NULL
  * names were not given. */
