@@ -1071,7 +1071,7 @@ START_TEST(test_help_lists_options)
         ck_assert_msg(strstr(run.out, options[i]), "--help does not list %s:\n%s", options[i], run.out);
     ck_assert_msg(strstr(run.out, "(the metadata wins; default 1)"),
                   "--help does not say that the file's timing wins over --line-time:\n%s", run.out);
-    ck_assert_msg(strstr(run.out, "(default 16; at most 4096 and the image's rows)"),
+    ck_assert_msg(strstr(run.out, "(default 16; at most 4096 and half the image's rows)"),
                   "--help does not state the module's stripe default and limit:\n%s", run.out);
     ck_assert_msg(strstr(run.out, "timed by the file's metadata"), "--help does not say where continuous mode's "
                   "timing comes from:\n%s", run.out);
@@ -2115,6 +2115,9 @@ static const ReferenceErrorCase reference_error_cases[] = {
       "gwy-localscan: the reference @IN channel 2 (80 x 160 px, *" },
     { "more stripes than rows", { "--reference", ":1", "--stripes", "161", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: 161 stripes do not fit the 160 rows of the image @IN channel 0" },
+    { "stripes of one row", { "--reference", ":1", "--stripes", "81", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: 81 stripes of the 160 rows of the image @IN channel 0 leave stripes of one row, "
+      "which cannot be registered: give at most 80" },
     { "nothing matches", { "--reference", ":1", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: no stripe of @IN channel 0 matched the reference @IN channel 1" },
     { "no reference channel of that title", { "--reference", ":Nothing", "-o", "@OUT", "@IN", }, 1,

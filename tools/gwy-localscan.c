@@ -221,7 +221,7 @@ free_options(void)
 static gchar*
 stripes_help(void)
 {
-    return g_strdup_printf(_("Register N stripes with --reference (default %d; at most %d and the "
+    return g_strdup_printf(_("Register N stripes with --reference (default %d; at most %d and half the "
                              "image's rows)"),
                            LOCALSCAN_STRIPES_DEFAULT, LOCALSCAN_STRIPES_MAX);
 }

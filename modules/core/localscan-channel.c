@@ -193,6 +193,16 @@ localscan_reference_check(GwyDataField *image, const gchar *image_name,
                     n_stripes, yres, image_name);
         return FALSE;
     }
+    /* A stripe of one row registers nothing (its match needs rows to
+     * interpolate between), and thousands of them took minutes to fail:
+     * 4096 stripes of a 4096 x 4096 image 183 s. */
+    if (n_stripes > yres/2) {
+        g_set_error(error, LOCALSCAN_CHANNEL_ERROR, LOCALSCAN_CHANNEL_ERROR_STRIPES,
+                    _("%d stripes of the %d rows of the image %s leave stripes of one row, which "
+                      "cannot be registered: give at most %d"),
+                    n_stripes, yres, image_name, yres/2);
+        return FALSE;
+    }
     return TRUE;
 }
 

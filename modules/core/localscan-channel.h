@@ -201,7 +201,8 @@ gint         localscan_table_stated_px       (const DriftTable *table,
 gboolean     localscan_reference_fits        (GwyDataField *image,
                                               GwyDataField *reference);
 /* The same with a message naming both, and n_stripes (< 1: not checked)
- * at most the image's rows. */
+ * at most half the image's rows (a stripe of one row cannot be
+ * registered). */
 gboolean     localscan_reference_check       (GwyDataField *image,
                                               const gchar *image_name,
                                               GwyDataField *reference,
