@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <check.h>
 #include <glib.h>
+#include <glib/gstdio.h>
 #include "channel-spec.h"
 #include "test-common.h"
 
@@ -57,6 +58,27 @@ START_TEST(test_file_and_id)
 }
 END_TEST
 
+/* A file whose name ends in a colon and digits is that file, when it
+ * exists: 'c:1' was read as channel 1 of 'c' (no such file). */
+START_TEST(test_existing_file_with_digits)
+{
+    gchar *dir = g_dir_make_tmp("test-channel-spec-XXXXXX", NULL);
+    gchar *name = g_build_filename(dir, "c:1", NULL), *missing = g_build_filename(dir, "d:2", NULL);
+    gchar *missing_file = g_build_filename(dir, "d", NULL);
+
+    assert_parses(name, g_build_filename(dir, "c", NULL), 1);
+    ck_assert(g_file_set_contents(name, "x", -1, NULL));
+    assert_parses(name, name, CHANNEL_SPEC_NO_ID);
+    assert_parses(missing, missing_file, 2);
+    g_unlink(name);
+    g_rmdir(dir);
+    g_free(name);
+    g_free(missing);
+    g_free(missing_file);
+    g_free(dir);
+}
+END_TEST
+
 START_TEST(test_colons_in_names)
 {
     /* Only an all-digit tail after the last colon is an id. */
@@ -96,6 +118,7 @@ main(void)
     tcase_add_test(tc, test_file_only);
     tcase_add_test(tc, test_file_and_id);
     tcase_add_test(tc, test_colons_in_names);
+    tcase_add_test(tc, test_existing_file_with_digits);
     tcase_add_test(tc, test_id_range);
     return test_run_suite(suite);
 }

@@ -27,7 +27,10 @@ channel_spec_parse(const gchar *text, gchar **filename, gint *id,
     const gchar *colon = strrchr(text, ':');
     guint64 value;
 
-    if (!colon || !all_digits(colon + 1)) {
+    /* A file of the whole name is the file ('scan:1' as it exists), as
+     * the documentation promises: its digits were taken for a channel of
+     * 'scan', which did not exist. */
+    if (!colon || !all_digits(colon + 1) || g_file_test(text, G_FILE_TEST_EXISTS)) {
         *filename = g_strdup(text);
         *id = CHANNEL_SPEC_NO_ID;
         return TRUE;

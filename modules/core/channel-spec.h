@@ -22,8 +22,9 @@ typedef enum {
 GQuark    channel_spec_error_quark  (void);
 
 /* Splits FILE[:ID].  A file name may hold colons, so only a non-empty,
- * all-digit tail after the last colon is an id (0 to G_MAXINT); otherwise
- * the whole text is the file and id gets CHANNEL_SPEC_NO_ID.  filename (a
+ * all-digit tail after the last colon is an id (0 to G_MAXINT), and only
+ * when no file of the whole name exists; otherwise the whole text is the
+ * file and id gets CHANNEL_SPEC_NO_ID.  filename (a
  * new string) may be empty, as in ":2"; what that means is the caller's
  * business.  Fails, setting neither output, when the id is out of range. */
 gboolean  channel_spec_parse        (const gchar *text,
