@@ -64,15 +64,16 @@ START_TEST(test_existing_file_with_digits)
 {
     gchar *dir = g_dir_make_tmp("test-channel-spec-XXXXXX", NULL);
     gchar *name = g_build_filename(dir, "c:1", NULL), *missing = g_build_filename(dir, "d:2", NULL);
-    gchar *missing_file = g_build_filename(dir, "d", NULL);
+    gchar *missing_file = g_build_filename(dir, "d", NULL), *base = g_build_filename(dir, "c", NULL);
 
-    assert_parses(name, g_build_filename(dir, "c", NULL), 1);
+    assert_parses(name, base, 1);
     ck_assert(g_file_set_contents(name, "x", -1, NULL));
     assert_parses(name, name, CHANNEL_SPEC_NO_ID);
     assert_parses(missing, missing_file, 2);
     g_unlink(name);
     g_rmdir(dir);
     g_free(name);
+    g_free(base);
     g_free(missing);
     g_free(missing_file);
     g_free(dir);
