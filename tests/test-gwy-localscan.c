@@ -2115,6 +2115,12 @@ static const ReferenceErrorCase reference_error_cases[] = {
       "gwy-localscan: the reference @IN channel 2 (80 x 160 px, *" },
     { "more stripes than rows", { "--reference", ":1", "--stripes", "161", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: 161 stripes do not fit the 160 rows of the image @IN channel 0" },
+    { "stripes no whole number", { "--reference", ":1", "--stripes", "2.5", "-o", "@OUT", "@IN", }, 2,
+      "gwy-localscan: --stripes must be a whole number from 1 to 4096, not '2.5'" },
+    /* Space around a number is no part of it: past the parsing, the
+     * registration itself answers. */
+    { "stripes with space around", { "--reference", ":1", "--stripes", " 4 ", "-o", "@OUT", "@IN", }, 1,
+      "gwy-localscan: no stripe of @IN channel 0 matched the reference @IN channel 1" },
     { "stripes of one row", { "--reference", ":1", "--stripes", "81", "-o", "@OUT", "@IN", }, 1,
       "gwy-localscan: 81 stripes of the 160 rows of the image @IN channel 0 leave stripes of one row, "
       "which cannot be registered: give at most 80" },

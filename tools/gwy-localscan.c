@@ -58,6 +58,7 @@ typedef struct {
     gchar *mode_name;
     gchar *write_drift;
     gchar *reference;
+    gchar *stripes_arg;
     gint stripes;
     gchar *search_arg;
     gdouble search_x;            /* px, 0: the whole frame */
@@ -116,7 +117,7 @@ static GOptionEntry option_table[] = {
          "channel titled TITLE (default its first channel); FILE may be INPUT "
          "itself, and :ID or :TITLE alone means that channel of INPUT.  Not "
          "with -d"), N_("FILE[:ID|:TITLE]") },
-    { "stripes", 0, 0, G_OPTION_ARG_INT, &options.stripes,
+    { "stripes", 0, 0, G_OPTION_ARG_STRING, &options.stripes_arg,
       NULL, N_("N") },   /* stripes_help() */
     { "search", 0, 0, G_OPTION_ARG_STRING, &options.search_arg,
       N_("With --reference: search shifts up to PX columns and PY rows (PY defaults to PX; "
@@ -207,6 +208,7 @@ free_options(void)
     g_free(options.write_drift);
     g_free(options.reference);
     g_free(options.search_arg);
+    g_free(options.stripes_arg);
     g_free(options.masking_name);
     g_free(options.line_time_arg);
     g_free(options.direction_name);
@@ -304,20 +306,40 @@ parse_search(const gchar *arg, GError **error)
     gint n = g_strv_length(parts), i;
     gboolean ok = (n == 1 || n == 2);
 
-    for (i = 0; ok && i < n; i++) {
-        gchar *end = NULL;
-
-        values[i] = g_ascii_strtod(parts[i], &end);
-        ok = (end != parts[i] && *end == '\0' && values[i] >= 1.0 && values[i] <= SEARCH_MAX);
-    }
+    for (i = 0; ok && i < n; i++)
+        ok = option_parse_number(parts[i], values + i) && values[i] >= 1.0 && values[i] <= SEARCH_MAX;
     g_strfreev(parts);
     if (!ok) {
+        gchar *quoted = quoted_input_excerpt(arg, -1);
+
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
-                    _("--search takes PX or PX,PY, each from 1 to %d px"), SEARCH_MAX);
+                    _("--search takes PX or PX,PY, each from 1 to %d px, not '%s'"), SEARCH_MAX, quoted);
+        g_free(quoted);
         return FALSE;
     }
     options.search_x = values[0];
     options.search_y = (n == 2) ? values[1] : values[0];
+    return TRUE;
+}
+
+/* --stripes N: a whole number, space around it allowed (GLib's own
+ * integer option refused "8 " in its own words); its range is checked
+ * with the rest of the command line. */
+static gboolean
+parse_stripes(const gchar *arg, GError **error)
+{
+    gdouble v;
+
+    if (!option_parse_number(arg, &v) || v != floor(v) || fabs(v) > G_MAXINT/2) {
+        gchar *quoted = quoted_input_excerpt(arg, -1);
+
+        g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                    _("--stripes must be a whole number from %d to %d, not '%s'"),
+                    LOCALSCAN_STRIPES_MIN, LOCALSCAN_STRIPES_MAX, quoted);
+        g_free(quoted);
+        return FALSE;
+    }
+    options.stripes = (gint)v;
     return TRUE;
 }
 
@@ -486,6 +508,8 @@ check_command_line(GError **error)
                       "them"));
         return NULL;
     }
+    if (options.stripes_arg && !parse_stripes(options.stripes_arg, error))
+        return NULL;
     if (options.stripes != STRIPES_UNSET && !options.reference) {
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
                     _("--stripes needs --reference"));

@@ -6,6 +6,7 @@
  */
 #include "config.h"
 #include <string.h>
+#include <math.h>
 #include "option-parse.h"
 #include "localscan-intl.h"
 
@@ -90,5 +91,24 @@ option_value_to_utf8(gchar **value, const gchar *option, GError **error)
     }
     g_free(*value);
     *value = text;
+    return TRUE;
+}
+
+gboolean
+option_parse_number(const gchar *text, gdouble *value)
+{
+    gchar *end;
+    gdouble v;
+
+    if (!text || strpbrk(text, "xX"))
+        return FALSE;
+    v = g_ascii_strtod(text, &end);
+    if (end == text)
+        return FALSE;
+    while (g_ascii_isspace(*end))
+        end++;
+    if (*end || !isfinite(v))
+        return FALSE;
+    *value = v;
     return TRUE;
 }

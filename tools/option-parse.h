@@ -36,6 +36,12 @@ gboolean option_value_to_utf8(gchar **value,
                               const gchar *option,
                               GError **error);
 
+/* A whole argument that is a finite decimal number, space around it
+ * allowed ("0.5 " from a script's variable), hexadecimal not (strtod
+ * reads "0x10" as 16: not what anyone types for a time or a size). */
+gboolean option_parse_number(const gchar *text,
+                             gdouble *value);
+
 G_END_DECLS
 
 #endif

@@ -56,18 +56,10 @@ series_options_parse_seconds(const gchar *option, const gchar *text,
                              gdouble min, gdouble max, gdouble *value,
                              GError **error)
 {
-    gchar *end, *quoted;
-    gdouble v = g_ascii_strtod(text, &end);
+    gchar *quoted;
+    gdouble v;
 
-    /* strtod also reads hexadecimal ("0x10" is 16): not a time anyone
-     * types. */
-    if (strpbrk(text, "xX"))
-        end = (gchar*)text;
-    /* Space around the number is no part of it ("1 " from a script's
-     * variable; strtod skips the space before). */
-    while (end != text && g_ascii_isspace(*end))
-        end++;
-    if (end == text || *end || !isfinite(v) || v < min || v > max) {
+    if (!option_parse_number(text, &v) || v < min || v > max) {
         quoted = quoted_input_excerpt(text, -1);
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
                     _("%s must be a number of seconds from %g to %g, not '%s'"),
