@@ -1465,6 +1465,12 @@ static const TimingCase timing_cases[] = {
       1.5, SCAN_DIRECTION_UP, -2.0, NULL },
     { "metadata and an option", { "Scan Rate", "4 Hz", NULL }, { "--direction", "up", "--frame-start", "3", NULL },
       0.25, SCAN_DIRECTION_UP, 3.0, NULL },
+    /* A value there but unusable is named, not called absent. */
+    { "unusable metadata", { "Line time (s)", "nan", "Frame start (s)", "soon", NULL },
+      { "--direction", "up", NULL }, 1.0, SCAN_DIRECTION_UP, 0.0,
+      "gwy-localscan: warning: the table's t_image/t_local times are matched with an assumed line time 1 s "
+      "(--line-time), frame start 0 s (--frame-start): @IN channel 0 gives no usable value ('Line time (s)' is "
+      "'nan', 'Frame start (s)' is 'soon')\n" },
 };
 
 static GwyDataField*

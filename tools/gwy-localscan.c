@@ -30,6 +30,7 @@
 #include "series-command.h"
 #include "series-options.h"
 #include "option-parse.h"
+#include "scan-timing-meta.h"
 
 #undef _
 #define _(s) dgettext(GETTEXT_PACKAGE, s)
@@ -972,6 +973,29 @@ check_not_compensated(GwyContainer *data, const gchar *filename, gint id, GError
 
 /* Times in the table are compared with the scan's own: a timing neither the
  * file nor the command line gave is a guess the user should know of. */
+/* What the channel's metadata holds for the parts of its timing not
+ * known, where it holds something unusable ("'Line time (s)' is 'nan'"),
+ * joined; NULL when it holds nothing for them: such a value was reported
+ * as absent. */
+static gchar*
+unusable_timing(GwyContainer *data, gint id, LocalscanTimingFound known)
+{
+    GwyContainer *meta = localscan_channel_meta(data, id, FALSE);
+    gchar *line = (known & LOCALSCAN_TIMING_LINE_TIME) ? NULL
+                  : scan_timing_meta_unusable(meta, SCAN_META_LINE_TIME);
+    gchar *start = (known & LOCALSCAN_TIMING_FRAME_START) ? NULL
+                   : scan_timing_meta_unusable(meta, SCAN_META_FRAME_START);
+    gchar *joined;
+
+    if (line && start)
+        joined = g_strconcat(line, ", ", start, NULL);
+    else
+        joined = g_strdup(line ? line : start);
+    g_free(line);
+    g_free(start);
+    return joined;
+}
+
 static void
 warn_assumed_timing(GwyContainer *data, const gchar *filename, gint id, const DriftTable *table,
                     const CompensationMode *mode)
@@ -980,6 +1004,7 @@ warn_assumed_timing(GwyContainer *data, const gchar *filename, gint id, const Dr
     LocalscanTimingFound known;
     GString *parts;
     ScanTiming timing;
+    gchar *unusable;
 
     if (mode->value != LOCALSCAN_MODE_CONTINUOUS
         || (drift_table_find_column(table, "t_image") < 0
@@ -1004,9 +1029,16 @@ warn_assumed_timing(GwyContainer *data, const gchar *filename, gint id, const Dr
         g_string_append(parts, parts->len ? ", " : "");
         g_string_append_printf(parts, _("frame start %g s (--frame-start)"), timing.frame_start);
     }
-    fprintf(stderr, _("%s: warning: the table's t_image/t_local times are matched with an "
-                      "assumed %s: "
-                      "%s channel %d does not say\n"), PROGRAM_NAME, parts->str, filename, id);
+    unusable = unusable_timing(data, id, known);
+    if (unusable)
+        fprintf(stderr, _("%s: warning: the table's t_image/t_local times are matched with an "
+                          "assumed %s: %s channel %d gives no usable value (%s)\n"),
+                PROGRAM_NAME, parts->str, filename, id, unusable);
+    else
+        fprintf(stderr, _("%s: warning: the table's t_image/t_local times are matched with an "
+                          "assumed %s: "
+                          "%s channel %d does not say\n"), PROGRAM_NAME, parts->str, filename, id);
+    g_free(unusable);
     g_string_free(parts, TRUE);
 }
 
