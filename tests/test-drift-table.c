@@ -498,6 +498,24 @@ START_TEST(test_physical_units)
                                     &error));
     ck_assert(dx[0] == 3.0 && dy[0] == 2.0);
     drift_table_free(table);
+
+    /* Half pixels round away from zero whatever the unit they are given
+     * in: in um the conversion gave 2.4999999999999996 and 2. */
+    {
+        static const gchar *const tables[] = {
+            "# units: um\nstripe,dx,dy\n0,0.09765625,-0.09765625\n",
+            "# units: nm\nstripe,dx,dy\n0,97.65625,-97.65625\n",
+            "# units: m\nstripe,dx,dy\n0,9.765625e-8,-9.765625e-8\n",
+        };
+        guint k;
+
+        for (k = 0; k < G_N_ELEMENTS(tables); k++) {
+            table = parse_ok(tables[k]);
+            ck_assert(drift_table_to_pixels(table, 1, 5e-6/128, 5e-6/128, TRUE, dx, dy, &error));
+            ck_assert_msg(dx[0] == 3.0 && dy[0] == -3.0, "%s: %g, %g", tables[k], dx[0], dy[0]);
+            drift_table_free(table);
+        }
+    }
     ck_assert(!error);
 }
 END_TEST

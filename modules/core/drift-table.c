@@ -931,8 +931,18 @@ convert_value(const DriftTable *table, const DriftTableRow *row,
     const gchar *unit = drift_unit_name(table->unit);
     gdouble v = value;
 
-    if (table->unit != DRIFT_UNIT_PX)
+    if (table->unit != DRIFT_UNIT_PX) {
+        gdouble half;
+
         v = value*unit_metres(table->unit)/pixel_size;
+        /* A half pixel given in a unit comes out of the conversion an ulp
+         * or two off (2.5 px as 0.09765625 um on pixels of 0.0390625 um:
+         * 2.4999999999999996), and rounding half away from zero then
+         * went either way by the unit: it is the half it stands for. */
+        half = round(2.0*v)/2.0;
+        if (fabs(v - half) <= WHOLE_PIXEL_TOLERANCE*MAX(1.0, fabs(v)))
+            v = half;
+    }
     if (!(fabs(v) <= DRIFT_TABLE_MAX_PIXELS)) {
         set_line_error(error, DRIFT_TABLE_ERROR_VALUE,
                        table_source_name(table), row->line,
