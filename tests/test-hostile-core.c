@@ -223,6 +223,56 @@ START_TEST(test_values_beyond_range_refused)
 }
 END_TEST
 
+/* A program killed while writing many outputs at once (simscan benchmark
+ * writes every file of its cases as one set) leaves none of their
+ * temporary files: 32 were remembered, the rest were left behind. */
+START_TEST(test_killed_with_many_temporaries)
+{
+    gchar *dir = g_dir_make_tmp("test-hostile-core-XXXXXX", NULL);
+    GRand *rng = g_rand_new_with_seed(seed ^ 6);
+    gint n = g_rand_int_range(rng, 200, 1200), status, i, fds[2];
+    const gchar *name;
+    GDir *listing;
+    gint left = 0;
+    GPid pid;
+    gchar c;
+
+    ck_assert_int_eq(pipe(fds), 0);
+    pid = fork();
+    if (pid == 0) {
+        for (i = 0; i < n; i++) {
+            gchar *target = g_strdup_printf("%s/out-%04d.gwy", dir, i);
+            gint fd;
+            gchar *tmp = safe_output_temp_new(target, "", &fd);
+
+            if (!tmp)
+                _exit(3);
+            close(fd);
+            g_free(tmp);
+            g_free(target);
+        }
+        if (write(fds[1], "x", 1) != 1)
+            _exit(4);
+        pause();
+        _exit(5);
+    }
+    ck_assert_int_eq(read(fds[0], &c, 1), 1);
+    kill(pid, SIGTERM);
+    waitpid(pid, &status, 0);
+    ck_assert(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM);
+    listing = g_dir_open(dir, 0, NULL);
+    while ((name = g_dir_read_name(listing)))
+        left++;
+    g_dir_close(listing);
+    ck_assert_msg(!left, "%d of %d temporary files left behind", left, n);
+    g_rmdir(dir);
+    close(fds[0]);
+    close(fds[1]);
+    g_free(dir);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* Whatever the bytes, an excerpt is short, valid and printable. */
 START_TEST(test_excerpts)
 {
@@ -472,6 +522,7 @@ hostile_core_suite(void)
     tcase_add_test(tc, test_continuous_missing_pixels);
     tcase_add_test(tc, test_missing_refused_past_half);
     tcase_add_test(tc, test_values_beyond_range_refused);
+    tcase_add_test(tc, test_killed_with_many_temporaries);
     tcase_add_test(tc, test_excerpts);
     tcase_add_test(tc, test_screening_truncations);
     tcase_add_test(tc, test_screening_gzip_truncations);
