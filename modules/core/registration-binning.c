@@ -34,8 +34,12 @@
  * frequency (a quarter of a cycle per px), where the match's
  * interpolation no longer follows it. */
 #define FINE_FROM 0.2
-/* The white noise floor is the median power above this frequency. */
+/* The binned frame's Nyquist frequency, cycles per px of the frame. */
+#define BINNED_NYQUIST 0.25
+/* The white noise floor is this quantile of the power above this
+ * frequency. */
 #define NOISE_BAND_FROM 0.4
+#define NOISE_QUANTILE 0.2
 /* The narrow blur of the band-pass (frame-conditioning.c), px: the
  * power it passes at frequency f is exp(-4 pi^2 sigma^2 f^2). */
 #define NARROW_SIGMA 1.0
@@ -47,6 +51,15 @@
 #define FINE_SHARE_MAX 0.05
 /* Each binned stripe keeps at least this many rows. */
 #define BINNED_MIN_STRIPE_ROWS 8
+
+/* How much the match uses texture at frequency f (cycles per px): the
+ * narrow blur passes exp(-4 pi^2 sigma^2 f^2) of its power, and the match
+ * steps along its gradients, whose power goes with f^2. */
+static gdouble
+registered_weight(gdouble f)
+{
+    return f*f*exp(-4.0*G_PI*G_PI*NARROW_SIGMA*NARROW_SIGMA*f*f);
+}
 
 /* Removes the least-squares line from v and tapers it (Hann). */
 static void
@@ -135,7 +148,7 @@ registration_fine_texture_share(const gdouble *data, gint xres, gint yres, gbool
 {
     gint len = along_x ? xres : yres, across = along_x ? yres : xres;
     gint nk = len/2 + 1, from = (gint)ceil(NOISE_BAND_FROM*len), taken, k, m = 0;
-    gdouble *lines, *power, *high, floor_power, f, w, excess, fine = 0.0, total = 0.0;
+    gdouble *lines, *power, *high, floor_power, f, excess, fine = 0.0, total = 0.0;
 
     g_return_val_if_fail(data && xres > 0 && yres > 0, 1.0);
     if (len < 4*LOWEST_CYCLES || from >= nk)
@@ -151,19 +164,25 @@ registration_fine_texture_share(const gdouble *data, gint xres, gint yres, gbool
     high = g_new(gdouble, nk - from);
     for (k = from; k < nk; k++)
         high[m++] = power[k];
-    floor_power = median_in_place(high, m);
+    /* A low quantile: a lattice's peak in the band is no floor. */
+    floor_power = median_kth_in_place(high, m, (gint)(NOISE_QUANTILE*(m - 1)));
     for (k = LOWEST_CYCLES; k < nk; k++) {
         f = (gdouble)k/len;
-        w = f*f*exp(-4.0*G_PI*G_PI*NARROW_SIGMA*NARROW_SIGMA*f*f);
-        excess = MAX(power[k] - floor_power, 0.0)*w;
-        total += excess;
-        if (f >= FINE_FROM)
-            fine += excess;
+        excess = MAX(power[k] - floor_power, 0.0);
+        total += registered_weight(f)*excess;
+        if (f >= BINNED_NYQUIST) {
+            /* Binned, texture at f comes back at 0.5 - f, its amplitude
+             * times the block mean's cos(pi f), moving against the
+             * sample: what the binned match would see of it. */
+            fine += cos(G_PI*f)*cos(G_PI*f)*registered_weight(0.5 - f)*excess;
+        }
+        else if (f >= FINE_FROM)
+            fine += registered_weight(f)*excess;
     }
     g_free(high);
     g_free(power);
     g_free(lines);
-    return (total > 0.0) ? fine/total : 1.0;
+    return (total > 0.0) ? MIN(fine/total, 1.0) : 1.0;
 }
 
 static gboolean

@@ -25,12 +25,13 @@ gint     registration_binning_factor     (const gdouble *image,
                                           gint yres,
                                           gint n);
 
-/* The share (0 to 1) of a frame's registered texture along one axis that
- * lies above a fifth of a cycle per pixel, too near what binning by two
- * leaves (a quarter): its power spectrum over sampled lines, above the white
- * noise floor, weighted as the narrow blur and the match's gradients
- * weigh it.  1 when no sampled line is whole or nothing stands above the
- * noise. */
+/* What binning by two would lose or garble of a frame's registered texture
+ * along one axis, as a share (0 to 1) of it: the power spectrum of sampled
+ * lines above its white-noise floor, weighted as the narrow blur and the
+ * match's gradients weigh it, from a fifth to a quarter of a cycle per
+ * pixel (too near the binned frame's Nyquist frequency), and above a
+ * quarter as what comes back aliased at 0.5 - f.  1 when no sampled line
+ * is whole or nothing stands above the noise. */
 gdouble  registration_fine_texture_share (const gdouble *data,
                                           gint xres,
                                           gint yres,
