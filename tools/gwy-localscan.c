@@ -971,8 +971,6 @@ check_not_compensated(GwyContainer *data, const gchar *filename, gint id, GError
     return ok;
 }
 
-/* Times in the table are compared with the scan's own: a timing neither the
- * file nor the command line gave is a guess the user should know of. */
 /* What the channel's metadata holds for the parts of its timing not
  * known, where it holds something unusable ("'Line time (s)' is 'nan'"),
  * joined; NULL when it holds nothing for them: such a value was reported
@@ -996,6 +994,8 @@ unusable_timing(GwyContainer *data, gint id, LocalscanTimingFound known)
     return joined;
 }
 
+/* Times in the table are compared with the scan's own: a timing neither the
+ * file nor the command line gave is a guess the user should know of. */
 static void
 warn_assumed_timing(GwyContainer *data, const gchar *filename, gint id, const DriftTable *table,
                     const CompensationMode *mode)

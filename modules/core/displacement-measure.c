@@ -149,16 +149,9 @@ register_prepared(const StripeRegistrationFrame *image,
     if (image && reference) {
         best = register_in_band(image, reference, xres, yres, n, options, guess, search, 0.0,
                                 &whole, shifts);
-        /* A guess chained through a pair that matched by chance (a frame
-         * of white noise between two good ones: a few of its blocks pass)
-         * centres the search wrong: a doubtful guess, or a poor result, is
-         * tried again with the frame searched as a consecutive pair's.
-         * Doubtful: on 8 blocks of 96 x 64 px frames, 4 matched chance
-         * content around such a guess, frames correlating at 0.40 there;
-         * 6 of 496 seeds 3-44 px off.  Before the wider band, whose
-         * smoother frames match chance content more often. */
-        if (guess && (2*best < n || search->doubtful)
-            && (count = register_in_band(image, reference, xres, yres, n, options, NULL, &blind, 0.0,
+        if (2*best < n
+            && (count = register_in_band(image, reference, xres, yres, n, options, guess, search,
+                                         MAX(WIDER_BAND_FRACTION*MIN(xres, yres), WIDER_BAND_MIN_PX),
                                          &other_whole, other)) > best) {
             StripeShift *kept = shifts;
 
@@ -166,12 +159,18 @@ register_prepared(const StripeRegistrationFrame *image,
             shifts = other;
             other = kept;
             best = count;
-            guess = NULL;
-            search = &blind;
         }
-        if (2*best < n
-            && (count = register_in_band(image, reference, xres, yres, n, options, guess, search,
-                                         MAX(WIDER_BAND_FRACTION*MIN(xres, yres), WIDER_BAND_MIN_PX),
+        /* A guess chained through a pair that matched by chance (a frame
+         * of white noise between two good ones: a few of its blocks pass)
+         * centres the search wrong: a poor result, or any result around a
+         * doubtful guess, is tried again with the frame searched as a
+         * consecutive pair's, and the one with more blocks kept (the
+         * guided one on a tie: the blind search reaches a quarter of the
+         * frame, the guess beyond).  Doubtful: on 8 blocks of 96 x 64 px
+         * frames, 4 matched chance content around such a guess, too many
+         * to count as poor; 6 of 496 seeds 3-44 px off. */
+        if (guess && (2*best < n || search->doubtful)
+            && (count = register_in_band(image, reference, xres, yres, n, options, NULL, &blind, 0.0,
                                          &other_whole, other)) > best) {
             StripeShift *kept = shifts;
 
@@ -498,9 +497,6 @@ displacement_tall_blocks(gint n_blocks)
     return (n_blocks/TALL_BLOCKS >= TALL_MIN_BLOCKS) ? n_blocks/TALL_BLOCKS : n_blocks;
 }
 
-/* Frame k against its older frames, the nearest first: the overall shifts
- * of the consecutive pairs between, chained, tell where to look in an
- * older frame, whose shift may exceed any blind search range. */
 /* Whether a consecutive pair from frame j + 1 to frame k registered fewer
  * than half its blocks: the guess chained through it is doubtful. */
 static gboolean
@@ -515,6 +511,9 @@ weak_chain(const SeriesRegistration *reg, gint k, gint j)
     return FALSE;
 }
 
+/* Frame k against its older frames, the nearest first: the overall shifts
+ * of the consecutive pairs between, chained, tell where to look in an
+ * older frame, whose shift may exceed any blind search range. */
 static void
 older_task(gpointer data, gint k)
 {
