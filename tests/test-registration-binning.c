@@ -16,6 +16,7 @@
 #include "registration-binning.h"
 #include "stripe-registration.h"
 #include "registration-frames.h"
+#include "median.h"
 #include "test-common.h"
 
 static guint32 test_seed;
@@ -184,6 +185,33 @@ START_TEST(test_binned_registration_accuracy)
     /* The uncertainty, in px of the frames given, covers the error. */
     for (s = 0; s < N; s++)
         ck_assert_msg(shifts[s].sigma > 0.0 && shifts[s].sigma < 0.5, "stripe %d sigma %g", s, shifts[s].sigma);
+    /* Binned, and its sigma in px of the frames given: a column less, the
+     * same pair is registered at full resolution, whose sigma is about
+     * half (a binned pixel is two; 1 if nothing was binned, 0.5 if the
+     * sigma stayed in binned px). */
+    {
+        gdouble *image = g_new(gdouble, (res - 1)*res), *reference = g_new(gdouble, (res - 1)*res);
+        gdouble binned[N], full[N], ratio;
+        StripeShift whole[N];
+        gint r;
+
+        for (r = 0; r < res; r++) {
+            memcpy(image + r*(res - 1), pair->image + r*res, (res - 1)*sizeof(gdouble));
+            memcpy(reference + r*(res - 1), pair->reference + r*res, (res - 1)*sizeof(gdouble));
+        }
+        ck_assert_int_eq(registration_binning_factor(image, reference, res - 1, res, N), 1);
+        ck_assert(stripe_registration_measure(image, reference, res - 1, res, N, NULL, whole, &error));
+        for (s = 0; s < N; s++) {
+            binned[s] = shifts[s].sigma;
+            full[s] = whole[s].sigma;
+        }
+        ratio = median_in_place(binned, N)/median_in_place(full, N);
+        printf("binned sigma %.2f times the full resolution's\n", ratio);
+        ck_assert_msg(ratio > 1.3 && ratio < 4.0, "binned sigma %g times the full resolution's (seed %u)",
+                      ratio, test_seed);
+        g_free(image);
+        g_free(reference);
+    }
     frame_pair_free(pair);
 }
 END_TEST

@@ -173,8 +173,11 @@ registration_fine_texture_share(const gdouble *data, gint xres, gint yres, gbool
         if (f >= BINNED_NYQUIST) {
             /* Binned, texture at f comes back at 0.5 - f, its amplitude
              * times the block mean's cos(pi f), moving against the
-             * sample: what the binned match would see of it. */
-            fine += cos(G_PI*f)*cos(G_PI*f)*registered_weight(0.5 - f)*excess;
+             * sample: what the binned match would see of it.  At least
+             * what the match uses of it here: just above a quarter cycle
+             * the aliased weight is half the weight just below (a 4 px
+             * lattice, on the binned Nyquist frequency, read 0.48). */
+            fine += MAX(registered_weight(f), cos(G_PI*f)*cos(G_PI*f)*registered_weight(0.5 - f))*excess;
         }
         else if (f >= FINE_FROM)
             fine += registered_weight(f)*excess;
