@@ -1106,9 +1106,11 @@ run_gui(ModuleArgs *args)
     gwy_param_table_append_foreign(table, WIDGET_TABLE_FILE, create_file_chooser, &gui, NULL);
     gwy_param_table_append_foreign(table, WIDGET_REFERENCE, create_reference_chooser, &gui, NULL);
     gwy_param_table_append_slider(table, PARAM_STRIPES);
+    /* A stripe needs two rows to be registered (localscan_reference_check). */
     gwy_param_table_slider_restrict_range(table, PARAM_STRIPES, LOCALSCAN_STRIPES_MIN,
-                                          MIN(LOCALSCAN_STRIPES_MAX,
-                                              gwy_data_field_get_yres(args->field)));
+                                          MAX(LOCALSCAN_STRIPES_MIN,
+                                              MIN(LOCALSCAN_STRIPES_MAX,
+                                                  gwy_data_field_get_yres(args->field)/2)));
     gwy_param_table_append_combo(table, PARAM_MASKING);
     gwy_param_table_append_header(table, -1, _("Compensation"));
     gwy_param_table_append_radio(table, PARAM_MODE);
@@ -1554,8 +1556,9 @@ preview_drift_table(ModuleGUI *gui, gboolean *in_preview_px, GError **error)
         return load_drift_table(args, error);
     if (!(reference = find_reference(args, &refid, error)))
         return NULL;
-    /* More stripes than the copy has rows: only the image can tell. */
-    if (n > preview_field_yres(gui->preview))
+    /* Stripes of one row of the copy cannot be registered: only the image
+     * can tell. */
+    if (n > preview_field_yres(gui->preview)/2)
         return load_drift_table(args, error);
     if (!gui->preview_reference || gui->preview_reference_id.datano != refid.datano
         || gui->preview_reference_id.id != refid.id) {

@@ -256,6 +256,8 @@ START_TEST(test_killed_with_many_temporaries)
         pause();
         _exit(5);
     }
+    /* The write end closed here: a child that died early ends the read. */
+    close(fds[1]);
     ck_assert_int_eq(read(fds[0], &c, 1), 1);
     kill(pid, SIGTERM);
     waitpid(pid, &status, 0);
@@ -267,7 +269,6 @@ START_TEST(test_killed_with_many_temporaries)
     ck_assert_msg(!left, "%d of %d temporary files left behind", left, n);
     g_rmdir(dir);
     close(fds[0]);
-    close(fds[1]);
     g_free(dir);
     g_rand_free(rng);
 }

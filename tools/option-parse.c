@@ -43,11 +43,12 @@ option_parse_unconvertible(gchar **args, const gchar *reason)
             g_free(text);
             continue;
         }
-        if ((option = option_of_value(args, i)))
-            message = g_strdup_printf(_("the value of %s is not text in this locale's encoding (%s)"),
-                                      option, reason);
-        else
-            message = g_strdup_printf(_("argument %d is not text in this locale's encoding (%s)"), i, reason);
+        /* An argument of its own is a file name, which GLib takes as
+         * bytes: not the one it could not convert. */
+        if (!(option = option_of_value(args, i)))
+            continue;
+        message = g_strdup_printf(_("the value of %s is not text in this locale's encoding (%s)"),
+                                  option, reason);
         g_free(option);
         return message;
     }

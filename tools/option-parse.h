@@ -19,10 +19,11 @@ gboolean option_parse_naming(GOptionContext *context,
                              gchar ***argv,
                              GError **error);
 
-/* The message for an argument that is not text: which option's value it
- * is ("--line-time" for "--line-time=V" or for V after "--line-time"),
- * else its position.  args (NULL-terminated) as given, the program's name
- * first; NULL when every argument converts. */
+/* The message for an option's value that is not text: which option's
+ * value it is ("--line-time" for "--line-time=V" or for V after
+ * "--line-time"; arguments of their own, file names GLib takes as bytes,
+ * are passed over).  args (NULL-terminated) as given, the program's name
+ * first; NULL when no such value is found. */
 gchar*   option_parse_unconvertible(gchar **args,
                                     const gchar *reason);
 

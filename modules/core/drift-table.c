@@ -7,6 +7,7 @@
 #include "config.h"
 #include <errno.h>
 #include <math.h>
+#include <float.h>
 #include <stdio.h>
 #include <string.h>
 #include <glib/gstdio.h>
@@ -19,6 +20,8 @@
 /* Whole-pixel tolerance for px tables: values written by other tools may
  * carry a last-digit error, but a real fraction is a wrong table. */
 #define WHOLE_PIXEL_TOLERANCE 1e-9
+/* A unit's conversion is a product and a quotient: a few ulps off. */
+#define HALF_PIXEL_ULPS 8
 
 /* A table has a row per stripe and a stripe at least a row of the image:
  * 64 MiB hold a million rows of 64 bytes, more than any image has.  A
@@ -940,7 +943,7 @@ convert_value(const DriftTable *table, const DriftTableRow *row,
          * 2.4999999999999996), and rounding half away from zero then
          * went either way by the unit: it is the half it stands for. */
         half = round(2.0*v)/2.0;
-        if (fabs(v - half) <= WHOLE_PIXEL_TOLERANCE*MAX(1.0, fabs(v)))
+        if (fabs(v - half) <= HALF_PIXEL_ULPS*DBL_EPSILON*MAX(1.0, fabs(v)))
             v = half;
     }
     if (!(fabs(v) <= DRIFT_TABLE_MAX_PIXELS)) {

@@ -130,14 +130,18 @@ output_files_same(const gchar *a, const gchar *b)
 gint
 output_files_finish_stdout(const gchar *program, gint status)
 {
-    gint failed = (fflush(stdout) != 0 || ferror(stdout));
-    gint saved_errno = errno;
+    gint flush_failed, saved_errno;
 
-    /* `simscan fit ... > /dev/full' lost its JSON with exit status 0. */
-    if (!failed)
+    errno = 0;
+    flush_failed = (fflush(stdout) != 0);
+    saved_errno = errno;
+    /* `simscan fit ... > /dev/full' lost its JSON with exit status 0.  An
+     * earlier write's failure leaves only the stream's error flag, and
+     * errno says nothing of it then. */
+    if (!flush_failed && !ferror(stdout))
         return status;
     fprintf(stderr, _("%s: cannot write to the standard output: %s\n"), program,
-            g_strerror(saved_errno ? saved_errno : EIO));
+            g_strerror((flush_failed && saved_errno) ? saved_errno : EIO));
     return 1;
 }
 
