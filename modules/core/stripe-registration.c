@@ -1113,6 +1113,9 @@ measure_binned(const gdouble *image, const gdouble *reference, gint xres, gint y
         shifts[s].dy *= factor;
         shifts[s].sigma *= factor;
     }
+    /* The bounds' half-pixel room was a binned pixel's. */
+    if (ok && options)
+        reject_beyond_search(options, shifts, n);
     g_free(binned_image);
     g_free(binned_reference);
     return ok;
