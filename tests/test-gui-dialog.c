@@ -1088,6 +1088,23 @@ series_dialog_at_rest(FrameProbe *probe)
     return dialog;
 }
 
+/* The series dialog at rest and its frame chooser; NULL until the dialog
+ * is at rest, and NULL with the dialog cancelled and the probe stopped
+ * when it has no chooser. */
+static GtkTreeView*
+frame_chooser_at_rest(FrameProbe *probe, GtkWidget **dialog)
+{
+    GtkTreeView *view;
+
+    if (!(*dialog = series_dialog_at_rest(probe)))
+        return NULL;
+    if (!(view = find_frame_chooser(*dialog))) {
+        gtk_dialog_response(GTK_DIALOG(*dialog), GTK_RESPONSE_CANCEL);
+        probe->stopped = TRUE;
+    }
+    return view;
+}
+
 /* Update on every frame, then one frame unchecked after the measurement,
  * then OK. */
 static gboolean
@@ -1099,13 +1116,8 @@ measure_then_leave_out(gpointer user_data)
 
     if (probe->step == STEP_OK)
         return answer_ok_until_gone(probe);
-    if (!(dialog = series_dialog_at_rest(probe)))
+    if (!(view = frame_chooser_at_rest(probe, &dialog)))
         return !probe->stopped;
-    if (!(view = find_frame_chooser(dialog))) {
-        gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
-        probe->stopped = TRUE;
-        return FALSE;
-    }
     if (probe->step == 0) {
         describe_frames(view, probe->opened);
         probe->step++;
@@ -1181,6 +1193,26 @@ assert_core_correction(GwyContainer *data, const gint *ids, const gint *places, 
     g_free(times);
 }
 
+/* The series dialog on channel 0 of data, added to the data browser, run
+ * interactively with drive stepping it every TICK_MS; the frames in
+ * uncheck (-1 terminated) are to be unchecked. */
+static void
+run_series_dialog(GwyContainer *data, FrameProbe *probe, const gint *uncheck, GSourceFunc drive)
+{
+    guint timeout;
+
+    init_application();
+    watch_criticals();
+    set_series_settings();
+    frame_probe_init(probe, uncheck);
+    gwy_app_data_browser_add(data);
+    gwy_app_data_browser_select_data_field(data, 0);
+    timeout = g_timeout_add(TICK_MS, drive, probe);
+    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
+    if (!probe->stopped)
+        g_source_remove(timeout);
+}
+
 /* Five frames measured with Update, then frame 2 (a disturbed frame, say)
  * unchecked and OK: the measurement of five frames is dropped, and the
  * result is the four checked frames corrected as the core corrects them,
@@ -1193,18 +1225,8 @@ START_TEST(test_series_frame_left_out)
     GwyContainer *data = make_movie_data(5, MOVIE_RES);
     FrameProbe probe;
     GError *error;
-    guint timeout;
 
-    init_application();
-    watch_criticals();
-    set_series_settings();
-    frame_probe_init(&probe, uncheck);
-    gwy_app_data_browser_add(data);
-    gwy_app_data_browser_select_data_field(data, 0);
-    timeout = g_timeout_add(TICK_MS, measure_then_leave_out, &probe);
-    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
-    if (!probe.stopped)
-        g_source_remove(timeout);
+    run_series_dialog(data, &probe, uncheck, measure_then_leave_out);
     printf("test-gui-dialog: the frame chooser as the series dialog opened:\n%s"
            "after Update on them:\n%sand after frame 2 was unchecked (%s, %d x %d):\n%s%s",
            probe.opened->str, probe.measured->str, SCREENSHOT_FRAMES, probe.width, probe.height,
@@ -1255,13 +1277,8 @@ leave_too_few(gpointer user_data)
 
     if (probe->step == STEP_OK)
         return answer_ok_until_gone(probe);
-    if (!(dialog = series_dialog_at_rest(probe)))
+    if (!(view = frame_chooser_at_rest(probe, &dialog)))
         return !probe->stopped;
-    if (!(view = find_frame_chooser(dialog))) {
-        gtk_dialog_response(GTK_DIALOG(dialog), GTK_RESPONSE_CANCEL);
-        probe->stopped = TRUE;
-        return FALSE;
-    }
     if (probe->step == 0) {
         describe_frames(view, probe->opened);
         probe->clicked = uncheck_frames(view, probe->uncheck);
@@ -1296,18 +1313,8 @@ START_TEST(test_series_too_few_frames)
     GwyContainer *data = make_movie_data(3, MOVIE_RES);
     FrameProbe probe;
     GError *error;
-    guint timeout;
 
-    init_application();
-    watch_criticals();
-    set_series_settings();
-    frame_probe_init(&probe, uncheck);
-    gwy_app_data_browser_add(data);
-    gwy_app_data_browser_select_data_field(data, 0);
-    timeout = g_timeout_add(TICK_MS, leave_too_few, &probe);
-    gwy_process_func_run(LOCALSCAN_SERIES_FUNCTION_NAME, data, GWY_RUN_INTERACTIVE);
-    if (!probe.stopped)
-        g_source_remove(timeout);
+    run_series_dialog(data, &probe, uncheck, leave_too_few);
     printf("test-gui-dialog: one frame of three checked (%s, %d x %d):\n%s%s",
            SCREENSHOT_TOO_FEW, probe.width, probe.height, probe.rows->str, probe.after->str);
     fflush(stdout);
