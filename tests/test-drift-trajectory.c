@@ -918,7 +918,7 @@ START_TEST(test_table_errors)
     ck_assert(g_error_matches(error, DRIFT_TRAJECTORY_ERROR,
                               DRIFT_TRAJECTORY_ERROR_VALUE));
     ck_assert_str_eq(error->message,
-                     "drift.csv:3: t_local is not a finite number");
+                     "drift.csv:3: t_local = 'soon' is not a finite number");
     g_clear_error(&error);
     drift_table_free(table);
 

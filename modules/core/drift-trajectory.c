@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <libgwyddion/gwymath.h>
 #include "drift-trajectory.h"
+#include "quoted-input.h"
 #include "median.h"
 #include "stripe-geometry.h"
 #include "localscan-intl.h"
@@ -1104,6 +1105,7 @@ extra_or_default(const DriftTable *table, gint s, const gchar *name,
                  gdouble *value, GError **error)
 {
     gint j = drift_table_find_column(table, name);
+    gchar *quoted;
 
     if (drift_table_get_extra(table, s, name, value) && isfinite(*value)) {
         /* Times beyond centuries are no clock's: 1e308 s would overflow the
@@ -1120,10 +1122,13 @@ extra_or_default(const DriftTable *table, gint s, const gchar *name,
         *value = fallback;
         return TRUE;
     }
+    /* The text as written: 'abc' was said to be no finite number. */
+    quoted = quoted_input_excerpt(table->extra_values[s*table->n_extra + j], -1);
     g_set_error(error, DRIFT_TRAJECTORY_ERROR, DRIFT_TRAJECTORY_ERROR_VALUE,
-                _("%s:%d: %s is not a finite number"),
+                _("%s:%d: %s = '%s' is not a finite number"),
                 table->source_name ? table->source_name : _("drift table"),
-                table->rows[s].line, name);
+                table->rows[s].line, name, quoted);
+    g_free(quoted);
     return FALSE;
 }
 
