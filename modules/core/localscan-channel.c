@@ -646,7 +646,7 @@ static gsize
 fill_missing_of_channel(GwyContainer *data, gint id)
 {
     GwyDataField *field = localscan_channel_item(data, id, "data");
-    GwyDataField *mask = localscan_channel_item(data, id, "mask");
+    GwyDataField *mask = localscan_channel_mask(data, id);
     gchar *mask_key = g_strdup_printf("/%d/mask", id);
     gdouble *a, *m, fill;
     gsize i, n, filled = 0;
@@ -655,8 +655,9 @@ fill_missing_of_channel(GwyContainer *data, gint id)
         a = gwy_data_field_get_data(field);
         n = (gsize)gwy_data_field_get_xres(field)*gwy_data_field_get_yres(field);
         if (missing_data_count(a, n)) {
-            if (!GWY_IS_DATA_FIELD(mask)
-                || gwy_data_field_check_compatibility(field, mask, GWY_DATA_COMPATIBILITY_RES)) {
+            /* The one test of a mask (localscan_channel_mask): anything
+             * else stored there is replaced by a mask of the filled pixels. */
+            if (!mask) {
                 mask = gwy_data_field_new_alike(field, TRUE);
                 gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_z(mask), NULL);
                 gwy_container_set_object_by_name(data, mask_key, mask);
