@@ -24,7 +24,8 @@ typedef struct {
     gboolean two_sided;
     gdouble control;         /* one-sided only; NAN where not seen */
     gdouble texture;         /* one-sided only: the line's mean square after
-                                its quadratic; NAN otherwise */
+                                its quadratic over the pixels its one
+                                drift predicts; NAN otherwise */
     gdouble nearby;          /* one-sided only: the lowest mismatch of its
                                 content a pixel off the place its one drift
                                 predicts (left, right, up or down); NAN

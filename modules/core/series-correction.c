@@ -952,10 +952,12 @@ predict_line(const SeriesCorrection *correction, const SeriesFrame *fk,
  * and so carries content from beyond the jump into the lines before it
  * (a particle's halo), which then match the wrong side (a jump 5 lines
  * into a frame was placed at its first line).  NAN when too little of the
- * line is predicted.  u and d are work space of n. */
+ * line is predicted.  With against_zero, the line's own texture over those
+ * same pixels (the prediction only says which pixels count).  u and d are
+ * work space of n. */
 static gdouble
-line_mismatch(const gdouble *data, const gdouble *pred, gint n, gdouble *u,
-              gdouble *d)
+line_residual(const gdouble *data, const gdouble *pred, gint n,
+              gboolean against_zero, gdouble *u, gdouble *d)
 {
     gdouble coeffs[3], sdd = 0.0, e;
     gint c, m = 0;
@@ -964,7 +966,7 @@ line_mismatch(const gdouble *data, const gdouble *pred, gint n, gdouble *u,
         if (!isfinite(pred[c]) || !isfinite(data[c]))
             continue;
         u[m] = (2.0*c - (n - 1))/MAX(n - 1, 1);
-        d[m] = data[c] - pred[c];
+        d[m] = against_zero ? data[c] : data[c] - pred[c];
         m++;
     }
     if (m < 8)
@@ -977,6 +979,25 @@ line_mismatch(const gdouble *data, const gdouble *pred, gint n, gdouble *u,
     return sdd/m;
 }
 
+static gdouble
+line_mismatch(const gdouble *data, const gdouble *pred, gint n, gdouble *u,
+              gdouble *d)
+{
+    return line_residual(data, pred, n, FALSE, u, d);
+}
+
+/* The texture of a line where pred has values: a line compared over part
+ * of its width is judged by what that part shows.  Measured over the whole
+ * line, a particle in columns the prediction does not reach made a line
+ * whose compared part was as featureless as its prediction look like a
+ * close match of textured content, and a line before a jump voted after
+ * it (test-series-correction seed 900000136, case 611). */
+static gdouble
+line_texture_where(const gdouble *data, const gdouble *pred, gint n,
+                   gdouble *u, gdouble *d)
+{
+    return line_residual(data, pred, n, TRUE, u, d);
+}
 
 /* The lowest mismatch of line r of frame k (data row) with its content as
  * frame j shows it under `side` moved a pixel left, right, up or down
@@ -1018,7 +1039,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     const gdouble *row = gwy_data_field_get_data_const(fk->field) + (gsize)r*xres;
     gdouble eb, ea, ec, en, sb = 0.0, sa = 0.0, ob = 0.0, oa = 0.0, cb = 0.0, ca = 0.0;
     gdouble near_a = 0.0, near_b = 0.0, cost_a = 0.0, cost_b = 0.0;
-    gdouble et, ta = 0.0, tb = 0.0;
+    gdouble et, ew, ta = 0.0, tb = 0.0, wa = 0.0, wb = 0.0;
     gdouble *u = line + xres, *d = u + xres, *zeros = d + xres;
     const gdouble *ref;
 
@@ -1047,6 +1068,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
             predict_line(correction, fk, series->frames + j, ref, r,
                          JUMP_NEVER, 0.0, 0.0, line);
         et = line_mismatch(zeros, line, xres, u, d);
+        ew = line_texture_where(row, line, xres, u, d);
         predict_line(correction, fk, series->frames + j, ref, r,
                      isnan(eb) ? JUMP_TWICE : JUMP_BACKWARDS, 0.0, 0.0, line);
         if (isnan(ec = line_mismatch(row, line, xres, u, d)))
@@ -1057,6 +1079,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
             oa += ea;
             ca += ec;
             ta += et;
+            wa += ew;
             if (!isnan(en)) {
                 near_a += en;
                 cost_a += ea;
@@ -1067,6 +1090,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
             ob += eb;
             cb += ec;
             tb += et;
+            wb += ew;
             if (!isnan(en)) {
                 near_b += en;
                 cost_b += eb;
@@ -1089,7 +1113,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     /* Only a one-sided line is judged by its texture. */
     ev->texture = ev->unrelated = NAN;
     if (!isnan(ev->control)) {
-        ev->texture = line_mismatch(row, zeros, xres, u, d);
+        ev->texture = (nb ? wb/nb : wa/na);
         ev->unrelated = ev->texture + (nb ? tb/nb : ta/na);
     }
 }
