@@ -24,10 +24,12 @@ displacement_options_init(DisplacementOptions *options)
 }
 
 /* The stripes' shifts (px) and the score the fit weighs them by: the
- * correlation at the peak, for blocks the registration accepted. */
+ * correlation at the peak, for blocks the registration accepted; row (may
+ * be NULL) gets the image row whose shift each is (StripeShift.row), the
+ * centre row for blocks not accepted. */
 static void
-copy_shifts(const StripeShift *shifts, gint n, gdouble *dx, gdouble *dy,
-            gdouble *score)
+copy_shifts(const StripeShift *shifts, gint n, gint yres, gdouble *dx, gdouble *dy,
+            gdouble *score, gdouble *row)
 {
     gint s;
 
@@ -35,6 +37,9 @@ copy_shifts(const StripeShift *shifts, gint n, gdouble *dx, gdouble *dy,
         dx[s] = shifts[s].dx;
         dy[s] = shifts[s].dy;
         score[s] = shifts[s].accepted ? CLAMP(shifts[s].peak, 0.0, 1.0) : 0.0;
+        if (row)
+            row[s] = (shifts[s].accepted && isfinite(shifts[s].row)) ? shifts[s].row
+                     : 0.5*(s*yres/n + (s + 1)*yres/n - 1);
     }
 }
 
@@ -134,13 +139,14 @@ register_in_band(const StripeRegistrationFrame *image,
 }
 
 /* displacement_register_blocks() for prepared frames (either may be NULL:
- * nothing registered), the blocks searched as search says. */
+ * nothing registered), the blocks searched as search says; row (may be
+ * NULL) gets the image row whose shift each block's is. */
 static void
 register_prepared(const StripeRegistrationFrame *image,
                   const StripeRegistrationFrame *reference, gint xres, gint yres,
                   gint n, const DisplacementOptions *options,
                   const gdouble *guess, const BlockSearch *search, gdouble *dx, gdouble *dy,
-                  gdouble *score, gdouble *global)
+                  gdouble *score, gdouble *row, gdouble *global)
 {
     StripeShift whole, other_whole, *shifts = g_new0(StripeShift, n), *other = g_new0(StripeShift, n);
     BlockSearch blind = { 0.0, search->uncertainty, FALSE, FALSE };
@@ -187,7 +193,7 @@ register_prepared(const StripeRegistrationFrame *image,
             whole.dy = guess[1];
         }
     }
-    copy_shifts(shifts, n, dx, dy, score);
+    copy_shifts(shifts, n, yres, dx, dy, score, row);
     if (global) {
         global[0] = whole.dx;
         global[1] = whole.dy;
@@ -220,34 +226,9 @@ displacement_register_blocks(const gdouble *image, const gdouble *reference,
     a = stripe_registration_frame_new(image, xres, yres, pixel_aspect);
     b = stripe_registration_frame_new(reference, xres, yres, pixel_aspect);
     register_prepared(a, b, xres, yres, n, options, guess, &search, dx, dy, score,
-                      global);
+                      NULL, global);
     stripe_registration_frame_free(a);
     stripe_registration_frame_free(b);
-}
-
-/* The row a block's registration speaks for: its rows weighted by their
- * detail (squared differences along the line, which line offsets do not
- * touch).  A block registers where its features are; when the drift moves
- * fast, its centre row's moment can be seconds off theirs.  The centre
- * row when the block has no detail (or no finite pixel). */
-static gdouble
-detail_row(const gdouble *data, gint xres, gint r0, gint r1)
-{
-    gdouble wsum = 0.0, rsum = 0.0, w, d;
-    gint r, c;
-
-    for (r = r0; r < r1; r++) {
-        const gdouble *row = data + (gsize)r*xres;
-
-        for (c = 1, w = 0.0; c < xres; c++) {
-            d = row[c] - row[c-1];
-            if (isfinite(d))
-                w += d*d;
-        }
-        wsum += w;
-        rsum += w*r;
-    }
-    return (wsum > 0.0 && isfinite(rsum)) ? rsum/wsum : 0.5*(r0 + r1 - 1);
 }
 
 /* A series registered pair by pair.  Each frame is prepared once
@@ -373,7 +354,7 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
     gdouble xstep = frame_series_dx(series), ystep = frame_series_dy(series);
     gint xres = fa->timing.xres, yres = fa->timing.yres;
     gdouble *dx = g_new(gdouble, n), *dy = g_new(gdouble, n),
-            *score = g_new(gdouble, n);
+            *score = g_new(gdouble, n), *row = g_new(gdouble, n);
     StripeRegistrationFrame *own_a = NULL, *own_b = NULL;
     /* The chained guess is trusted in a long series only, where the cost
      * matters: on the three raw FastScan frames, whose consecutive pairs
@@ -388,20 +369,22 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
         own_b = prepare_series_frame(reg, kb);
     register_prepared(reg->prepared[ka] ? reg->frames[ka] : own_a,
                       reg->prepared[kb] ? reg->frames[kb] : own_b,
-                      xres, yres, n, options, guess, &search, dx, dy, score, global);
+                      xres, yres, n, options, guess, &search, dx, dy, score, row, global);
     if (spread)
         *spread = block_spread(dx, dy, score, n, options->min_score, global);
     stripe_registration_frame_free(own_a);
     stripe_registration_frame_free(own_b);
     for (s = 0; s < n; s++) {
         gint r0 = s*yres/n, r1 = (s + 1)*yres/n;
-        gdouble ccol = 0.5*(xres - 1), crow;
+        gdouble ccol = 0.5*(xres - 1), crow = row[s];
         DriftMeasurement *m = reg->meas + (gsize)pair*options->n_blocks + s;
 
         /* The block's content was scanned in the reference dy rows
-         * earlier (higher up), dx columns to the left. */
-        crow = detail_row(gwy_data_field_get_data_const(fa->field), xres,
-                          r0, r1);
+         * earlier (higher up), dx columns to the left.  Both moments are
+         * those of the row the registration says the shift is that of: a
+         * block registers where its features are, and where the drift
+         * moves fast its centre row's moment can be seconds off theirs
+         * (StripeShift.row). */
         m->t_a = scan_timing_pixel_time(&fa->timing, crow, ccol);
         m->t_b = scan_timing_pixel_time(&fb->timing, crow - dy[s],
                                         ccol - dx[s]);
@@ -419,6 +402,7 @@ measure_pair(const SeriesRegistration *reg, gint ka, gint kb, gint n,
     g_free(dx);
     g_free(dy);
     g_free(score);
+    g_free(row);
     return accepted;
 }
 

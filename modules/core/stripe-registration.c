@@ -103,6 +103,9 @@ typedef struct {
     gdouble value;        /* ZNCC at the peak */
     gdouble rival;        /* best competing local maximum, >= 0 */
     gdouble sigma;        /* px, from the sub-pixel match; 0 without */
+    gdouble row;          /* the image row whose shift dy, dx are (the
+                             stripe's centre row unless the match says
+                             otherwise) */
     gboolean trusted;     /* found, inside the search area, refinable */
     gboolean polished;    /* dy, dx refined by stripe_subpixel_refine() */
     gint ylo, yhi;        /* the shifts searched */
@@ -359,10 +362,10 @@ polish_peak(Level *level, gint s, gint reach, Peak *peak)
         peak->sigma = 0.0;
 
         peak->polished = stripe_subpixel_refine(level->subpixel, first, end, peak->ky, peak->kx,
-                                                reach, &peak->dy, &peak->dx, sigma);
+                                                reach, &peak->dy, &peak->dx, sigma, &peak->row);
         if (!peak->polished && level->subpixel_band) {
             peak->polished = stripe_subpixel_refine(level->subpixel_band, first, end, peak->ky, peak->kx,
-                                                    reach, &peak->dy, &peak->dx, sigma);
+                                                    reach, &peak->dy, &peak->dx, sigma, &peak->row);
         }
         /* The match must not carry the stripe out of its searched window,
          * whose border a peak of its own could not cross. */
@@ -371,6 +374,7 @@ polish_peak(Level *level, gint s, gint reach, Peak *peak)
             peak->polished = peak->trusted = FALSE;
             peak->dy = ky;
             peak->dx = kx;
+            peak->row = 0.5*(first + end - 1);
         }
         if (!peak->polished)
             g_debug("registration: stripe %d: no sub-pixel match at (%d, %d)", s, peak->ky, peak->kx);
@@ -406,6 +410,8 @@ find_peak(Level *level, gint s, gint cy, gint cx, gint ry, gint rx, gint known, 
     gint i, j;
 
     gwy_clear(peak, 1);
+    peak->row = 0.5*(stripe_first_row(s, level->n, level->image->yres)
+                     + stripe_end_row(s, level->n, level->image->yres) - 1);
     peak->ylo = ylo;
     peak->yhi = yhi;
     peak->xlo = xlo;
@@ -538,6 +544,7 @@ set_shift(StripeShift *shift, const Peak *peak, gdouble score, gboolean resolved
     shift->dy = peak->dy;
     shift->score = score;
     shift->sigma = peak->polished ? peak->sigma : 0.0;
+    shift->row = peak->row;
     shift->accepted = (peak->trusted && score >= min_score && score > 0.0
                        && (peak->polished || !need_polish));
     shift->peak = MAX(peak->value, -1.0);

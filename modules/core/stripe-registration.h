@@ -61,6 +61,13 @@ typedef struct {
     gboolean in_reference; /* at the shift the coarse stage found, most of
                               the stripe lies on the reference (TRUE when
                               there was nothing to tell) */
+    gdouble row;       /* the image row whose shift dx, dy are: the centre
+                          row, except where the sub-pixel match fitted one
+                          shift for all the stripe's rows, which is the
+                          shift of the rows whose texture decided it (rows
+                          by the frame's edge, which the filters reach,
+                          decide nothing); a drift changing over the rows
+                          is measured at that row */
     /* Diagnostics. */
     gdouble peak;      /* normalised cross-correlation at the chosen peak */
     gdouble rival;     /* the highest competing peak (in the window used) */

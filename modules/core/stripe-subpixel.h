@@ -37,7 +37,8 @@ void            stripe_subpixel_free  (StripeSubpixel *sp);
  * axis) of the whole-pixel shift (anchor_dy, anchor_dx).  Returns FALSE,
  * leaving dy and dx unchanged, when the match does not converge within that
  * square or too little of the stripe stays on the reference.  sigma (may
- * be NULL) gets the standard uncertainty of the shift, px. */
+ * be NULL) gets the standard uncertainty of the shift, px; row (may be
+ * NULL) the image row whose shift it is (see refine_rows). */
 gboolean        stripe_subpixel_refine(StripeSubpixel *sp,
                                        gint first,
                                        gint end,
@@ -46,7 +47,8 @@ gboolean        stripe_subpixel_refine(StripeSubpixel *sp,
                                        gint reach,
                                        gdouble *dy,
                                        gdouble *dx,
-                                       gdouble *sigma);
+                                       gdouble *sigma,
+                                       gdouble *row);
 
 G_END_DECLS
 
