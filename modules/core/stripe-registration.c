@@ -1119,6 +1119,8 @@ measure_binned(const gdouble *image, const gdouble *reference, gint xres, gint y
         shifts[s].dx *= factor;
         shifts[s].dy *= factor;
         shifts[s].sigma *= factor;
+        /* Binned row i holds rows factor i .. factor i + factor - 1. */
+        shifts[s].row = factor*shifts[s].row + 0.5*(factor - 1);
     }
     /* The bounds' half-pixel room was a binned pixel's. */
     if (ok && options)
