@@ -12,6 +12,7 @@
 #include "local-scan.h"
 #include "simscan-sample-file.h"
 #include "option-values.h"
+#include "option-parse.h"
 #include "output-files.h"
 #include "simscan-options.h"
 #include "simscan-i18n.h"
@@ -686,7 +687,7 @@ simscan_options_parse(gint argc, gchar **argv, const gchar *usage,
     args = g_new0(gchar*, argc + 1);
     for (i = 0; i < argc; i++)
         args[i] = g_strdup(argv[i]);
-    ok = g_option_context_parse_strv(context, &args, error);
+    ok = option_parse_naming_strv(context, &args, error);
     if (ok && g_strv_length(args) > 1) {
         g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
                     _("unexpected argument %s"), args[1]);

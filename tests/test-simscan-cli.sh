@@ -87,6 +87,18 @@ bad_case --size 1e6
 bad_case --size 1000 --density 10
 bad_case --size 2 --radius 2000
 bad_case --xres 8192 --yres 4096
+# A value that is not text in the locale's encoding: the refusal names the
+# option, not only GLib's "Invalid byte sequence in conversion input".
+for arg in "--drift=$(printf '\377')" "--velocity=$(printf '\376\377')"; do
+    rm -f "$tmp"/e.*
+    LC_ALL=C "$simscan" "$arg" -o "$tmp/e.gwy" >"$tmp/out" 2>"$tmp/err"
+    status=$?
+    check
+    [ $status -ne 0 ] || fail "$arg exited 0"
+    check
+    grep -q "^simscan: the value of ${arg%%=*} is not text" "$tmp/err" \
+        || fail "$arg: $(cat "$tmp/err")"
+done
 
 # One output unwritable: none of the others is left behind.
 rm -f "$tmp"/e.*

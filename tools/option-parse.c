@@ -55,21 +55,46 @@ option_parse_unconvertible(gchar **args, const gchar *reason)
     return NULL;
 }
 
+/* A conversion error of the parse of given (as it was before the parse)
+ * made into one that names the option. */
+static void
+name_unconvertible(gchar **given, GError **err)
+{
+    gchar *message;
+
+    if (*err && (*err)->domain == G_CONVERT_ERROR
+        && (message = option_parse_unconvertible(given, (*err)->message))) {
+        g_clear_error(err);
+        g_set_error_literal(err, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE, message);
+        g_free(message);
+    }
+}
+
 gboolean
 option_parse_naming(GOptionContext *context, gint *argc, gchar ***argv, GError **error)
 {
     /* The parse takes what it reads out of argv. */
-    gchar **given = g_strdupv(*argv), *message;
+    gchar **given = g_strdupv(*argv);
     GError *err = NULL;
     gboolean ok;
 
     ok = g_option_context_parse(context, argc, argv, &err);
-    if (!ok && err->domain == G_CONVERT_ERROR
-        && (message = option_parse_unconvertible(given, err->message))) {
-        g_clear_error(&err);
-        g_set_error_literal(&err, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE, message);
-        g_free(message);
-    }
+    name_unconvertible(given, &err);
+    if (err)
+        g_propagate_error(error, err);
+    g_strfreev(given);
+    return ok;
+}
+
+gboolean
+option_parse_naming_strv(GOptionContext *context, gchar ***args, GError **error)
+{
+    gchar **given = g_strdupv(*args);
+    GError *err = NULL;
+    gboolean ok;
+
+    ok = g_option_context_parse_strv(context, args, &err);
+    name_unconvertible(given, &err);
     if (err)
         g_propagate_error(error, err);
     g_strfreev(given);

@@ -18,6 +18,10 @@ gboolean option_parse_naming(GOptionContext *context,
                              gint *argc,
                              gchar ***argv,
                              GError **error);
+/* The same for g_option_context_parse_strv(). */
+gboolean option_parse_naming_strv(GOptionContext *context,
+                                  gchar ***args,
+                                  GError **error);
 
 /* The message for an option's value that is not text: which option's
  * value it is ("--line-time" for "--line-time=V" or for V after
