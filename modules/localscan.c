@@ -1511,6 +1511,30 @@ append_timing(GString *status, const ScanTiming *timing, LocalscanTimingFound fo
 
 /* Short lines: the message must not widen the dialog.  A reduced preview
  * says so; its filled pixels are counted on it and scaled to the image. */
+/* Local scans the line-by-line trajectory leaves out as gross errors
+ * (localscan_continuous_left_out), named by stripe: the result does not
+ * follow them, as the command line says too. */
+static void
+append_left_out(GString *status, ModuleArgs *args)
+{
+    LocalscanOptions options;
+    gint *stripes, n, i;
+
+    if (!args->table)
+        return;
+    stripes = g_new(gint, MAX(args->table->n_stripes, 1));
+    gather_options(args, &options);
+    n = localscan_continuous_left_out(args->field, args->table, &options, stripes, NULL);
+    if (n > 0) {
+        g_string_append_c(status, '\n');
+        g_string_append(status, _("Left out, far from the other stripes' drift: stripe"));
+        for (i = 0; i < n; i++)
+            g_string_append_printf(status, i ? ", %d" : " %d", stripes[i]);
+        g_string_append_c(status, '.');
+    }
+    g_free(stripes);
+}
+
 static gchar*
 format_status(ModuleGUI *gui)
 {
@@ -1534,6 +1558,7 @@ format_status(ModuleGUI *gui)
         return g_string_free(status, FALSE);
     g_string_append_c(status, '\n');
     append_timing(status, &args->timing, args->timing_found);
+    append_left_out(status, args);
     return g_string_free(status, FALSE);
 }
 

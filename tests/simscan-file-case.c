@@ -69,22 +69,32 @@ simscan_file_timing(const SimscanFileCase *fcase, GwyDataField *field, ScanTimin
 }
 
 gdouble
-simscan_file_worst_stripe_px(const SimscanFileCase *fcase, const DriftTable *table, GwyDataField *field)
+simscan_file_stripe_error_px(const SimscanFileCase *fcase, const DriftTable *table,
+                             GwyDataField *field, gint s)
 {
     gdouble xstep = gwy_data_field_get_dx(field)*1e9, ystep = gwy_data_field_get_dy(field)*1e9;
-    gdouble worst = 0.0, dx, dy, t_image, t_local, ex, ey;
+    gdouble dx, dy, t_image, t_local, ex, ey;
+
+    if (!table->rows[s].has_drift)
+        return NAN;
+    g_assert(drift_table_get_extra(table, s, "dx_exact", &dx)
+             && drift_table_get_extra(table, s, "dy_exact", &dy)
+             && drift_table_get_extra(table, s, "t_image", &t_image)
+             && drift_table_get_extra(table, s, "t_local", &t_local));
+    ex = dx - fcase->velocity[0]*(t_image - t_local)/xstep;
+    ey = dy - fcase->velocity[1]*(t_image - t_local)/ystep;
+    return sqrt(ex*ex + ey*ey);
+}
+
+gdouble
+simscan_file_worst_stripe_px(const SimscanFileCase *fcase, const DriftTable *table, GwyDataField *field)
+{
+    gdouble worst = 0.0, e;
     gint s;
 
     for (s = 0; s < table->n_stripes; s++) {
-        if (!table->rows[s].has_drift)
-            continue;
-        g_assert(drift_table_get_extra(table, s, "dx_exact", &dx)
-                 && drift_table_get_extra(table, s, "dy_exact", &dy)
-                 && drift_table_get_extra(table, s, "t_image", &t_image)
-                 && drift_table_get_extra(table, s, "t_local", &t_local));
-        ex = dx - fcase->velocity[0]*(t_image - t_local)/xstep;
-        ey = dy - fcase->velocity[1]*(t_image - t_local)/ystep;
-        worst = fmax(worst, sqrt(ex*ex + ey*ey));
+        if (!isnan(e = simscan_file_stripe_error_px(fcase, table, field, s)))
+            worst = fmax(worst, e);
     }
     return worst;
 }

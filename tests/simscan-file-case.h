@@ -43,9 +43,15 @@ void          simscan_file_timing          (const SimscanFileCase *fcase,
                                             GwyDataField *field,
                                             ScanTiming *timing);
 
-/* The largest error of a measured stripe's dx_exact, dy_exact against the
- * true p(t_image) - p(t_local), px: a few tenths when every local scan
- * measured its own particle, pixels when one measured a neighbour. */
+/* How far the local scan of stripe s of the file's table (its dx_exact,
+ * dy_exact) lies from the true p(t_image) - p(t_local), px; NAN for a
+ * stripe without one. */
+gdouble       simscan_file_stripe_error_px (const SimscanFileCase *fcase,
+                                            const DriftTable *table,
+                                            GwyDataField *field,
+                                            gint s);
+/* The largest of them: a few tenths when every local scan measured its
+ * own particle, pixels when one measured a neighbour. */
 gdouble       simscan_file_worst_stripe_px (const SimscanFileCase *fcase,
                                             const DriftTable *table,
                                             GwyDataField *field);

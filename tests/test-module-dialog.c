@@ -167,6 +167,54 @@ START_TEST(test_good_table_ok_makes_channel)
 }
 END_TEST
 
+/* Continuous mode names the stripe whose local scan it leaves out as a
+ * gross error (6-20 px in a random direction on a random stripe of a
+ * smooth drift), as gwy-localscan does. */
+START_TEST(test_status_names_left_out_stripe)
+{
+    GRand *rng = test_rand_salted(test_seed, 7400);
+    GwyDataField *field = gwy_data_field_new(32, 48, 32e-9, 48e-9, FALSE);
+    GwyContainer *data = gwy_container_new();
+    GString *table = g_string_new("stripe,dx,dy\n");
+    gint bad = g_rand_int_range(rng, 0, 12), s;
+    gdouble size = g_rand_double_range(rng, 6.0, 20.0), angle = g_rand_double_range(rng, 0.0, 2.0*G_PI);
+    gchar *expected;
+    DialogProbe probe = { NULL, GTK_RESPONSE_CANCEL, 0, FALSE, FALSE, FALSE, FALSE, NULL, FALSE };
+
+    for (s = 0; s < 32*48; s++)
+        gwy_data_field_get_data(field)[s] = 1e-9*g_rand_double(rng);
+    for (s = 0; s < 12; s++) {
+        gdouble dx = 0.5 + 0.05*s, dy = -0.3 + 0.02*s;
+
+        if (s == bad) {
+            dx += size*cos(angle);
+            dy += size*sin(angle);
+        }
+        g_string_append_printf(table, "%d,%.4f,%.4f\n", s, dx, dy);
+    }
+    gwy_si_unit_set_from_string(gwy_data_field_get_si_unit_xy(field), "m");
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(0), field);
+    gwy_container_set_const_string_by_name(data, "/0/data/title", (const guchar*)"Height");
+    localscan_channel_store_table_text(data, 0, table->str);
+    gwy_app_data_browser_add(data);
+    gwy_app_data_browser_select_data_field(data, 0);
+    set_stored_table_settings();
+    gwy_container_set_int32_by_name(gwy_app_settings_get(), LOCALSCAN_SETTINGS_KEY(MODE), 1);
+    expected = g_strdup_printf("Left out, far from the other stripes' drift: stripe %d.", bad);
+    probe.wait_for_text = expected;
+    run_dialog(data, &probe);
+    ck_assert(probe.found_dialog);
+    ck_assert_msg(probe.found_text, "seed %u: the dialog does not name stripe %d (%.1f px off)",
+                  test_seed, bad, size);
+    gwy_app_data_browser_remove(data);
+    g_object_unref(data);
+    g_object_unref(field);
+    g_string_free(table, TRUE);
+    g_free(expected);
+    g_rand_free(rng);
+}
+END_TEST
+
 /* Continuous mode says where each part of the scan timing came from. */
 START_TEST(test_status_names_timing_source)
 {
@@ -549,6 +597,7 @@ main(int argc, char **argv)
     tcase_add_test(tc, test_bad_table_disables_ok);
     tcase_add_test(tc, test_good_table_ok_makes_channel);
     tcase_add_test(tc, test_status_names_timing_source);
+    tcase_add_test(tc, test_status_names_left_out_stripe);
     tcase_add_test(tc, test_reference_chooser_and_cache);
     /* One X connection, one process. */
     return test_run_suite_forking(suite, FALSE);

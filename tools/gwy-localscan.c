@@ -825,6 +825,25 @@ settings_interpolation(void)
     return interpolation;
 }
 
+/* Local scans the line-by-line trajectory leaves out as gross errors are
+ * named: the result no longer follows them, and the user should know
+ * which line of the table said what the others contradict. */
+static void
+warn_left_out(GwyDataField *field, const DriftTable *table, const LocalscanOptions *lo)
+{
+    gint *stripes = g_new(gint, MAX(table->n_stripes, 1)), n, i;
+
+    n = localscan_continuous_left_out(field, table, lo, stripes, NULL);
+    for (i = 0; i < n; i++) {
+        g_printerr(_("%s: warning: %s:%d: stripe %d's drift is far from what the "
+                     "other stripes' say and is left out of the line-by-line "
+                     "compensation\n"),
+                   PROGRAM_NAME, table->source_name, table->rows[stripes[i]].line,
+                   stripes[i]);
+    }
+    g_free(stripes);
+}
+
 /* Continuous compensation checked here as the module will do it (planned,
  * not computed: the module computes it once), so that its refusals name
  * the table as the user named it (not the absolute path the module is
@@ -848,8 +867,10 @@ check_continuous(GwyContainer *data, gint id, const DriftTable *table, GwyDataFi
     lo.direction = timing.direction;
     lo.frame_start = timing.frame_start;
     ok = localscan_compensate_check(field, table, &lo, &err);
-    if (ok)
+    if (ok) {
+        warn_left_out(field, table, &lo);
         return TRUE;
+    }
     if (g_error_matches(err, CONTINUOUS_COMPENSATE_ERROR, CONTINUOUS_COMPENSATE_ERROR_TOO_FAST))
         g_set_error(error, err->domain, err->code, "%s: %s", table->source_name, err->message);
     else

@@ -14,6 +14,7 @@
 #include "localscan-channel.h"
 #include "paper-compensate.h"
 #include "continuous-compensate.h"
+#include "drift-trajectory.h"
 #include "stripe-geometry.h"
 #include "scan-timing-meta.h"
 #include "missing-data.h"
@@ -403,6 +404,45 @@ localscan_compensate_check(GwyDataField *field, const DriftTable *table,
                                              gwy_data_field_get_dx(field),
                                              gwy_data_field_get_dy(field),
                                              &timing, options->interpolation, error);
+}
+
+gint
+localscan_continuous_left_out(GwyDataField *field, const DriftTable *table,
+                              const LocalscanOptions *options, gint *stripes,
+                              GError **error)
+{
+    gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
+    gdouble xstep = gwy_data_field_get_dx(field), ystep = gwy_data_field_get_dy(field);
+    DriftMeasurement *meas;
+    DriftTrajectory *trajectory = NULL;
+    gdouble a[2], b[2];
+    ScanTiming timing;
+    gint i, m, n = 0;
+
+    if (options->mode == LOCALSCAN_MODE_PAPER)
+        return 0;
+    scan_timing_init(&timing, xres, yres,
+                     options->frame_start, options->line_time, options->direction);
+    meas = g_new0(DriftMeasurement, MAX(table->n_stripes, 1));
+    m = drift_trajectory_measurements_from_table(table, xstep, ystep, &timing, meas, error);
+    if (m >= 0)
+        trajectory = drift_trajectory_new_from_table(table, xstep, ystep, &timing, error);
+    if (!trajectory) {
+        g_free(meas);
+        return -1;
+    }
+    for (i = 0; i < m; i++) {
+        if (drift_trajectory_measurement_weight(trajectory, i) >= DRIFT_TRAJECTORY_DOWNWEIGHTED)
+            continue;
+        drift_trajectory_eval(trajectory, meas[i].t_a, a, a + 1);
+        drift_trajectory_eval(trajectory, meas[i].t_b, b, b + 1);
+        if (hypot(meas[i].dx - (a[0] - b[0]), meas[i].dy - (a[1] - b[1]))
+            > LOCALSCAN_LEFT_OUT_MIN_PX)
+            stripes[n++] = drift_trajectory_measurement_stripe(trajectory, i);
+    }
+    drift_trajectory_free(trajectory);
+    g_free(meas);
+    return n;
 }
 
 gboolean

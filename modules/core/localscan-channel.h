@@ -177,6 +177,21 @@ gboolean     localscan_compensate_check      (GwyDataField *field,
                                               const DriftTable *table,
                                               const LocalscanOptions *options,
                                               GError **error);
+/* The stripes whose local scans continuous compensation of field with
+ * table and options leaves out of its trajectory as gross errors (the
+ * robust smoothing gives them a weight below DRIFT_TRAJECTORY_DOWNWEIGHTED:
+ * a local scan that found another particle, a value mistyped) and lie more
+ * than LOCALSCAN_LEFT_OUT_MIN_PX from it (local scans scatter by tenths of
+ * a pixel, and a tenth may be an outlier among exact ones), in table
+ * order, into stripes (room for table->n_stripes); returns how many, -1
+ * with error where the trajectory cannot be built.  Paper mode leaves
+ * none out (0). */
+#define LOCALSCAN_LEFT_OUT_MIN_PX 1.0
+gint         localscan_continuous_left_out   (GwyDataField *field,
+                                              const DriftTable *table,
+                                              const LocalscanOptions *options,
+                                              gint *stripes,
+                                              GError **error);
 
 /* A copy of a px table with dx, dy rounded to whole pixels by
  * drift_px_round(), as stripe_registration_to_table() rounds them, extra
