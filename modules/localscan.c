@@ -1509,32 +1509,48 @@ append_timing(GString *status, const ScanTiming *timing, LocalscanTimingFound fo
                            (found & LOCALSCAN_TIMING_FRAME_START) ? from_meta : setting);
 }
 
-/* Short lines: the message must not widen the dialog.  A reduced preview
- * says so; its filled pixels are counted on it and scaled to the image. */
 /* Local scans the line-by-line trajectory leaves out as gross errors
  * (localscan_continuous_left_out), named by stripe: the result does not
- * follow them, as the command line says too. */
+ * follow them, as the command line says too.  At most LEFT_OUT_LISTED are
+ * listed (the line must not widen the dialog); a registration of a
+ * reduced preview is not judged (its scatter, scaled to the image, is not
+ * the full registration's). */
+#define LEFT_OUT_LISTED 4
+
 static void
-append_left_out(GString *status, ModuleArgs *args)
+append_left_out(GString *status, ModuleGUI *gui)
 {
+    ModuleArgs *args = gui->args;
     LocalscanOptions options;
+    GString *list;
     gint *stripes, n, i;
 
-    if (!args->table)
+    if (!args->table
+        || (preview_field_is_reduced(gui->preview)
+            && gwy_params_get_enum(args->params, PARAM_SOURCE) == LOCALSCAN_SOURCE_REFERENCE))
         return;
     stripes = g_new(gint, MAX(args->table->n_stripes, 1));
     gather_options(args, &options);
-    n = localscan_continuous_left_out(args->field, args->table, &options, stripes, NULL);
+    n = localscan_continuous_left_out(args->field, args->table, &options, stripes, NULL, NULL);
     if (n > 0) {
+        list = g_string_new(NULL);
+        for (i = 0; i < MIN(n, LEFT_OUT_LISTED); i++)
+            g_string_append_printf(list, i ? ", %d" : "%d", stripes[i]);
+        if (n > LEFT_OUT_LISTED)
+            g_string_append(list, ", ...");
         g_string_append_c(status, '\n');
-        g_string_append(status, _("Left out, far from the other stripes' drift: stripe"));
-        for (i = 0; i < n; i++)
-            g_string_append_printf(status, i ? ", %d" : " %d", stripes[i]);
-        g_string_append_c(status, '.');
+        g_string_append_printf(status,
+                               dngettext(GETTEXT_PACKAGE,
+                                         "Stripe %s lies far from the others' drift: left out.",
+                                         "Stripes %s lie far from the others' drift: left out.", n),
+                               list->str);
+        g_string_free(list, TRUE);
     }
     g_free(stripes);
 }
 
+/* Short lines: the message must not widen the dialog.  A reduced preview
+ * says so; its filled pixels are counted on it and scaled to the image. */
 static gchar*
 format_status(ModuleGUI *gui)
 {
@@ -1558,7 +1574,7 @@ format_status(ModuleGUI *gui)
         return g_string_free(status, FALSE);
     g_string_append_c(status, '\n');
     append_timing(status, &args->timing, args->timing_found);
-    append_left_out(status, args);
+    append_left_out(status, gui);
     return g_string_free(status, FALSE);
 }
 

@@ -200,7 +200,7 @@ START_TEST(test_status_names_left_out_stripe)
     gwy_app_data_browser_select_data_field(data, 0);
     set_stored_table_settings();
     gwy_container_set_int32_by_name(gwy_app_settings_get(), LOCALSCAN_SETTINGS_KEY(MODE), 1);
-    expected = g_strdup_printf("Left out, far from the other stripes' drift: stripe %d.", bad);
+    expected = g_strdup_printf("Stripe %d lies far from the others' drift: left out.", bad);
     probe.wait_for_text = expected;
     run_dialog(data, &probe);
     ck_assert(probe.found_dialog);

@@ -182,9 +182,16 @@ START_TEST(test_binned_registration_accuracy)
     printf("binned %dx%d, N = %d: %d accepted, rms %.4f px, worst %.4f px\n", res, res, N, accepted, rms, worst);
     ck_assert_msg(accepted == N, "%d of %d stripes accepted (seed %u)", accepted, N, test_seed);
     ck_assert_msg(rms <= 0.05 && worst <= 0.15, "rms %g px, worst %g px (seed %u)", rms, worst, test_seed);
-    /* The uncertainty, in px of the frames given, covers the error. */
-    for (s = 0; s < N; s++)
+    /* The uncertainty, in px of the frames given, covers the error; the
+     * row each shift is that of lies in its stripe's rows as given (in
+     * binned rows it would lie in the stripe's first half). */
+    for (s = 0; s < N; s++) {
         ck_assert_msg(shifts[s].sigma > 0.0 && shifts[s].sigma < 0.5, "stripe %d sigma %g", s, shifts[s].sigma);
+        ck_assert_msg(shifts[s].row >= s*res/N - 0.5 && shifts[s].row <= (s + 1)*res/N - 0.5
+                      && fabs(shifts[s].row - ((s + 0.5)*res/N - 0.5)) <= 0.25*res/N,
+                      "stripe %d (rows %d-%d): row %g (seed %u)", s, s*res/N, (s + 1)*res/N - 1,
+                      shifts[s].row, test_seed);
+    }
     /* Binned, and its sigma in px of the frames given: a column less, the
      * same pair is registered at full resolution, whose sigma is about
      * half (a binned pixel is two; 1 if nothing was binned, 0.5 if the

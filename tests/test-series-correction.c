@@ -29,7 +29,11 @@
  * were a trajectory of 0.27 px, a stripe of 0.38 px and a frame of
  * 0.32 px, a fast settling whose excess travel is read a few per cent
  * short (seed 8000147) or an oscillation beside a slipped frame (seed
- * 8000189). */
+ * 8000189).  Later soaks found fast settlings whose frames lay 0.44 and
+ * 0.40 px off (seeds 800000065 and 576000040, case 1 and 6; 0.40 and
+ * 0.36 px since blocks are timed at the row the registration measured):
+ * frame 0's first rows, the only view of the settling's start, read
+ * 0.4-0.5 px off in every pair alike (docs/series.md, not done yet). */
 #define TRAJECTORY_RMS_MAX 0.4
 #define STRIPE_MAX 0.5
 #define FRAME_MAX 0.4
@@ -247,14 +251,38 @@ featureless_after_jump(const gdouble *texture, const ScanTiming *timing,
  * featureless lines in that window).  Seed 480000936 of
  * test_hidden_drift_corrected drew such a case: 5.9 px on a featureless
  * last line, and no word of it. */
+static void check_jump_in_featureless_lines(gint loop);
+
 START_TEST(test_jump_in_featureless_lines)
 {
-    GRand *rng = test_rand_salted(base_seed, 5000 + _i);
+    check_jump_in_featureless_lines(_i);
+}
+END_TEST
+
+/* The draw of seed 900000136, loop 0 (case 611): a line before the jump,
+ * compared over part of its width, was judged by the texture of the
+ * whole line and voted after the jump, and the featureless lines were
+ * not reported (docs/series.md, step 5).  Replayed whatever the seed. */
+START_TEST(test_jump_in_featureless_lines_partly_predicted)
+{
+    guint32 saved = base_seed;
+
+    base_seed = 900000136;
+    check_jump_in_featureless_lines(0);
+    base_seed = saved;
+}
+END_TEST
+
+/* Loop `loop` of test_jump_in_featureless_lines, drawn from base_seed. */
+static void
+check_jump_in_featureless_lines(gint loop)
+{
+    GRand *rng = test_rand_salted(base_seed, 5000 + loop);
     SeriesCaseOptions options = { FALSE, 1 };
     DriftModel model;
     SeriesCorrection correction;
     FrameSeries *series;
-    gint attempt, i = 600 + 200*_i;
+    gint attempt, i = 600 + 200*loop;
     gboolean warned = FALSE;
     guint w;
 
@@ -270,7 +298,7 @@ START_TEST(test_jump_in_featureless_lines)
     for (w = 0; w < correction.warnings->len; w++)
         warned |= (strstr(g_ptr_array_index(correction.warnings, w), "may lie anywhere") != NULL);
     printf("featureless %d (case %d): jump at %.2f s, window %.2f-%.2f s, %d lines tied\n",
-           _i, i, model.t_jump, correction.jump_window[0], correction.jump_window[1],
+           loop, i, model.t_jump, correction.jump_window[0], correction.jump_window[1],
            correction.jump_tied_lines);
     ck_assert_msg(warned && correction.jump_tied_lines >= 2,
                   "case %d (seed %u): %d lines tied, not reported", i, base_seed,
@@ -293,7 +321,6 @@ START_TEST(test_jump_in_featureless_lines)
     drift_model_clear(&model);
     g_rand_free(rng);
 }
-END_TEST
 
 /* Progress of the correction: fractions recorded; stop_at (>= 0) makes the
  * call of that number stop it. */
@@ -935,6 +962,7 @@ main(void)
     tcase_add_loop_test(tc, test_hidden_drift_corrected, 0, N_CASES);
     tcase_add_loop_test(tc, test_jump_before_slipped_frame, 0, 3);
     tcase_add_loop_test(tc, test_jump_in_featureless_lines, 0, 2);
+    tcase_add_test(tc, test_jump_in_featureless_lines_partly_predicted);
     tcase_add_test(tc, test_progress_and_cancel);
     tcase_add_loop_test(tc, test_random_walk_smooth, 0, 2);
     tcase_add_test(tc, test_outputs);

@@ -825,52 +825,40 @@ settings_interpolation(void)
     return interpolation;
 }
 
-/* Local scans the line-by-line trajectory leaves out as gross errors are
- * named: the result no longer follows them, and the user should know
- * which line of the table said what the others contradict. */
-static void
-warn_left_out(GwyDataField *field, const DriftTable *table, const LocalscanOptions *lo)
-{
-    gint *stripes = g_new(gint, MAX(table->n_stripes, 1)), n, i;
-
-    n = localscan_continuous_left_out(field, table, lo, stripes, NULL);
-    for (i = 0; i < n; i++) {
-        g_printerr(_("%s: warning: %s:%d: stripe %d's drift is far from what the "
-                     "other stripes' say and is left out of the line-by-line "
-                     "compensation\n"),
-                   PROGRAM_NAME, table->source_name, table->rows[stripes[i]].line,
-                   stripes[i]);
-    }
-    g_free(stripes);
-}
-
 /* Continuous compensation checked here as the module will do it (planned,
  * not computed: the module computes it once), so that its refusals name
  * the table as the user named it (not the absolute path the module is
  * given); the few that do not name it get its name. */
+/* The options continuous compensation of channel id runs with: its
+ * metadata's timing, the command line's where the metadata says nothing. */
+static void
+continuous_options(GwyContainer *data, gint id, LocalscanOptions *lo)
+{
+    const TimingFallback *tf = &timing_fallback;
+    ScanTiming timing;
+
+    localscan_channel_scan_timing_fallback(data, id, tf->line_time, tf->direction,
+                                           tf->frame_start, &timing);
+    lo->mode = LOCALSCAN_MODE_CONTINUOUS;
+    lo->fill = LOCALSCAN_FILL_MEAN;
+    lo->interpolation = settings_interpolation();
+    lo->line_time = timing.line_time;
+    lo->direction = timing.direction;
+    lo->frame_start = timing.frame_start;
+}
+
 static gboolean
 check_continuous(GwyContainer *data, gint id, const DriftTable *table, GwyDataField *field,
                  GError **error)
 {
-    const TimingFallback *tf = &timing_fallback;
     LocalscanOptions lo;
-    ScanTiming timing;
     GError *err = NULL;
     gboolean ok;
 
-    localscan_channel_scan_timing_fallback(data, id, tf->line_time, tf->direction,
-                                           tf->frame_start, &timing);
-    lo.mode = LOCALSCAN_MODE_CONTINUOUS;
-    lo.fill = LOCALSCAN_FILL_MEAN;
-    lo.interpolation = settings_interpolation();
-    lo.line_time = timing.line_time;
-    lo.direction = timing.direction;
-    lo.frame_start = timing.frame_start;
+    continuous_options(data, id, &lo);
     ok = localscan_compensate_check(field, table, &lo, &err);
-    if (ok) {
-        warn_left_out(field, table, &lo);
+    if (ok)
         return TRUE;
-    }
     if (g_error_matches(err, CONTINUOUS_COMPENSATE_ERROR, CONTINUOUS_COMPENSATE_ERROR_TOO_FAST))
         g_set_error(error, err->domain, err->code, "%s: %s", table->source_name, err->message);
     else
@@ -1015,6 +1003,39 @@ unusable_timing(GwyContainer *data, gint id, LocalscanTimingFound known)
     return joined;
 }
 
+/* Local scans the line-by-line trajectory leaves out as gross errors are
+ * named, with how far they lie from it: the result no longer follows
+ * them, and the user should know which line of the table (or which
+ * stripe of the registration) said what the others contradict. */
+static void
+warn_left_out(GwyContainer *data, gint id, const DriftTable *table, GwyDataField *field,
+              const CompensationMode *mode)
+{
+    gint *stripes, n, i;
+    LocalscanOptions lo;
+    gdouble *off;
+
+    if (mode->value != LOCALSCAN_MODE_CONTINUOUS)
+        return;
+    continuous_options(data, id, &lo);
+    stripes = g_new(gint, MAX(table->n_stripes, 1));
+    off = g_new(gdouble, MAX(table->n_stripes, 1));
+    n = localscan_continuous_left_out(field, table, &lo, stripes, off, NULL);
+    for (i = 0; i < n; i++) {
+        if (table->source_name)
+            g_printerr(_("%s: warning: %s:%d: stripe %d's drift lies %.1f px from what the "
+                         "other stripes give; continuous compensation leaves it out\n"),
+                       PROGRAM_NAME, table->source_name, table->rows[stripes[i]].line,
+                       stripes[i], off[i]);
+        else
+            g_printerr(_("%s: warning: the registration's stripe %d lies %.1f px from what "
+                         "the other stripes give; continuous compensation leaves it out\n"),
+                       PROGRAM_NAME, stripes[i], off[i]);
+    }
+    g_free(stripes);
+    g_free(off);
+}
+
 /* Times in the table are compared with the scan's own: a timing neither the
  * file nor the command line gave is a guess the user should know of. */
 static void
@@ -1087,6 +1108,7 @@ run_batch(const CompensationMode *mode, GError **error)
     if (!check_table_fits(data, id, table, field, mode, error))
         goto end;
     warn_assumed_timing(data, input, id, table, mode);
+    warn_left_out(data, id, table, field, mode);
 
     if (options.reference)
         ok = compensate_with_measured(data, id, table, mode, error);

@@ -409,13 +409,13 @@ localscan_compensate_check(GwyDataField *field, const DriftTable *table,
 gint
 localscan_continuous_left_out(GwyDataField *field, const DriftTable *table,
                               const LocalscanOptions *options, gint *stripes,
-                              GError **error)
+                              gdouble *off_px, GError **error)
 {
     gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
     gdouble xstep = gwy_data_field_get_dx(field), ystep = gwy_data_field_get_dy(field);
     DriftMeasurement *meas;
     DriftTrajectory *trajectory = NULL;
-    gdouble a[2], b[2];
+    gdouble a[2], b[2], off;
     ScanTiming timing;
     gint i, m, n = 0;
 
@@ -436,9 +436,12 @@ localscan_continuous_left_out(GwyDataField *field, const DriftTable *table,
             continue;
         drift_trajectory_eval(trajectory, meas[i].t_a, a, a + 1);
         drift_trajectory_eval(trajectory, meas[i].t_b, b, b + 1);
-        if (hypot(meas[i].dx - (a[0] - b[0]), meas[i].dy - (a[1] - b[1]))
-            > LOCALSCAN_LEFT_OUT_MIN_PX)
+        off = hypot(meas[i].dx - (a[0] - b[0]), meas[i].dy - (a[1] - b[1]));
+        if (off > LOCALSCAN_LEFT_OUT_MIN_PX) {
+            if (off_px)
+                off_px[n] = off;
             stripes[n++] = drift_trajectory_measurement_stripe(trajectory, i);
+        }
     }
     drift_trajectory_free(trajectory);
     g_free(meas);

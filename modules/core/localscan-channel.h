@@ -183,14 +183,15 @@ gboolean     localscan_compensate_check      (GwyDataField *field,
  * a local scan that found another particle, a value mistyped) and lie more
  * than LOCALSCAN_LEFT_OUT_MIN_PX from it (local scans scatter by tenths of
  * a pixel, and a tenth may be an outlier among exact ones), in table
- * order, into stripes (room for table->n_stripes); returns how many, -1
- * with error where the trajectory cannot be built.  Paper mode leaves
- * none out (0). */
+ * order, into stripes and their distance from it (px) into off_px (may be
+ * NULL; room for table->n_stripes each); returns how many, -1 with error
+ * where the trajectory cannot be built.  Paper mode leaves none out (0). */
 #define LOCALSCAN_LEFT_OUT_MIN_PX 1.0
 gint         localscan_continuous_left_out   (GwyDataField *field,
                                               const DriftTable *table,
                                               const LocalscanOptions *options,
                                               gint *stripes,
+                                              gdouble *off_px,
                                               GError **error);
 
 /* A copy of a px table with dx, dy rounded to whole pixels by
