@@ -1138,6 +1138,26 @@ slope_z(const ResidualSplit *rs)
     return z;
 }
 
+/* A model missing from the table is said to be so, and why: a table
+ * that silently loses a row reads as if the model had been judged. */
+static void
+write_models_left_out(GString *md, const ResidualSplit *splits, const gboolean *fitted,
+                      gint n_models)
+{
+    const gchar *sep = "\nNot in the table, not fitted in every channel (a period or time "
+                       "constant outside what the channel's blocks can show): ";
+    gint m;
+
+    for (m = 0; m < n_models; m++) {
+        if (fitted[m] && splits[m].n_blocks)
+            continue;
+        g_string_append_printf(md, "%s%s", sep, drift_model_type_name(splits[m].type));
+        sep = ", ";
+    }
+    if (*sep == ',')
+        g_string_append(md, ".\n");
+}
+
 static void
 write_agreement_verdicts(GString *md, const ResidualSplit *splits, const gboolean *fitted,
                          gint n_models, gint chosen)
@@ -1160,8 +1180,8 @@ write_agreement_verdicts(GString *md, const ResidualSplit *splits, const gboolea
                         "errors.");
     else if (flat >= 0)
         g_string_append_printf(md, "  Its shared part changes with the row (beyond 3 standard "
-            "errors), but not against %s (%.2f standard errors): a drift that grows with "
-            "time, which that model follows, explains the slope as well as a drift that "
+            "errors), but not against %s (%.2f standard errors): a drift that changes over "
+            "the series as that model does explains the slope as well as a drift that "
             "repeats in every frame.", drift_model_type_name(splits[flat].type),
             slope_z(splits + flat));
     else
@@ -1202,6 +1222,7 @@ write_channel_agreement(GString *md, const gchar *const *channels, const Residua
                                rs->shared2 < 0.0 ? "-" : "", sqrt(fabs(rs->shared2)),
                                rs->slope[0], rs->slope_se[0], rs->slope[1], rs->slope_se[1]);
     }
+    write_models_left_out(md, splits, fitted, n_models);
     if (!splits[chosen].n_blocks) {
         g_string_append(md, "\nNo block is kept by two channels: the residual cannot be split.\n");
         return;
