@@ -12,6 +12,7 @@
 #include "json-values.h"
 #include "output-files.h"
 #include "option-values.h"
+#include "option-parse.h"
 #include "simscan-i18n.h"
 #include "benchmark-write.h"
 #include "benchmark-score.h"
@@ -78,7 +79,7 @@ simscan_benchmark_main(int argc, char **argv)
     context = g_option_context_new(_("- write the drift benchmark's cases"));
     g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
     g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
-    if (!g_option_context_parse(context, &argc, &argv, &error))
+    if (!option_parse_naming(context, &argc, &argv, &error))
         goto end;
     if (argc > 1) {
         g_set_error(&error, benchmark_error_quark(), 0,
@@ -448,7 +449,7 @@ simscan_score_main(int argc, char **argv)
                                      "benchmark's truth"));
     g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
     g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
-    if (!g_option_context_parse(context, &argc, &argv, &error))
+    if (!option_parse_naming(context, &argc, &argv, &error))
         goto end;
     if (!truth || !results || !results[0]) {
         g_set_error(&error, benchmark_error_quark(), 0,

@@ -25,6 +25,7 @@
 #include "isolated-load.h"
 #include "library-log.h"
 #include "option-values.h"
+#include "option-parse.h"
 #include "simscan-i18n.h"
 
 /* Particles this close to the border are left out, px. */
@@ -321,7 +322,7 @@ simscan_compare_main(int argc, char **argv)
                                      "simscan file"));
     g_option_context_set_translation_domain(context, GETTEXT_PACKAGE);
     g_option_context_add_main_entries(context, entries, GETTEXT_PACKAGE);
-    ok = g_option_context_parse(context, &argc, &argv, &error);
+    ok = option_parse_naming(context, &argc, &argv, &error);
     if (ok && (!options.inputs || g_strv_length(options.inputs) != 1)) {
         g_set_error(&error, G_OPTION_ERROR, G_OPTION_ERROR_FAILED,
                     _("expected one input file"));

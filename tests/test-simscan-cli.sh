@@ -99,6 +99,15 @@ for arg in "--drift=$(printf '\377')" "--velocity=$(printf '\376\377')"; do
     grep -q "^simscan: the value of ${arg%%=*} is not text" "$tmp/err" \
         || fail "$arg: $(cat "$tmp/err")"
 done
+LC_ALL=C "$simscan" benchmark "--size=$(printf '\377')" -o "$tmp/bench-e" >"$tmp/out" 2>"$tmp/err"
+status=$?
+check
+[ $status -ne 0 ] || fail "benchmark --size=<bytes> exited 0"
+check
+grep -q "^simscan benchmark: the value of --size is not text" "$tmp/err" \
+    || fail "benchmark --size=<bytes>: $(cat "$tmp/err")"
+check
+[ ! -e "$tmp/bench-e" ] || fail "benchmark --size=<bytes> left $tmp/bench-e"
 
 # One output unwritable: none of the others is left behind.
 rm -f "$tmp"/e.*
