@@ -223,7 +223,9 @@ image_row_clamped(const StripeSubpixel *sp, gint r)
     return sp->image + (gsize)CLAMP(r, 0, sp->yres - 1)*sp->xres;
 }
 
-/* 1 when the pixel and the taps of its gradients are valid, else 0. */
+/* The product of the weights of the pixel and of its gradients' taps: 1
+ * where all are valid, 0 where one is missing, less where one is a missing
+ * pixel the conditioning restored among data. */
 static gdouble
 tap_validity(const StripeSubpixel *sp, gint r, gint c)
 {
@@ -508,8 +510,13 @@ add_pixel_terms(const StripeSubpixel *sp, gint i, gint c, gdouble *terms)
 }
 
 /* Whether the reference sample of every column of the row is made of
- * valid pixels only: column_valid[c] gets the product of the validity of
- * the four reference rows from top on (c in [lo, hi)). */
+ * pixels present only: column_valid[c] gets the product of the weights of
+ * the four reference rows from top on (c in [lo, hi)).  A pixel restored
+ * among data (weight below 1) is present, and its sample counts in full:
+ * weighing each sample by its taps' weights as the kernel weighs them,
+ * tried, moved nothing (20 % of the reference missing at random: 0.033
+ * against 0.034 px rms from the clean pairs' shifts over 320 stripes) and
+ * summed every row's terms anew at every step. */
 static gboolean
 reference_columns_valid(StripeSubpixel *sp, gint top, gint lo, gint hi)
 {
