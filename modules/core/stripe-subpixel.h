@@ -37,7 +37,8 @@ void            stripe_subpixel_free  (StripeSubpixel *sp);
  * starting from the given values, which must lie within reach px (per
  * axis) of the whole-pixel shift (anchor_dy, anchor_dx).  Returns FALSE,
  * leaving dy and dx unchanged, when the match does not converge within that
- * square or too little of the stripe stays on the reference.  sigma (may
+ * square, too little of the stripe stays on the reference, or less than
+ * half of it meets reference pixels present (the rest in a hole).  sigma (may
  * be NULL) gets the standard uncertainty of the shift, px. */
 gboolean        stripe_subpixel_refine(StripeSubpixel *sp,
                                        gint first,
