@@ -16,7 +16,11 @@ typedef struct {
     gint xres;
     gint yres;
     gdouble *data;           /* yres x xres, unit RMS, 0 where missing */
-    gdouble *weight;         /* yres x xres, 1 where valid, 0 where missing */
+    gdouble *weight;         /* yres x xres, 1 where valid, 0 where missing;
+                                after the band-pass, a missing pixel among
+                                data holds the band-pass's estimate with
+                                the narrow blur's coverage (0.5 to 1) for
+                                weight */
     gdouble *levelled;       /* the same without the band-pass's wide cut
                                 (line offsets, strokes and the column trend
                                 removed, the narrow blur, line medians,
@@ -26,7 +30,8 @@ typedef struct {
                                 into featureless regions and moves content
                                 near the frame's edges; NULL in a
                                 downsampled frame */
-    gdouble valid_fraction;  /* of the pixels */
+    gdouble valid_fraction;  /* of the pixels, valid in the data given
+                                (1: every weight is 1) */
     gdouble narrow_sigma;    /* px, the band-pass's narrow blur: within
                                 about twice this of the frame's edge the
                                 blur is one-sided and moves content */
@@ -34,7 +39,8 @@ typedef struct {
 
 /* Conditions data (yres x xres, row-major): NaN and infinite pixels, and
  * pixels where exclude (may be NULL) is above 0.5, are missing and carry no
- * weight.  Then, on the valid pixels: per-scan-line offsets (medians of the
+ * weight (those among data get the band-pass's estimate and a weight of
+ * its coverage, see weight).  Then, on the valid pixels: per-scan-line offsets (medians of the
  * differences of adjacent lines), strokes one line tall, the plane along x
  * and the bow (a quadratic fitted to the column medians), and a band-pass
  * that keeps features between a pixel or more (more

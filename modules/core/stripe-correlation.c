@@ -29,7 +29,10 @@
  * Missing pixels (weight 0) have value 0 in the conditioned frames.  In the
  * stripe they are left out of every sum; in the reference they add nothing
  * to the cross term and to the reference's sums, which lowers the
- * correlation a little where the stripe meets many of them.
+ * correlation a little where the stripe meets many of them.  Every pixel
+ * present counts once, whatever its weight: the sums are of plain values,
+ * and a weight below 1 (a missing pixel the conditioning restored among
+ * data) is the sub-pixel match's business.
  */
 
 struct _StripeCorrelation {
@@ -50,10 +53,17 @@ struct _StripeCorrelation {
     FFTCorrelation *fc;
 };
 
-/* table[(r+1)*(xres+1) + c+1] = sum of values[i][j] over i <= r, j <= c;
- * square: of the squares. */
+/* What a summed-area table sums. */
+typedef enum {
+    SUM_VALUES,
+    SUM_SQUARES,
+    SUM_PRESENT,   /* how many values are above 0 (weights: pixels present) */
+} SummedQuantity;
+
+/* table[(r+1)*(xres+1) + c+1] = sum of what values[i][j] gives over
+ * i <= r, j <= c. */
 static void
-summed_area_table(const gdouble *values, gint xres, gint yres, gboolean square, gdouble *table)
+summed_area_table(const gdouble *values, gint xres, gint yres, SummedQuantity what, gdouble *table)
 {
     gint r, c, w = xres + 1;
 
@@ -64,7 +74,12 @@ summed_area_table(const gdouble *values, gint xres, gint yres, gboolean square, 
 
         t[0] = 0.0;
         for (c = 0; c < xres; c++) {
-            s += square ? row[c]*row[c] : row[c];
+            if (what == SUM_VALUES)
+                s += row[c];
+            else if (what == SUM_SQUARES)
+                s += row[c]*row[c];
+            else
+                s += (row[c] > 0.0);
             t[c + 1] = above[c + 1] + s;
         }
     }
@@ -124,8 +139,8 @@ stripe_correlation_free(StripeCorrelation *sc)
     g_free(sc);
 }
 
-/* The stripe, zero-mean over its valid pixels and 0 where missing, into the
- * FFT template (rows cols apart) and its own summed-area tables. */
+/* The stripe, zero-mean over its pixels present and 0 where missing, into
+ * the FFT template (rows cols apart) and its own summed-area tables. */
 static void
 prepare_template(StripeCorrelation *sc, gint first, gint end)
 {
@@ -136,17 +151,19 @@ prepare_template(StripeCorrelation *sc, gint first, gint end)
     gdouble *tmpl = fft_correlation_template(sc->fc), s = 0.0, w = 0.0, mean;
 
     for (k = 0; k < n; k++) {
-        s += v[k]*wt[k];
-        w += wt[k];
+        if (wt[k] > 0.0) {
+            s += v[k];
+            w += 1.0;
+        }
     }
     mean = (w > 0.0) ? s/w : 0.0;
     for (k = 0; k < n; k++)
         sc->stripe[k] = (wt[k] > 0.0) ? v[k] - mean : 0.0;
     for (i = 0; i < h; i++)
         memcpy(tmpl + (gsize)i*cols, sc->stripe + (gsize)i*xres, xres*sizeof(gdouble));
-    summed_area_table(sc->stripe, xres, h, FALSE, sc->tmpl_sum);
-    summed_area_table(sc->stripe, xres, h, TRUE, sc->tmpl_sq_sum);
-    summed_area_table(wt, xres, h, FALSE, sc->tmpl_count);
+    summed_area_table(sc->stripe, xres, h, SUM_VALUES, sc->tmpl_sum);
+    summed_area_table(sc->stripe, xres, h, SUM_SQUARES, sc->tmpl_sq_sum);
+    summed_area_table(wt, xres, h, SUM_PRESENT, sc->tmpl_count);
     fft_correlation_set_template(sc->fc);
 }
 
@@ -183,8 +200,8 @@ prepare_slab_sums(StripeCorrelation *sc, gint first, gint end, const StripeCorre
 
     sc->slab_first = r0;
     r1 = MAX(r1, r0);
-    summed_area_table(ref->data + (gsize)r0*ref->xres, ref->xres, r1 - r0, FALSE, sc->ref_sum);
-    summed_area_table(ref->data + (gsize)r0*ref->xres, ref->xres, r1 - r0, TRUE, sc->ref_sq_sum);
+    summed_area_table(ref->data + (gsize)r0*ref->xres, ref->xres, r1 - r0, SUM_VALUES, sc->ref_sum);
+    summed_area_table(ref->data + (gsize)r0*ref->xres, ref->xres, r1 - r0, SUM_SQUARES, sc->ref_sq_sum);
 }
 
 gdouble

@@ -14,9 +14,10 @@ G_BEGIN_DECLS
 typedef struct _StripeSubpixel StripeSubpixel;
 
 /* image and reference are yres x xres, row-major; weight and ref_weight
- * (either may be NULL: all valid) are 1 on the image's and the reference's
- * valid pixels and 0 on their missing ones; window holds xres column
- * weights.  All must outlive the object.  Stripes up to max_height rows can
+ * (either may be NULL: all valid) are the image's and the reference's
+ * pixel weights, 0 on their missing pixels (a weight between 0 and 1
+ * lowers a pixel's share, times its gradient taps'); window holds xres
+ * column weights.  All must outlive the object.  Stripes up to max_height rows can
  * be refined.  Image pixels within edge_margin of the frame's edge take no
  * part (filtered frames are biased there), nor do those whose reference
  * sample reaches a missing pixel. */
@@ -36,9 +37,10 @@ void            stripe_subpixel_free  (StripeSubpixel *sp);
  * starting from the given values, which must lie within reach px (per
  * axis) of the whole-pixel shift (anchor_dy, anchor_dx).  Returns FALSE,
  * leaving dy and dx unchanged, when the match does not converge within that
- * square or too little of the stripe stays on the reference.  sigma (may
- * be NULL) gets the standard uncertainty of the shift, px; row (may be
- * NULL) the image row whose shift it is (see refine_rows). */
+ * square, too little of the stripe stays on the reference, or less than
+ * half of it meets reference pixels present (the rest in a hole).  sigma
+ * (may be NULL) gets the standard uncertainty of the shift, px; row (may
+ * be NULL) the image row whose shift it is (see refine_rows). */
 gboolean        stripe_subpixel_refine(StripeSubpixel *sp,
                                        gint first,
                                        gint end,
