@@ -11,6 +11,7 @@
 #include <libprocess/gwyprocess.h>
 #include "parallel-run.h"
 #include "stripe-registration.h"
+#include "stripe-geometry.h"
 #include "displacement-measure.h"
 
 void
@@ -39,7 +40,7 @@ copy_shifts(const StripeShift *shifts, gint n, gint yres, gdouble *dx, gdouble *
         score[s] = shifts[s].accepted ? CLAMP(shifts[s].peak, 0.0, 1.0) : 0.0;
         if (row)
             row[s] = (shifts[s].accepted && isfinite(shifts[s].row)) ? shifts[s].row
-                     : 0.5*(s*yres/n + (s + 1)*yres/n - 1);
+                     : stripe_centre_row(s, n, yres);
     }
 }
 
