@@ -70,6 +70,18 @@ name_unconvertible(gchar **given, GError **err)
     }
 }
 
+/* What both parses end with: a conversion error named, the copy of the
+ * arguments freed. */
+static gboolean
+parse_finish(gboolean ok, gchar **given, GError *err, GError **error)
+{
+    name_unconvertible(given, &err);
+    if (err)
+        g_propagate_error(error, err);
+    g_strfreev(given);
+    return ok;
+}
+
 gboolean
 option_parse_naming(GOptionContext *context, gint *argc, gchar ***argv, GError **error)
 {
@@ -79,11 +91,7 @@ option_parse_naming(GOptionContext *context, gint *argc, gchar ***argv, GError *
     gboolean ok;
 
     ok = g_option_context_parse(context, argc, argv, &err);
-    name_unconvertible(given, &err);
-    if (err)
-        g_propagate_error(error, err);
-    g_strfreev(given);
-    return ok;
+    return parse_finish(ok, given, err, error);
 }
 
 gboolean
@@ -94,11 +102,7 @@ option_parse_naming_strv(GOptionContext *context, gchar ***args, GError **error)
     gboolean ok;
 
     ok = g_option_context_parse_strv(context, args, &err);
-    name_unconvertible(given, &err);
-    if (err)
-        g_propagate_error(error, err);
-    g_strfreev(given);
-    return ok;
+    return parse_finish(ok, given, err, error);
 }
 
 gboolean
