@@ -134,6 +134,11 @@ mkdir "$tmp/outdir"
 bad_case 2 "it is a folder" $timing -o "$tmp/outdir" $frames
 rmdir "$tmp/outdir"
 bad_case 2 "is empty" $timing -c "" -o "$tmp/bad.gwy" $frames
+# A channel listed twice is one scan taken as two frames, as a file named
+# twice: it was dropped as identical to itself, or with --keep-duplicates
+# corrected as two frames 64 s apart (exit 0 both).
+bad_case 2 "channel 0 is given twice, as frames 0 and 2" $timing --channels 0,1,0 -o "$tmp/bad.gwy" "$tmp/f0.gwy"
+bad_case 2 "channel 1 is given twice, as frames 1 and 2" $timing --keep-duplicates --channels 0,1,1 -o "$tmp/bad.gwy" "$tmp/f0.gwy"
 bad_case 1 "3 frames" --line-time 0.5 --frame-times 0,64 -o "$tmp/bad.gwy" $frames
 bad_case 1 "at least two" --line-time 0.5 --frame-times 0 --channels 0 -o "$tmp/bad.gwy" "$tmp/f0.gwy"
 bad_case 1 "nosuch.gwy" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/nosuch.gwy"
