@@ -5,6 +5,7 @@
  *  SPDX-License-Identifier: GPL-2.0-or-later
  */
 #include "config.h"
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -15,6 +16,9 @@
 #include "test-common.h"
 
 static gchar *dir;
+
+/* The user id root takes to meet a file it may not write: nobody's. */
+#define UNPRIVILEGED_UID 65534
 
 static void
 make_dir(void)
@@ -306,6 +310,41 @@ START_TEST(test_add_refuses_folder_and_repeats)
 }
 END_TEST
 
+/* A file the user may not write is not replaced: renamed over, which
+ * needs only the folder's rights, a file made read-only (chmod a-w) was
+ * replaced by one the user owns.  The folder is open to all, so that only
+ * the file's rights stand in the way; root, who may write any file, tries
+ * it with nobody's rights (the effective user id only). */
+START_TEST(test_read_only_target_kept)
+{
+    OutputFiles *files = output_files_new();
+    gboolean as_root = (geteuid() == 0), added;
+    GError *error = NULL;
+    gchar *locked, *msg;
+
+    make_dir();
+    put("locked.gwy", "old");
+    locked = path("locked.gwy");
+    ck_assert_int_eq(g_chmod(locked, 0444), 0);
+    ck_assert_int_eq(g_chmod(dir, 0777), 0);
+    if (as_root)
+        ck_assert_int_eq(seteuid(UNPRIVILEGED_UID), 0);
+    added = add(files, "locked.gwy", "new", &error);
+    output_files_free(files);
+    if (as_root)
+        ck_assert_int_eq(seteuid(0), 0);
+    ck_assert_msg(!added, "a read-only file was taken as an output");
+    msg = g_strdup_printf("cannot write %s: %s", locked, g_strerror(EACCES));
+    ck_assert_str_eq(error->message, msg);
+    g_clear_error(&error);
+    assert_contents("locked.gwy", "old");
+    assert_listing("locked.gwy");
+    g_free(msg);
+    g_free(locked);
+    remove_dir();
+}
+END_TEST
+
 START_TEST(test_same_file)
 {
     gchar *a, *b, *c, *link_a, *dot_a, *missing, *missing2, *base;
@@ -396,6 +435,7 @@ main(void)
     tcase_add_test(tc, test_failed_rename_rolls_back);
     tcase_add_test(tc, test_free_without_commit);
     tcase_add_test(tc, test_add_refuses_folder_and_repeats);
+    tcase_add_test(tc, test_read_only_target_kept);
     tcase_add_test(tc, test_same_file);
     tcase_add_test(tc, test_check_roles);
     return test_run_suite(suite);

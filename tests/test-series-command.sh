@@ -134,8 +134,39 @@ mkdir "$tmp/outdir"
 bad_case 2 "it is a folder" $timing -o "$tmp/outdir" $frames
 rmdir "$tmp/outdir"
 bad_case 2 "is empty" $timing -c "" -o "$tmp/bad.gwy" $frames
+# A channel listed twice is one scan taken as two frames, as a file named
+# twice: it was dropped as identical to itself, or with --keep-duplicates
+# corrected as two frames 64 s apart (exit 0 both).
+bad_case 2 "channel 0 is given twice, as frames 0 and 2" $timing --channels 0,1,0 -o "$tmp/bad.gwy" "$tmp/f0.gwy"
+bad_case 2 "channel 1 is given twice, as frames 1 and 2" $timing --keep-duplicates --channels 0,1,1 -o "$tmp/bad.gwy" "$tmp/f0.gwy"
 bad_case 1 "3 frames" --line-time 0.5 --frame-times 0,64 -o "$tmp/bad.gwy" $frames
 bad_case 1 "at least two" --line-time 0.5 --frame-times 0 --channels 0 -o "$tmp/bad.gwy" "$tmp/f0.gwy"
+# A title two channels of a file share names neither: refused with their
+# ids, as the one-image command refuses it (the lower id was taken).
+python3 - "$tmp/f7.gwy" "$tmp/f8.gwy" <<'PY'
+import struct, sys
+def obj(name, comps):
+    body = b''.join(comps)
+    return name.encode() + b'\0' + struct.pack('<I', len(body)) + body
+def comp(name, kind, payload):
+    return name.encode() + b'\0' + kind.encode() + payload
+def field(seed):
+    data = [((i * 7919 + seed) % 13) * 1e-10 for i in range(32 * 32)]
+    return obj('GwyDataField', [
+        comp('xres', 'i', struct.pack('<i', 32)), comp('yres', 'i', struct.pack('<i', 32)),
+        comp('xreal', 'd', struct.pack('<d', 1e-6)), comp('yreal', 'd', struct.pack('<d', 1e-6)),
+        comp('data', 'D', struct.pack('<I', 32 * 32) + struct.pack('<1024d', *data))])
+for k, path in enumerate(sys.argv[1:]):
+    comps = []
+    for cid in (0, 1):
+        comps.append(comp('/%d/data' % cid, 'o', field(2 * k + cid)))
+        comps.append(comp('/%d/data/title' % cid, 's', b'Height\0'))
+    with open(path, 'wb') as fh:
+        fh.write(b'GWYP' + obj('GwyContainer', comps))
+PY
+bad_case 1 "f7.gwy: 2 channels are titled 'Height' (ids 0, 1): give the id" \
+    --line-time 0.5 --frame-times 0,64 -c Height -o "$tmp/bad.gwy" "$tmp/f7.gwy" "$tmp/f8.gwy"
+rm -f "$tmp/f7.gwy" "$tmp/f8.gwy"
 bad_case 1 "nosuch.gwy" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/nosuch.gwy"
 printf 'not a gwy file\n' >"$tmp/notes.txt"
 bad_case 1 "notes.txt" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/notes.txt"

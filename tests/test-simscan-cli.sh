@@ -132,8 +132,9 @@ for k in 0 1 2; do
         --velocity 1,0.5 --offset $((100 * k)),$((50 * k)) -o "$tmp/f$k.gwy" \
         || fail "frame $k exited non-zero"
 done
-# write_gwy FILE ID XRES YRES noise|particles: one channel, id ID, of
-# hemispheres 3 px in radius on a flat ground, or of small noise.
+# write_gwy FILE ID XRES YRES noise|white|particles: one channel, id ID, of
+# hemispheres 3 px in radius on a flat ground, of small noise (a pattern
+# repeated every 13 pixels), or of white noise drawn from the file's name.
 write_gwy() {
     python3 - "$@" <<'PY'
 import math, struct, sys
@@ -145,6 +146,10 @@ def comp(name, kind, payload):
 path, cid, xres, yres, kind = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
 dx = 1e-6 / 32
 data = [((i * 7919 + len(path)) % 13) * 1e-10 for i in range(xres * yres)]
+if kind == 'white':
+    import random
+    rng = random.Random(path)
+    data = [rng.gauss(0, 1e-10) for i in range(xres * yres)]
 if kind == 'particles':
     data = [0.0] * (xres * yres)
     for cy in range(8, yres - 4, 12):
@@ -220,6 +225,25 @@ fit_bad_case "3 lines" --line-time 1 --frame-times 0,100 --blocks 1 \
     "$tmp/tiny0.gwy" "$tmp/tiny-frame1.gwy"
 fit_bad_case "3 lines" --line-time 1 --frame-times 0,100 \
     "$tmp/tiny0.gwy" "$tmp/tiny-frame1.gwy"
+
+# Frames of white noise match a few blocks by chance: the fit says that it
+# rests on few measurements, on stderr and in the notes (it chose a jump of
+# 825 nm from 4 of 48 blocks, and said nothing).  The particles' frames
+# register every block and get no such warning.
+for k in 0 1 2; do
+    write_gwy "$tmp/white$k.gwy" 0 64 64 white
+done
+"$simscan" fit $fit_timing --json "$tmp/white.json" "$tmp"/white[012].gwy 2>"$tmp/err" \
+    || fail "fit of white noise exited non-zero: $(cat "$tmp/err")"
+check
+grep -q "^simscan fit: warning: only [0-9]* of 48 measurements could be used" "$tmp/err" \
+    || fail "fit of white noise: no warning: $(cat "$tmp/err")"
+check
+grep -q '"only [0-9]* of 48 measurements could be used' "$tmp/white.json" \
+    || fail "fit of white noise: no note in the JSON"
+"$simscan" fit $fit_timing --json "$tmp/fit.json" $fit_frames 2>"$tmp/err"
+check
+[ ! -s "$tmp/err" ] || fail "fit of three good frames: $(cat "$tmp/err")"
 
 # An output that is a folder: refused before any output is renamed.
 rm -f "$tmp"/e.*

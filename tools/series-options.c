@@ -124,6 +124,32 @@ parse_channel_id(const gchar *text, gint *id)
     return TRUE;
 }
 
+/* An id listed twice is one scan taken as two frames, refused as a file
+ * named twice is: it was dropped as identical to itself, or with
+ * --keep-duplicates kept as two frames (with --frame-times) or refused as
+ * out of time order with itself (times from the metadata). */
+static gboolean
+refuse_repeated_id(const gint *ids, gint n, GError **error)
+{
+    GHashTable *first_frame = g_hash_table_new(g_direct_hash, g_direct_equal);
+    gpointer first;
+    gboolean ok = TRUE;
+    gint i;
+
+    for (i = 0; i < n && ok; i++) {
+        if (g_hash_table_lookup_extended(first_frame, GINT_TO_POINTER(ids[i]), NULL, &first)) {
+            g_set_error(error, G_OPTION_ERROR, G_OPTION_ERROR_BAD_VALUE,
+                        _("--channels: channel %d is given twice, as frames %d and %d: "
+                          "one scan cannot be two frames"), ids[i], GPOINTER_TO_INT(first), i);
+            ok = FALSE;
+        }
+        else
+            g_hash_table_insert(first_frame, GINT_TO_POINTER(ids[i]), GINT_TO_POINTER(i));
+    }
+    g_hash_table_destroy(first_frame);
+    return ok;
+}
+
 /* "FIRST-LAST" is a range (channels missing inside it are skipped), else a
  * comma-separated list of ids, each of which must exist. */
 static gboolean
@@ -166,6 +192,10 @@ parse_channels(const gchar *text, FrameSeriesOptions *options,
         }
     }
     g_strfreev(parts);
+    if (!refuse_repeated_id(ids, n, error)) {
+        g_free(ids);
+        return FALSE;
+    }
     options->channel_ids = ids;
     options->n_channel_ids = n;
     return TRUE;

@@ -248,19 +248,64 @@ append_channel(FrameSeries *series, GwyContainer *data, gint id,
 }
 
 static gint
-first_channel_id(GwyContainer *data, const gchar *wanted)
+first_channel_id(GwyContainer *data)
 {
     gint *ids = localscan_channel_ids(data);
     gint i, found = -1;
 
     for (i = 0; ids[i] >= 0; i++) {
-        if ((!wanted
-             || frame_series_title_matches(localscan_channel_title(data, ids[i]), wanted))
-            && (found < 0 || ids[i] < found))
+        if (found < 0 || ids[i] < found)
             found = ids[i];
     }
     g_free(ids);
     return found;
+}
+
+/* The ids of the channels titled wanted exactly, else of those titled
+ * wanted and a number; "0, 3" into list. */
+static gint
+count_titled_channels(GwyContainer *data, const gchar *wanted, GString *list, gint *first)
+{
+    gint *ids = localscan_channel_ids(data);
+    gint i, pass, n = 0;
+
+    for (pass = 0; pass < 2 && !n; pass++) {
+        for (i = 0; ids[i] >= 0; i++) {
+            const gchar *title = localscan_channel_title(data, ids[i]);
+
+            if (pass ? !frame_series_title_matches(title, wanted) : g_strcmp0(title, wanted) != 0)
+                continue;
+            g_string_append_printf(list, n ? ", %d" : "%d", ids[i]);
+            if (!n++)
+                *first = ids[i];
+        }
+    }
+    g_free(ids);
+    return n;
+}
+
+/* The one channel of a file that title names; -1 with error set when none
+ * or several do.  Two channels of one title in a file took the lower id
+ * silently, where the one-image command refuses the title (docs/cli.md). */
+static gint
+titled_channel_id(GwyContainer *data, const gchar *filename, const gchar *wanted,
+                  GError **error)
+{
+    GString *list = g_string_new(NULL);
+    gint n, id = -1;
+
+    n = count_titled_channels(data, wanted, list, &id);
+    if (!n)
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("%s: no channel %s"), filename, wanted);
+    else if (n > 1) {
+        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
+                    _("%s: %d channels are titled '%s' (ids %s): give the id"),
+                    filename, n, wanted, list->str);
+        id = -1;
+    }
+    g_string_free(list, TRUE);
+    return id;
 }
 
 static gboolean
@@ -411,12 +456,15 @@ load_one_channel_per_file(FrameSeries *series, gchar **filenames, gint n_files,
                 return FALSE;
             }
         }
+        else if (options->channel) {
+            if ((id = titled_channel_id(datas[k], filenames[k], options->channel, error)) < 0)
+                return FALSE;
+        }
         else
-            id = first_channel_id(datas[k], options->channel);
+            id = first_channel_id(datas[k]);
         if (id < 0) {
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
-                        _("%s: no channel %s"), filenames[k],
-                        options->channel ? options->channel : "at all");
+                        _("%s: no channel %s"), filenames[k], "at all");
             return FALSE;
         }
         if (k && !fields_alike(series->frames[0].field,

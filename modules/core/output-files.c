@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <glib/gstdio.h>
 #include "output-files.h"
@@ -316,6 +317,20 @@ check_target(OutputFiles *files, const gchar *filename, GError **error)
     return output_files_check_kind(filename, error) && check_new_target(files, filename, error);
 }
 
+/* An existing file the user may not write is not replaced: the new
+ * contents are renamed over it, which needs only the folder's rights, and
+ * a file made read-only (chmod a-w) was replaced by one the user owns,
+ * where a plain write is refused.  errno says why when FALSE. */
+static gboolean
+may_replace(const gchar *target)
+{
+    /* The effective user's rights, which a write would meet (access()
+     * asks for the real user's). */
+    if (faccessat(AT_FDCWD, target, W_OK, AT_EACCESS) == 0)
+        return TRUE;
+    return errno != EACCES && errno != EPERM;
+}
+
 /* Adds filename to the set with a new temporary file beside the file it
  * names, open as *fd; NULL with error set on failure. */
 static PendingOutput*
@@ -326,7 +341,7 @@ add_pending(OutputFiles *files, const gchar *filename, gint *fd,
     gchar *target = link_target(filename);
 
     memset(&p, 0, sizeof(p));
-    if (!(p.tmpname = make_temp_beside(target, "", fd))) {
+    if (!may_replace(target) || !(p.tmpname = make_temp_beside(target, "", fd))) {
         set_errno_error(error, errno, filename);
         g_free(target);
         return NULL;
