@@ -188,6 +188,7 @@ struct _DriftTrajectory {
     gboolean is_zero;
     gint n_meas;
     gdouble *meas_weight;  /* robustness weight per measurement, given order */
+    DriftMeasurement *meas; /* the measurements, given order */
     gint *meas_stripe;     /* stripe per measurement (from a table), or NULL */
 };
 
@@ -1018,6 +1019,7 @@ trajectory_new(const DriftMeasurement *meas, gint n, gboolean smooth,
     trajectory->curv[1] = trajectory->curv[0] + n;
     trajectory->n_meas = n;
     trajectory->meas_weight = g_new(gdouble, n);
+    trajectory->meas = g_memdup2(meas, n*sizeof(DriftMeasurement));
     tau = g_new(gdouble, 3*n);
     count = tau + n;
     robust = count + n;
@@ -1215,6 +1217,7 @@ drift_trajectory_free(DriftTrajectory *trajectory)
         return;
     g_free(trajectory->t);
     g_free(trajectory->meas_weight);
+    g_free(trajectory->meas);
     g_free(trajectory->meas_stripe);
     g_free(trajectory);
 }
@@ -1270,6 +1273,19 @@ drift_trajectory_measurement_weight(const DriftTrajectory *trajectory, gint i)
 {
     g_return_val_if_fail(i >= 0 && i < trajectory->n_meas, 0.0);
     return trajectory->meas_weight[i];
+}
+
+gdouble
+drift_trajectory_measurement_residual(const DriftTrajectory *trajectory, gint i)
+{
+    const DriftMeasurement *m;
+    gdouble a[2], b[2];
+
+    g_return_val_if_fail(i >= 0 && i < trajectory->n_meas, NAN);
+    m = trajectory->meas + i;
+    drift_trajectory_eval(trajectory, m->t_a, a, a + 1);
+    drift_trajectory_eval(trajectory, m->t_b, b, b + 1);
+    return hypot(m->dx - (a[0] - b[0]), m->dy - (a[1] - b[1]));
 }
 
 gint

@@ -106,6 +106,10 @@ gint              drift_trajectory_n_measurements(const DriftTrajectory *traject
  * 1 without smoothing).  The smaller of the x and y weights. */
 gdouble           drift_trajectory_measurement_weight(const DriftTrajectory *trajectory,
                                                       gint i);
+/* How far measurement i lies from the trajectory, px: |(dx, dy) -
+ * (D(t_a) - D(t_b))|. */
+gdouble           drift_trajectory_measurement_residual(const DriftTrajectory *trajectory,
+                                                        gint i);
 /* The stripe of measurement i for a trajectory from a table, else i. */
 gint              drift_trajectory_measurement_stripe(const DriftTrajectory *trajectory,
                                                       gint i);

@@ -411,40 +411,29 @@ localscan_continuous_left_out(GwyDataField *field, const DriftTable *table,
                               const LocalscanOptions *options, gint *stripes,
                               gdouble *off_px, GError **error)
 {
-    gint xres = gwy_data_field_get_xres(field), yres = gwy_data_field_get_yres(field);
-    gdouble xstep = gwy_data_field_get_dx(field), ystep = gwy_data_field_get_dy(field);
-    DriftMeasurement *meas;
-    DriftTrajectory *trajectory = NULL;
-    gdouble a[2], b[2], off;
+    DriftTrajectory *trajectory;
     ScanTiming timing;
-    gint i, m, n = 0;
+    gdouble off;
+    gint i, n = 0;
 
     if (options->mode == LOCALSCAN_MODE_PAPER)
         return 0;
-    scan_timing_init(&timing, xres, yres,
+    scan_timing_init(&timing, gwy_data_field_get_xres(field), gwy_data_field_get_yres(field),
                      options->frame_start, options->line_time, options->direction);
-    meas = g_new0(DriftMeasurement, MAX(table->n_stripes, 1));
-    m = drift_trajectory_measurements_from_table(table, xstep, ystep, &timing, meas, error);
-    if (m >= 0)
-        trajectory = drift_trajectory_new_from_table(table, xstep, ystep, &timing, error);
-    if (!trajectory) {
-        g_free(meas);
+    trajectory = drift_trajectory_new_from_table(table, gwy_data_field_get_dx(field),
+                                                 gwy_data_field_get_dy(field), &timing, error);
+    if (!trajectory)
         return -1;
-    }
-    for (i = 0; i < m; i++) {
-        if (drift_trajectory_measurement_weight(trajectory, i) >= DRIFT_TRAJECTORY_DOWNWEIGHTED)
+    for (i = 0; i < drift_trajectory_n_measurements(trajectory); i++) {
+        if (drift_trajectory_measurement_weight(trajectory, i) >= DRIFT_TRAJECTORY_DOWNWEIGHTED
+            || !((off = drift_trajectory_measurement_residual(trajectory, i))
+                 > LOCALSCAN_LEFT_OUT_MIN_PX))
             continue;
-        drift_trajectory_eval(trajectory, meas[i].t_a, a, a + 1);
-        drift_trajectory_eval(trajectory, meas[i].t_b, b, b + 1);
-        off = hypot(meas[i].dx - (a[0] - b[0]), meas[i].dy - (a[1] - b[1]));
-        if (off > LOCALSCAN_LEFT_OUT_MIN_PX) {
-            if (off_px)
-                off_px[n] = off;
-            stripes[n++] = drift_trajectory_measurement_stripe(trajectory, i);
-        }
+        if (off_px)
+            off_px[n] = off;
+        stripes[n++] = drift_trajectory_measurement_stripe(trajectory, i);
     }
     drift_trajectory_free(trajectory);
-    g_free(meas);
     return n;
 }
 
