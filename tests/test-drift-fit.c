@@ -397,6 +397,60 @@ START_TEST(test_consistent_false_match)
 }
 END_TEST
 
+/* One pair of frames with a frame's time between them (a featureless
+ * middle frame flagged, say): every block spans a jump placed between the
+ * two frames, so such a jump is the velocity again, its step read from
+ * the few percent by which the blocks' baselines differ.  A step of 168 nm
+ * in 64 nm frames was fitted there (test-series-correction seed 19386928).
+ * The jump is neither searched nor refitted there; within a frame, where
+ * it splits the blocks, it still is.  Velocity and noise drawn at random. */
+START_TEST(test_jump_between_one_pairs_frames)
+{
+    GRand *rng = test_rand_salted(test_seed, 500 + _i);
+    gdouble speed = g_rand_double_range(rng, 0.02e-9, 0.2e-9),
+            angle = g_rand_double_range(rng, 0.0, 2.0*G_PI), gap;
+    DriftMeasurement *meas = g_new0(DriftMeasurement, N_BLOCKS);
+    SimRandom noise;
+    DriftModel model;
+    DriftFit fit, refit;
+    gint b;
+
+    drift_model_init(&model, DRIFT_MODEL_NONE);
+    model.v[0] = speed*cos(angle);
+    model.v[1] = speed*sin(angle);
+    sim_random_init(&noise, g_rand_int(rng), 3);
+    for (b = 0; b < N_BLOCKS; b++) {
+        DriftMeasurement *d = meas + b;
+
+        d->t_a = FRAME_TIME*(2 + (b + 0.5)/N_BLOCKS) + g_rand_double_range(rng, -1.0, 1.0);
+        d->t_b = FRAME_TIME*(b + 0.5)/N_BLOCKS + g_rand_double_range(rng, -1.0, 1.0);
+        d->dx = model.v[0]*(d->t_a - d->t_b) + 0.05e-9*sim_random_gaussian(&noise);
+        d->dy = model.v[1]*(d->t_a - d->t_b) + 0.05e-9*sim_random_gaussian(&noise);
+        d->weight = 1.0;
+        d->group = b;
+        d->frame_a = 2;
+        d->frame_b = 0;
+    }
+    ck_assert(drift_fit_model(meas, N_BLOCKS, DRIFT_MODEL_JUMP, NULL, &fit));
+    ck_assert_msg(fit.nonlinear < FRAME_TIME || fit.nonlinear > 2.0*FRAME_TIME,
+                  "seed %u: a jump fitted at %g s, between the frames", test_seed, fit.nonlinear);
+    for (gap = 1.1*FRAME_TIME; gap < 2.0*FRAME_TIME; gap += 0.2*FRAME_TIME) {
+        refit = fit;
+        ck_assert_msg(!drift_fit_refit_at(meas, N_BLOCKS, gap, &refit),
+                      "seed %u: refitted at %g s: step (%g, %g) nm", test_seed, gap,
+                      refit.coef[0][1], refit.coef[1][1]);
+        ck_assert(memcmp(&refit, &fit, sizeof(DriftFit)) == 0);
+    }
+    /* Within frame 2, the step is as small as the noise allows. */
+    ck_assert(drift_fit_refit_at(meas, N_BLOCKS, 2.5*FRAME_TIME, &refit));
+    ck_assert_msg(hypot(refit.coef[0][1], refit.coef[1][1]) < 0.2,
+                  "seed %u: a step of (%g, %g) nm within frame 2", test_seed,
+                  refit.coef[0][1], refit.coef[1][1]);
+    g_free(meas);
+    g_rand_free(rng);
+}
+END_TEST
+
 START_TEST(test_model_roundtrip)
 {
     DriftModel model, back;
@@ -444,6 +498,7 @@ drift_fit_suite(void)
     tcase_add_test(tc, test_outlier_dropped);
     tcase_add_loop_test(tc, test_fast_settling_beside_failures, 0, 12);
     tcase_add_loop_test(tc, test_consistent_false_match, 0, 12);
+    tcase_add_loop_test(tc, test_jump_between_one_pairs_frames, 0, 8);
     tcase_add_test(tc, test_model_roundtrip);
     return s;
 }

@@ -18,6 +18,9 @@
 #define REFINED_MINIMA 12
 /* Distinct measured times a jump leaves on either side at least. */
 #define JUMP_MIN_SIDE 3
+/* Measurements a jump must lie within, and measurements it must not, at
+ * least (see jump_separable). */
+#define JUMP_MIN_SPLIT 3
 /* Oscillation periods whose cycles mostly cancel between the frames are not
  * searched (see oscillation_visibility). */
 #define MIN_VISIBILITY 0.25
@@ -290,9 +293,9 @@ prepare(const DriftMeasurement *meas, gint n, const gboolean *mask,
 
 /* Solves the k x k system a x = b (a, b destroyed) by Gaussian elimination
  * with partial pivoting; a vanishing pivot gives a zero coefficient.  Not
- * gwy_math_lin_solve(): it refuses singular systems, and a jump that no
- * measurement spans (its basis zero everywhere) must still fit the
- * velocity, with a zero step. */
+ * gwy_math_lin_solve(): it refuses singular systems, and an effect whose
+ * basis no measurement sees (zero everywhere) must still fit the velocity,
+ * with a zero effect. */
 static void
 solve_small(gdouble *a, gdouble *b, gint k, gdouble *x)
 {
@@ -366,8 +369,24 @@ solve_normal(const gdouble *ata, gdouble atb[2][MAX_BASIS],
     return MAX(rss, 0.0);
 }
 
+/* Whether a jump that lies within `spanned` of the n_used measurements
+ * can be told from the velocity.  Its step adds to exactly the
+ * measurements it lies within, so without JUMP_MIN_SPLIT measurements on
+ * each side of that split the step is the velocity times the spanned
+ * measurements' nearly equal baselines over again: any step fits, read
+ * from the baselines' spread of a few percent (one pair of frames with a
+ * featureless frame between, every block spanning a jump placed between
+ * them: a step of 168 nm in 64 nm frames, the drift read 26 px off;
+ * test-series-correction seed 19386928). */
+static gboolean
+jump_separable(gint spanned, gint n_used)
+{
+    return spanned >= JUMP_MIN_SPLIT && n_used - spanned >= JUMP_MIN_SPLIT;
+}
+
 /* Weighted least squares for a fixed nonlinear parameter; returns the
- * weighted residual sum of squares (nm^2) over both axes. */
+ * weighted residual sum of squares (nm^2) over both axes; NAN for a jump
+ * that cannot be told from the velocity. */
 static gdouble
 solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
             gdouble coef[2][MAX_BASIS], gint *n_basis)
@@ -375,7 +394,7 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
     gdouble ata[MAX_BASIS*MAX_BASIS], atb[2][MAX_BASIS], fa[MAX_BASIS],
             fb[MAX_BASIS], row[MAX_BASIS];
     gdouble sdd[2] = { 0.0, 0.0 }, half = NAN, w = 1.0;
-    gint i, j, l, k = 1;
+    gint i, j, l, k = 1, spanned = 0;
 
     memset(ata, 0, sizeof(ata));
     memset(atb, 0, sizeof(atb));
@@ -402,6 +421,8 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
         }
         for (j = 0; j < k; j++)
             row[j] = fa[j] - fb[j];
+        if (kind == DRIFT_MODEL_JUMP)
+            spanned += (fabs(row[1]) >= 0.5);
         for (j = 0; j < k; j++) {
             for (l = 0; l < k; l++)
                 ata[j*k + l] += pm->w[i]*row[j]*row[l];
@@ -412,6 +433,8 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
         sdd[1] += pm->w[i]*pm->d[1][i]*pm->d[1][i];
     }
     *n_basis = k;
+    if (kind == DRIFT_MODEL_JUMP && !jump_separable(spanned, pm->n_used))
+        return NAN;
     return solve_normal(ata, atb, sdd, k, coef);
 }
 
@@ -857,7 +880,7 @@ jump_grid_rss(const Prepared *pm, const gdouble *grid, gint m)
 {
     gdouble fa[MAX_BASIS], fb[MAX_BASIS], ata[4], atb[2][MAX_BASIS], coef[2][MAX_BASIS];
     gdouble sums0[5] = { 0.0, 0.0, 0.0, 0.0, 0.0 }, *sums1, *rss, wi, r0, r1, lo, hi, margin;
-    gint i, j, ax;
+    gint i, j, ax, *spanned;
 
     for (j = 0; j < m; j++) {
         if (!isfinite(grid[j]) || (j && !(grid[j-1] <= grid[j])))
@@ -868,6 +891,7 @@ jump_grid_rss(const Prepared *pm, const gdouble *grid, gint m)
     /* sums0: a00, b0 of each axis, d.d of each axis; sums1 per grid value:
      * a01, a10, a11, b1 of each axis. */
     sums1 = g_new0(gdouble, 5*m);
+    spanned = g_new0(gint, m);
     for (i = 0; i < pm->n; i++) {
         if (pm->w[i] <= 0.0)
             continue;
@@ -887,6 +911,7 @@ jump_grid_rss(const Prepared *pm, const gdouble *grid, gint m)
             model_basis_mean(DRIFT_MODEL_JUMP, grid[j], pm->ta[i], pm->half[i], fa);
             model_basis_mean(DRIFT_MODEL_JUMP, grid[j], pm->tb[i], pm->half[i], fb);
             r1 = fa[1] - fb[1];
+            spanned[j] += (fabs(r1) >= 0.5);
             sums1[5*j] += wi*r0*r1;
             sums1[5*j + 1] += wi*r1*r0;
             sums1[5*j + 2] += wi*r1*r1;
@@ -904,11 +929,13 @@ jump_grid_rss(const Prepared *pm, const gdouble *grid, gint m)
             atb[ax][0] = sums0[1 + ax];
             atb[ax][1] = sums1[5*j + 3 + ax];
         }
-        rss[j] = solve_normal(ata, atb, sums0 + 3, 2, coef);
+        rss[j] = jump_separable(spanned[j], pm->n_used)
+                 ? solve_normal(ata, atb, sums0 + 3, 2, coef) : NAN;
         if (!isfinite(rss[j]))
             rss[j] = G_MAXDOUBLE;
     }
     g_free(sums1);
+    g_free(spanned);
     return rss;
 }
 

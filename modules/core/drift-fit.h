@@ -104,8 +104,10 @@ gboolean       drift_fit_model        (const DriftMeasurement *meas,
 /* Refits fit (of a model with a nonlinear parameter) with that parameter
  * fixed at theta, to the measurements with weight > 0: when something
  * finer than the grid search places it (a jump located line by line).
- * FALSE, fit unchanged, when the model has no such parameter or the
- * solution is not finite. */
+ * FALSE, fit unchanged, when the model has no such parameter, the
+ * solution is not finite, or theta is a jump time the measurements cannot
+ * tell from the velocity (fewer than three of them on either side of the
+ * split between those it lies within and the others). */
 gboolean       drift_fit_refit_at     (const DriftMeasurement *meas,
                                        gint n,
                                        gdouble theta,

@@ -1320,10 +1320,17 @@ locate_jump(SeriesCorrection *correction, const FrameSeries *series,
         localise_jump(correction, series, block_span);
         if (fit->type != DRIFT_MODEL_JUMP
             || fit->creep != DRIFT_FIT_CREEP_NONE
-            || fit->nonlinear == before
-            || !drift_fit_refit_at(report->meas, report->n_meas,
-                                   fit->nonlinear, fit))
+            || fit->nonlinear == before)
             break;
+        if (!drift_fit_refit_at(report->meas, report->n_meas, fit->nonlinear, fit)) {
+            /* A time the blocks cannot fit a step at (every block spans
+             * it): the trajectory stays as fitted, and a window of tied
+             * lines that leaves its jump out is no longer about it. */
+            fit->nonlinear = before;
+            if (before < correction->jump_window[0] || before > correction->jump_window[1])
+                correction->jump_tied_lines = 0;
+            break;
+        }
     }
 }
 
