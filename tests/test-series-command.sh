@@ -86,6 +86,18 @@ done
 check
 [ "$(grep -c '"flagged" : false' "$tmp/t.json")" -eq 3 ] || fail "not 3 unflagged frames"
 
+# --json - prints the same report on standard output, once the .gwy is
+# written, and leaves no file named '-' (one was written before).
+check
+(cd "$tmp" && "$tool" series $timing -o "$tmp/out-stdout.gwy" --json - $frames) \
+    >"$tmp/out-stdout.json" 2>"$tmp/err" || fail "--json - exited $?: $(cat "$tmp/err")"
+check
+[ ! -e "$tmp/-" ] || fail "--json - wrote a file named '-'"
+check
+cmp -s "$tmp/out-stdout.json" "$tmp/t.json" || fail "--json - printed another report"
+check
+[ "$(head -c 4 "$tmp/out-stdout.gwy" 2>/dev/null)" = "GWYP" ] || fail "--json -: no .gwy written"
+
 # --crop common: smaller corrected channels, no masks left (no frame is
 # flagged, so none lacks data in the area).
 check
@@ -130,6 +142,8 @@ bad_case 2 "f9.gwy is given twice, as frames 1 and 2" $timing -o "$tmp/bad.gwy" 
 rm -f "$tmp/f9.gwy"
 bad_case 2 "frame 2: the file name is empty" $timing -o "$tmp/bad.gwy" "$tmp/f0.gwy" "$tmp/f1.gwy" ""
 bad_case 2 "--json: the file name is empty" $timing -o "$tmp/bad.gwy" --json "" $frames
+bad_case 2 "cannot both go to the standard output" $timing -o "$tmp/bad.gwy" --json - --trajectory - $frames
+bad_case 2 "-o names a file" $timing -o - $frames
 mkdir "$tmp/outdir"
 bad_case 2 "it is a folder" $timing -o "$tmp/outdir" $frames
 rmdir "$tmp/outdir"

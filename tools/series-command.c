@@ -84,9 +84,11 @@ parse_args(SeriesCommandArgs *args, gint *argc, gchar ***argv,
           N_("Write every input channel and the corrected frames to OUT.gwy"),
           N_("OUT.gwy") },
         { "trajectory", 0, 0, G_OPTION_ARG_FILENAME, &args->trajectory,
-          N_("Write the drift of every scan line as CSV"), N_("FILE.csv") },
+          N_("Write the drift of every scan line as CSV (- for the standard output)"),
+          N_("FILE.csv") },
         { "json", 0, 0, G_OPTION_ARG_FILENAME, &args->json,
-          N_("Write the fit, the frames' verdicts and the warnings as JSON"),
+          N_("Write the fit, the frames' verdicts and the warnings as JSON "
+             "(- for the standard output)"),
           N_("FILE") },
         { "crop", 0, 0, G_OPTION_ARG_STRING, &args->crop,
           N_("common: crop the corrected frames to the area every frame "
@@ -196,6 +198,20 @@ check_frame_files(gchar **files, gint n, GError **error)
     return ok;
 }
 
+/* "-" names the standard output, as for simscan fit's --json. */
+static gboolean
+is_stdout(const gchar *filename)
+{
+    return filename && strcmp(filename, "-") == 0;
+}
+
+/* The file an output role checks: none for the standard output. */
+static const gchar*
+output_file(const gchar *filename)
+{
+    return is_stdout(filename) ? NULL : filename;
+}
+
 static gboolean
 check_args(SeriesCommandArgs *args, SeriesRun *run, GError **error)
 {
@@ -220,9 +236,15 @@ check_args(SeriesCommandArgs *args, SeriesRun *run, GError **error)
         run->crop = TRUE;
     else if (args->crop && g_ascii_strcasecmp(args->crop, "none") != 0)
         return refuse_usage(error, _("--crop must be common or none"));
+    if (is_stdout(args->output))
+        return refuse_usage(error, _("-o names a file: the .gwy file is not "
+                                     "written to the standard output"));
+    if (is_stdout(args->trajectory) && is_stdout(args->json))
+        return refuse_usage(error, _("--trajectory and --json cannot both go "
+                                     "to the standard output"));
     if (!output_files_check_kind(args->output, error)
-        || !output_files_check_kind(args->trajectory, error)
-        || !output_files_check_kind(args->json, error))
+        || !output_files_check_kind(output_file(args->trajectory), error)
+        || !output_files_check_kind(output_file(args->json), error))
         return FALSE;
     if (args->series.channels && n_files > 1)
         return refuse_usage(error, _("--channels names the channels of one "
@@ -245,9 +267,9 @@ check_args(SeriesCommandArgs *args, SeriesRun *run, GError **error)
     roles[n_files].role = "-o";
     roles[n_files].filename = args->output;
     roles[n_files + 1].role = "--trajectory";
-    roles[n_files + 1].filename = args->trajectory;
+    roles[n_files + 1].filename = output_file(args->trajectory);
     roles[n_files + 2].role = "--json";
-    roles[n_files + 2].filename = args->json;
+    roles[n_files + 2].filename = output_file(args->json);
     for (i = n_files; i < n_files + 3; i++)
         roles[i].is_input = FALSE;
     ok = output_files_check_roles(roles, n_files + 3, error);
@@ -547,25 +569,39 @@ write_outputs(const SeriesCommandArgs *args, SeriesRun *run,
 {
     OutputFiles *files = output_files_new();
     const gchar *temp;
-    gchar *text;
+    gchar *text, *printed = NULL;
     gboolean ok;
 
     ok = ((temp = output_files_reserve(files, args->output, error))
           && gwy_stream_save_as(out, temp, args->output, error));
     if (ok && args->trajectory) {
         text = series_correction_trajectory_csv(&run->correction, run->series);
-        ok = output_files_add(files, args->trajectory, (const guchar*)text,
-                              strlen(text), error);
-        g_free(text);
+        if (is_stdout(args->trajectory))
+            printed = text;
+        else {
+            ok = output_files_add(files, args->trajectory, (const guchar*)text,
+                                  strlen(text), error);
+            g_free(text);
+        }
     }
     if (ok && args->json) {
         text = series_correction_to_json(&run->correction, run->series);
-        ok = output_files_add(files, args->json, (const guchar*)text,
-                              strlen(text), error);
-        g_free(text);
+        if (is_stdout(args->json))
+            printed = text;
+        else {
+            ok = output_files_add(files, args->json, (const guchar*)text,
+                                  strlen(text), error);
+            g_free(text);
+        }
     }
     ok = ok && output_files_commit(files, error);
     output_files_free(files);
+    /* Printed once every file is in place: a failed run prints nothing a
+     * pipe would take for its result (a write error of the standard
+     * output is told at exit, output_files_finish_stdout). */
+    if (ok && printed)
+        fputs(printed, stdout);
+    g_free(printed);
     return ok;
 }
 
