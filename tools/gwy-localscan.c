@@ -589,17 +589,6 @@ check_command_line(GError **error)
     return find_mode(options.mode_name, error);
 }
 
-static gchar*
-format_channel_list(const gint *ids)
-{
-    GString *str = g_string_new(NULL);
-    guint i;
-
-    for (i = 0; ids[i] != -1; i++)
-        g_string_append_printf(str, i ? ", %d" : "%d", ids[i]);
-    return g_string_free(str, FALSE);
-}
-
 /* A one-file movie may hold hundreds of channels: the list names this
  * many and counts the rest, so that the message stays one line. */
 #define TITLED_CHANNELS_LISTED 20
@@ -627,21 +616,16 @@ format_titled_channel_list(GwyContainer *data, const gint *ids)
 }
 
 /* The one channel titled title exactly; -1 with error set when none or
- * several are. */
+ * several are (ids: the file's channels, for the message). */
 static gint
 pick_titled_channel(GwyContainer *data, const gchar *filename, const gint *ids,
                     const gchar *title, GError **error)
 {
-    GString *matches = g_string_new(NULL);
+    gint *titled = localscan_channel_ids_titled(data, title), n, id = titled[0];
     gchar *list, *quoted = quoted_input_excerpt(title, -1);
-    gint i, n = 0, id = -1;
 
-    for (i = 0; ids[i] != -1; i++) {
-        if (g_strcmp0(localscan_channel_title(data, ids[i]), title) == 0) {
-            g_string_append_printf(matches, n++ ? ", %d" : "%d", ids[i]);
-            id = ids[i];
-        }
-    }
+    for (n = 0; titled[n] != -1; n++)
+        ;
     if (!n) {
         list = format_titled_channel_list(data, ids);
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
@@ -650,12 +634,14 @@ pick_titled_channel(GwyContainer *data, const gchar *filename, const gint *ids,
         g_free(list);
     }
     else if (n > 1) {
+        list = localscan_channel_id_list(titled);
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
                     _("%s has %d channels titled '%s' (%s): give its id instead"),
-                    filename, n, quoted, matches->str);
+                    filename, n, quoted, list);
+        g_free(list);
         id = -1;
     }
-    g_string_free(matches, TRUE);
+    g_free(titled);
     g_free(quoted);
     return id;
 }
@@ -680,7 +666,7 @@ pick_channel(GwyContainer *data, const gchar *filename, gint wanted,
     else if (headless_run_has_channel(data, wanted))
         id = wanted;
     else {
-        list = format_channel_list(ids);
+        list = localscan_channel_id_list(ids);
         g_set_error(error, HEADLESS_RUN_ERROR, HEADLESS_RUN_ERROR_CHANNEL,
                     _("%s has no channel %d (its channels: %s)"),
                     filename, wanted, list);

@@ -262,26 +262,22 @@ first_channel_id(GwyContainer *data)
 }
 
 /* The ids of the channels titled wanted exactly, else of those titled
- * wanted and a number; "0, 3" into list. */
-static gint
-count_titled_channels(GwyContainer *data, const gchar *wanted, GString *list, gint *first)
+ * wanted and a number (frame_series_title_matches). */
+static gint*
+titled_channels(GwyContainer *data, const gchar *wanted)
 {
-    gint *ids = localscan_channel_ids(data);
-    gint i, pass, n = 0;
+    gint *ids = localscan_channel_ids_titled(data, wanted), i, n = 0;
 
-    for (pass = 0; pass < 2 && !n; pass++) {
-        for (i = 0; ids[i] >= 0; i++) {
-            const gchar *title = localscan_channel_title(data, ids[i]);
-
-            if (pass ? !frame_series_title_matches(title, wanted) : g_strcmp0(title, wanted) != 0)
-                continue;
-            g_string_append_printf(list, n ? ", %d" : "%d", ids[i]);
-            if (!n++)
-                *first = ids[i];
-        }
-    }
+    if (ids[0] != -1)
+        return ids;
     g_free(ids);
-    return n;
+    ids = localscan_channel_ids(data);
+    for (i = 0; ids[i] != -1; i++) {
+        if (frame_series_title_matches(localscan_channel_title(data, ids[i]), wanted))
+            ids[n++] = ids[i];
+    }
+    ids[n] = -1;
+    return ids;
 }
 
 /* The one channel of a file that title names; -1 with error set when none
@@ -291,20 +287,23 @@ static gint
 titled_channel_id(GwyContainer *data, const gchar *filename, const gchar *wanted,
                   GError **error)
 {
-    GString *list = g_string_new(NULL);
-    gint n, id = -1;
+    gint *ids = titled_channels(data, wanted), n, id = ids[0];
+    gchar *list;
 
-    n = count_titled_channels(data, wanted, list, &id);
+    for (n = 0; ids[n] != -1; n++)
+        ;
     if (!n)
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("%s: no channel %s"), filename, wanted);
     else if (n > 1) {
+        list = localscan_channel_id_list(ids);
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("%s: %d channels are titled '%s' (ids %s): give the id"),
-                    filename, n, wanted, list->str);
+                    filename, n, wanted, list);
+        g_free(list);
         id = -1;
     }
-    g_string_free(list, TRUE);
+    g_free(ids);
     return id;
 }
 

@@ -605,6 +605,30 @@ localscan_channel_ids(GwyContainer *data)
     return (gint*)g_array_free(ids, FALSE);
 }
 
+gint*
+localscan_channel_ids_titled(GwyContainer *data, const gchar *title)
+{
+    gint *ids = localscan_channel_ids(data), i, n = 0;
+
+    for (i = 0; ids[i] != -1; i++) {
+        if (g_strcmp0(localscan_channel_title(data, ids[i]), title) == 0)
+            ids[n++] = ids[i];
+    }
+    ids[n] = -1;
+    return ids;
+}
+
+gchar*
+localscan_channel_id_list(const gint *ids)
+{
+    GString *str = g_string_new(NULL);
+    gint i;
+
+    for (i = 0; ids[i] != -1; i++)
+        g_string_append_printf(str, i ? ", %d" : "%d", ids[i]);
+    return g_string_free(str, FALSE);
+}
+
 gpointer
 localscan_channel_item(GwyContainer *data, gint id, const gchar *item)
 {

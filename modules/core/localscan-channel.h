@@ -245,6 +245,13 @@ void         localscan_applied_to_physical   (const LocalscanApplied *applied,
  * data browser lists, without its GUI library. */
 gint*        localscan_channel_ids           (GwyContainer *data);
 
+/* The ids of data's channels titled exactly title, as
+ * localscan_channel_ids() gives them (possibly none: ids[0] == -1). */
+gint*        localscan_channel_ids_titled    (GwyContainer *data,
+                                              const gchar *title);
+/* "0, 3": ids (terminated by -1) as messages list them; g_free(). */
+gchar*       localscan_channel_id_list       (const gint *ids);
+
 /* The object at "/ID/ITEM" of data (item "data": the channel's field,
  * "mask", "meta"), or NULL when there is none; no reference is added. */
 gpointer     localscan_channel_item          (GwyContainer *data,
