@@ -563,37 +563,42 @@ build_output(SeriesRun *run, gboolean all_channels, GError **error)
     return out;
 }
 
+/* Text (consumed) into the set of files, or into *printed for "-". */
+static gboolean
+add_text(OutputFiles *files, const gchar *filename, gchar *text, gchar **printed,
+         GError **error)
+{
+    gboolean ok = TRUE;
+
+    if (is_stdout(filename)) {
+        g_free(*printed);
+        *printed = text;
+        return TRUE;
+    }
+    ok = output_files_add(files, filename, (const guchar*)text, strlen(text), error);
+    g_free(text);
+    return ok;
+}
+
 static gboolean
 write_outputs(const SeriesCommandArgs *args, SeriesRun *run,
               GwyContainer *out, GError **error)
 {
     OutputFiles *files = output_files_new();
     const gchar *temp;
-    gchar *text, *printed = NULL;
+    gchar *printed = NULL;
     gboolean ok;
 
     ok = ((temp = output_files_reserve(files, args->output, error))
           && gwy_stream_save_as(out, temp, args->output, error));
-    if (ok && args->trajectory) {
-        text = series_correction_trajectory_csv(&run->correction, run->series);
-        if (is_stdout(args->trajectory))
-            printed = text;
-        else {
-            ok = output_files_add(files, args->trajectory, (const guchar*)text,
-                                  strlen(text), error);
-            g_free(text);
-        }
-    }
-    if (ok && args->json) {
-        text = series_correction_to_json(&run->correction, run->series);
-        if (is_stdout(args->json))
-            printed = text;
-        else {
-            ok = output_files_add(files, args->json, (const guchar*)text,
-                                  strlen(text), error);
-            g_free(text);
-        }
-    }
+    if (ok && args->trajectory)
+        ok = add_text(files, args->trajectory,
+                      series_correction_trajectory_csv(&run->correction, run->series),
+                      &printed, error);
+    if (ok && args->json)
+        ok = add_text(files, args->json,
+                      series_correction_to_json(&run->correction, run->series),
+                      &printed, error);
     ok = ok && output_files_commit(files, error);
     output_files_free(files);
     /* Printed once every file is in place: a failed run prints nothing a
