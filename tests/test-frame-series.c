@@ -373,6 +373,68 @@ START_TEST(test_channel_range_beyond_the_file)
 }
 END_TEST
 
+/* Whether a note of the series holds text. */
+static gboolean
+noted(const FrameSeries *series, const gchar *text)
+{
+    guint i;
+
+    for (i = 0; i < series->notes->len; i++) {
+        if (strstr(g_ptr_array_index(series->notes, i), text))
+            return TRUE;
+    }
+    return FALSE;
+}
+
+/* Channels of one file taken as frames with nothing chosen, under titles
+ * of different signals (Height and Amplitude in the same unit): loaded,
+ * with a note naming the titles; a movie's "Height", "Height 1", ...
+ * or untitled channels get none, nor does a choice by title or range. */
+START_TEST(test_mixed_titles_noted)
+{
+    static const gdouble starts[3] = { 0.0, 1.0, 2.0 };
+    static const gchar *const mixed[3] = { "Height", "Amplitude", "Height 2" };
+    static const gchar *const movie[3] = { "Height", "Height 1", "Height 2" };
+    GwyContainer *data = timed_frames(starts);
+    gchar *name = g_strdup("frames.gwy");
+    FrameSeriesOptions options;
+    FrameSeries *series;
+    GError *error = NULL;
+    gint k;
+
+    series = frame_series_from_files(&data, &name, 1, NULL, &error);
+    ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
+    ck_assert(!noted(series, "different titles"));
+    frame_series_free(series);
+    for (k = 0; k < 3; k++)
+        gwy_container_set_const_string(data, gwy_app_get_data_title_key_for_id(k),
+                                       (const guchar*)mixed[k]);
+    series = frame_series_from_files(&data, &name, 1, NULL, &error);
+    ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
+    ck_assert_int_eq(series->n_frames, 3);
+    ck_assert_msg(noted(series, "frames.gwy: the frames are channels of 2 different titles "
+                        "('Height', 'Amplitude'), taken as one series in channel order"),
+                  "no note of the mixed titles");
+    frame_series_free(series);
+    frame_series_options_init(&options);
+    options.first_id = 0;
+    options.last_id = 2;
+    series = frame_series_from_files(&data, &name, 1, &options, &error);
+    ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
+    ck_assert(!noted(series, "different titles"));
+    frame_series_free(series);
+    for (k = 0; k < 3; k++)
+        gwy_container_set_const_string(data, gwy_app_get_data_title_key_for_id(k),
+                                       (const guchar*)movie[k]);
+    series = frame_series_from_files(&data, &name, 1, NULL, &error);
+    ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
+    ck_assert(!noted(series, "different titles"));
+    frame_series_free(series);
+    g_object_unref(data);
+    g_free(name);
+}
+END_TEST
+
 /************************************************************************
  * simscan's own files: timing from simscan's metadata keys
  ************************************************************************/
@@ -580,6 +642,7 @@ main(void)
     tcase_add_test(tc_simscan, test_frame_times_follow_dropped_duplicates);
     tcase_add_test(tc_simscan, test_one_clock);
     tcase_add_test(tc_simscan, test_channel_range_beyond_the_file);
+    tcase_add_test(tc_simscan, test_mixed_titles_noted);
     if (probe) {
         tc = tcase_create("measured");
         tcase_add_test(tc, test_nanoscope_timing);

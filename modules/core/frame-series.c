@@ -374,21 +374,67 @@ note_range_beyond(FrameSeries *series, const gchar *filename,
     return TRUE;
 }
 
+/* How many titles the notes list at most. */
+#define TITLES_NOTED 4
+
+/* Channels taken as frames because nothing chose them, under titles that
+ * are not one signal's ("Height" beside "Amplitude" in the same unit, or
+ * beside "Height 2"): a file of several signals of one scan, or of two
+ * series, whose frames the user should choose.  Said, not refused: a
+ * movie's frames may be titled anyhow. */
+static void
+note_mixed_titles(FrameSeries *series, GwyContainer *data, const gchar *filename,
+                  const gint *ids, gint n)
+{
+    GPtrArray *bases = g_ptr_array_new_with_free_func(g_free);
+    GString *list;
+    gchar *base;
+    guint i;
+    gint k;
+
+    for (k = 0; k < n; k++) {
+        base = frame_series_title_base(localscan_channel_title(data, ids[k]));
+        for (i = 0; i < bases->len && strcmp(g_ptr_array_index(bases, i), base) != 0; i++)
+            ;
+        if (i < bases->len)
+            g_free(base);
+        else
+            g_ptr_array_add(bases, base);
+    }
+    if (bases->len > 1) {
+        list = g_string_new(NULL);
+        for (i = 0; i < MIN(bases->len, TITLES_NOTED); i++)
+            g_string_append_printf(list, i ? ", '%s'" : "'%s'",
+                                   (const gchar*)g_ptr_array_index(bases, i));
+        if (bases->len > TITLES_NOTED)
+            g_string_append_printf(list, _(" and %u more"), bases->len - TITLES_NOTED);
+        g_ptr_array_add(series->notes,
+                        g_strdup_printf(_("%s: the frames are channels of %u different "
+                                          "titles (%s), taken as one series in channel "
+                                          "order; if they are different signals, choose "
+                                          "the frames by title or id"),
+                                        filename, bases->len, list->str));
+        g_string_free(list, TRUE);
+    }
+    g_ptr_array_free(bases, TRUE);
+}
+
 static gboolean
 load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
                           const gchar *filename,
                           const FrameSeriesOptions *options,
                           MetaTiming **mts, GError **error)
 {
-    gint *ids = localscan_channel_ids(data);
+    gint *ids = localscan_channel_ids(data), *taken;
     GwyDataField *first = NULL;
-    gint i, n, matched = 0;
+    gint i, n, matched = 0, n_taken = 0;
     gboolean ok, chosen = (options->channel || options->first_id >= 0
                            || options->last_id >= 0);
 
     for (n = 0; ids[n] >= 0; n++)
         ;
     *mts = g_new0(MetaTiming, n + 1);
+    taken = g_new(gint, n + 1);
     for (i = 0; i < n; i++) {
         GwyDataField *field = localscan_channel_item(data, ids[i], "data");
 
@@ -420,18 +466,24 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
                           "from the first frame"),
                         filename, ids[i],
                         localscan_channel_title(data, ids[i]));
+            g_free(taken);
             g_free(ids);
             return FALSE;
         }
         append_channel(series, data, ids[i], filename, 0, TRUE, *mts);
+        taken[n_taken++] = ids[i];
     }
     if (options->channel && !matched) {
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("%s: no channel %s"), filename, options->channel);
+        g_free(taken);
         g_free(ids);
         return FALSE;
     }
+    if (!chosen)
+        note_mixed_titles(series, data, filename, taken, n_taken);
     ok = note_range_beyond(series, filename, options, ids, n, matched, error);
+    g_free(taken);
     g_free(ids);
     return ok;
 }
