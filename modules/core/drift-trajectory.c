@@ -1279,13 +1279,19 @@ gdouble
 drift_trajectory_measurement_residual(const DriftTrajectory *trajectory, gint i)
 {
     const DriftMeasurement *m;
-    gdouble a[2], b[2];
+    gdouble a[2], tau;
 
     g_return_val_if_fail(i >= 0 && i < trajectory->n_meas, NAN);
     m = trajectory->meas + i;
+    /* What the trajectory was built to give: D(t_a) less the local scan's
+     * own drift after t_ref (estimate_local_velocity).  Not D(t_a) - D(t_b):
+     * the spline's extrapolation to t_b is no zero where every t_b is t_ref
+     * (a registration's table, every t_local the frame's end), and every
+     * stripe of a steady drift read 7.7 px off. */
     drift_trajectory_eval(trajectory, m->t_a, a, a + 1);
-    drift_trajectory_eval(trajectory, m->t_b, b, b + 1);
-    return hypot(m->dx - (a[0] - b[0]), m->dy - (a[1] - b[1]));
+    tau = m->t_b - trajectory->t_ref;
+    return hypot(m->dx - (a[0] - trajectory->v_local[0]*tau),
+                 m->dy - (a[1] - trajectory->v_local[1]*tau));
 }
 
 gint

@@ -107,7 +107,8 @@ gint              drift_trajectory_n_measurements(const DriftTrajectory *traject
 gdouble           drift_trajectory_measurement_weight(const DriftTrajectory *trajectory,
                                                       gint i);
 /* How far measurement i lies from the trajectory, px: |(dx, dy) -
- * (D(t_a) - D(t_b))|. */
+ * (D(t_a) - v (t_b - t_ref))|, v the drift during the local scans the
+ * trajectory estimated (0 where it cannot be told). */
 gdouble           drift_trajectory_measurement_residual(const DriftTrajectory *trajectory,
                                                         gint i);
 /* The stripe of measurement i for a trajectory from a table, else i. */
