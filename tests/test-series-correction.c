@@ -416,6 +416,8 @@ START_TEST(test_random_walk_smooth)
 }
 END_TEST
 
+static gboolean warned_of(const SeriesCorrection *correction, const gchar *text);
+
 /* A steady drift of vx_px and vy_px per frame (96 x yres px, lines of
  * 1 s) over a field of Gaussian bumps, each line sampled exactly where
  * the drift puts it (an interpolated canvas would smooth each frame by its
@@ -490,6 +492,8 @@ START_TEST(test_outputs)
     ck_assert_msg(series_correction_compute(series, NULL, NULL, &correction,
                                             &error),
                   "%s", error ? error->message : "?");
+    /* Three frames, three pairs: no warning of one pair. */
+    ck_assert(!warned_of(&correction, "one pair of frames"));
     csv = series_correction_trajectory_csv(&correction, series);
     lines = g_strsplit(csv, "\n", -1);
     for (i = 0; lines[i] && lines[i][0]; i++) {
@@ -616,6 +620,10 @@ check_featureless_frame_between(gint zeros)
                       vx*t/64.0, vy*t/64.0);
     }
     ck_assert_msg(!warned_of(&correction, "refused"), "seed %u: a refused effect reported", base_seed);
+    /* Frames 0 and 2 alone measure the drift: a change of it between them
+     * would go unseen, which is said. */
+    ck_assert_msg(warned_of(&correction, "the trajectory rests on one pair of frames (0 and 2)"),
+                  "seed %u: no warning of the one pair", base_seed);
     series_correction_clear(&correction);
     frame_series_free(series);
     g_rand_free(rng);

@@ -192,6 +192,33 @@ subset_stride(gint count, gint most, gint n_blocks)
     return (gint)coprime_step((count + most - 1)/most, (gsize)MAX(n_blocks, 1)*tall);
 }
 
+/* How many pairs of frames the measurements with weight come from: 0, 1,
+ * or 2 for two or more; *frame_a, *frame_b get the first one's frames.
+ * From one pair (two frames, or three with the middle one flagged), a
+ * jump between its frames is the velocity over again, any size of it
+ * fits, and refusing it is nothing the user needs to hear ("a jump of
+ * 2.04e+03 nm was fitted and refused" on two clean frames); other effects
+ * refused are told whatever the pairs. */
+static gint
+pairs_used(const DriftMeasurement *meas, gint n, gint *frame_a, gint *frame_b)
+{
+    gint i, first = -1;
+
+    for (i = 0; i < n; i++) {
+        if (!(meas[i].weight > 0.0))
+            continue;
+        if (first < 0) {
+            first = i;
+            *frame_a = meas[i].frame_a;
+            *frame_b = meas[i].frame_b;
+        }
+        else if (meas[i].frame_a != meas[first].frame_a
+                 || meas[i].frame_b != meas[first].frame_b)
+            return 2;
+    }
+    return (first >= 0) ? 1 : 0;
+}
+
 /* The fit of every model to the measurements whose weight in `weights` is
  * positive; measurements the fit cuts as gross outliers get weight 0.  A
  * long series fits every stride-th of them only (FIT_MAX_MEASUREMENTS in
@@ -199,35 +226,12 @@ subset_stride(gint count, gint most, gint n_blocks)
  * an oscillation's period grow with the measurements times their count,
  * and a few thousand measurements determine a handful of parameters as
  * well as fifty thousand. */
-/* Whether the measurements with weight come from more than one pair of
- * frames.  From one pair (two frames, or three with the middle one
- * flagged), a jump between its frames is the velocity over again, any
- * size of it fits, and refusing it is nothing the user needs to hear
- * ("a jump of 2.04e+03 nm was fitted and refused" on two clean frames);
- * other effects refused are told whatever the pairs. */
-static gboolean
-several_pairs_used(const DriftMeasurement *meas, gint n)
-{
-    gint i, first = -1;
-
-    for (i = 0; i < n; i++) {
-        if (!(meas[i].weight > 0.0))
-            continue;
-        if (first < 0)
-            first = i;
-        else if (meas[i].frame_a != meas[first].frame_a
-                 || meas[i].frame_b != meas[first].frame_b)
-            return TRUE;
-    }
-    return FALSE;
-}
-
 static gboolean
 fit_models(SeriesCorrection *correction, const gdouble *weights, gint n_blocks)
 {
     FitReport *fit = &correction->fit;
     gboolean *kept = g_new(gboolean, MAX(fit->n_meas, 1));
-    gint i, used = 0, stride;
+    gint i, used = 0, stride, a, b;
 
     for (i = 0; i < fit->n_meas; i++)
         used += (weights[i] > 0.0);
@@ -245,7 +249,7 @@ fit_models(SeriesCorrection *correction, const gdouble *weights, gint n_blocks)
     fit->chosen = plausible_choice(correction, fit->fits, fit->n_fits, fit->chosen,
                                    &correction->refused_type, &correction->refused_nm);
     if (correction->refused_type == DRIFT_MODEL_JUMP
-        && !several_pairs_used(fit->meas, fit->n_meas))
+        && pairs_used(fit->meas, fit->n_meas, &a, &b) < 2)
         correction->refused_type = -1;
     for (i = 0; i < fit->n_meas; i++) {
         if (!kept[i])
@@ -818,7 +822,7 @@ warn_about_fit(SeriesCorrection *correction, const gdouble *registered)
 {
     const FitReport *fit = &correction->fit;
     const DriftFit *chosen = fit->fits + fit->chosen;
-    gint i, n_reg = 0;
+    gint i, n_reg = 0, a, b;
     gdouble rms_px;
 
     if (correction->refused_type >= 0)
@@ -835,6 +839,18 @@ warn_about_fit(SeriesCorrection *correction, const gdouble *registered)
                                       "registered: the trajectory rests on "
                                       "few measurements"),
                                     n_reg, fit->n_meas));
+    /* Two frames measure one displacement per block: a drift that
+     * changes between them (a jump, a drift speeding up) and steady drift
+     * fit alike (the helper's run: a jump of (5, -3) px between two
+     * frames read as steady drift, 3.2 px RMS off, in silence). */
+    if (pairs_used(fit->meas, fit->n_meas, &a, &b) == 1)
+        add_warning(correction,
+                    g_strdup_printf(_("the trajectory rests on one pair of frames "
+                                      "(%d and %d): a change of the drift between "
+                                      "them (a jump, a drift speeding up) cannot be "
+                                      "told from steady drift, and the frames are "
+                                      "corrected as if the drift were steady"),
+                                    MIN(a, b), MAX(a, b)));
     rms_px = 1e-9*(correction->use_smooth ? correction->smooth->rms_nm
                                           : chosen->rms_nm)
              /MIN(correction->xstep, correction->ystep);
