@@ -435,6 +435,43 @@ START_TEST(test_mixed_titles_noted)
 }
 END_TEST
 
+/* Too few frames: the refusal says where the others went, channels of
+ * another size passed over and bit-identical frames dropped. */
+START_TEST(test_too_few_frames_said_why)
+{
+    static const gdouble starts[3] = { 0.0, 1.0, 2.0 };
+    GwyContainer *data = timed_frames(starts);
+    GwyDataField *other = gwy_data_field_new(32, 32, 32e-9, 32e-9, TRUE);
+    gchar *name = g_strdup("frames.gwy");
+    FrameSeries *series;
+    GError *error = NULL;
+
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(1), other);
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(2), other);
+    series = frame_series_from_files(&data, &name, 1, NULL, &error);
+    ck_assert(series == NULL);
+    ck_assert_str_eq(error->message, "frames.gwy: a series needs at least two distinct frames, "
+                     "found 1; 2 channels were passed over (another size, pixel size or unit "
+                     "than the first): choose the frames by title or id");
+    g_clear_error(&error);
+    g_object_unref(data);
+    data = timed_frames(starts);
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(1),
+                             gwy_container_get_object(data, gwy_app_get_data_key_for_id(0)));
+    gwy_container_set_object(data, gwy_app_get_data_key_for_id(2), other);
+    series = frame_series_from_files(&data, &name, 1, NULL, &error);
+    ck_assert(series == NULL);
+    ck_assert_str_eq(error->message, "frames.gwy: a series needs at least two distinct frames, "
+                     "found 1; 1 channel was passed over (another size, pixel size or unit "
+                     "than the first); 1 frame was dropped as a duplicate: choose the frames "
+                     "by title or id");
+    g_clear_error(&error);
+    g_object_unref(other);
+    g_object_unref(data);
+    g_free(name);
+}
+END_TEST
+
 /************************************************************************
  * simscan's own files: timing from simscan's metadata keys
  ************************************************************************/
@@ -643,6 +680,7 @@ main(void)
     tcase_add_test(tc_simscan, test_one_clock);
     tcase_add_test(tc_simscan, test_channel_range_beyond_the_file);
     tcase_add_test(tc_simscan, test_mixed_titles_noted);
+    tcase_add_test(tc_simscan, test_too_few_frames_said_why);
     if (probe) {
         tc = tcase_create("measured");
         tcase_add_test(tc, test_nanoscope_timing);

@@ -453,6 +453,7 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
             /* Channels not chosen by name or id that are no frames of the
              * series (another scan in the file) are passed over, said. */
             if (!chosen) {
+                series->n_passed_over++;
                 g_ptr_array_add(series->notes,
                                 g_strdup_printf(_("%s: channel %d (%s) is "
                                                   "not a frame of the series: "
@@ -796,6 +797,37 @@ take_given_times(FrameSeries *series, MetaTiming *mts,
     return TRUE;
 }
 
+/* Fewer than two frames: said with what else the file held, so that the
+ * user knows where the frames went (an AFM-IR file of maps of several
+ * sizes gave 'found 1' and nothing more). */
+static void
+refuse_too_few(const FrameSeries *series, const gchar *filename, gint n_dropped,
+               GError **error)
+{
+    GString *why = g_string_new(NULL);
+
+    g_string_printf(why, _("%s: a series needs at least two distinct frames, found %d"),
+                    filename, series->n_frames);
+    if (series->n_passed_over)
+        g_string_append_printf(why, dngettext(GETTEXT_PACKAGE,
+                                              "; %d channel was passed over (another size, "
+                                              "pixel size or unit than the first)",
+                                              "; %d channels were passed over (another size, "
+                                              "pixel size or unit than the first)",
+                                              series->n_passed_over),
+                               series->n_passed_over);
+    if (n_dropped)
+        g_string_append_printf(why, dngettext(GETTEXT_PACKAGE,
+                                              "; %d frame was dropped as a duplicate",
+                                              "; %d frames were dropped as duplicates",
+                                              n_dropped),
+                               n_dropped);
+    if (series->n_passed_over || n_dropped)
+        g_string_append(why, _(": choose the frames by title or id"));
+    g_set_error_literal(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL, why->str);
+    g_string_free(why, TRUE);
+}
+
 FrameSeries*
 frame_series_from_files(GwyContainer **datas, gchar **filenames,
                         gint n_files, const FrameSeriesOptions *options,
@@ -805,6 +837,7 @@ frame_series_from_files(GwyContainer **datas, gchar **filenames,
     FrameSeries *series = frame_series_new();
     MetaTiming *mts = NULL;
     gboolean ok;
+    gint n_loaded;
 
     if (!options) {
         frame_series_options_init(&defaults);
@@ -826,12 +859,11 @@ frame_series_from_files(GwyContainer **datas, gchar **filenames,
                                        options, &mts, error);
     if (!ok || !take_given_times(series, mts, options, error))
         goto fail;
+    n_loaded = series->n_frames;
     if (!options->keep_duplicates)
         drop_duplicates(series, mts);
     if (series->n_frames < 2) {
-        g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
-                    _("%s: a series needs at least two distinct frames, "
-                      "found %d"), filenames[0], series->n_frames);
+        refuse_too_few(series, filenames[0], n_loaded - series->n_frames, error);
         goto fail;
     }
     if (!check_pixels(series, error)

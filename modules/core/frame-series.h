@@ -50,6 +50,9 @@ typedef struct {
     SeriesFrame *frames;          /* in time order */
     GPtrArray *notes;             /* human-readable remarks (dropped duplicates,
                                      assumptions made), strings */
+    gint n_passed_over;           /* channels of a one-file series not taken
+                                     as frames: another size, pixel size or
+                                     unit than the first */
 } FrameSeries;
 
 /* Options: anything given here overrides the metadata. */
