@@ -1596,7 +1596,10 @@ series_correction_compute_progress(const FrameSeries *series,
         g_set_error(error, SERIES_CORRECTION_ERROR,
                     SERIES_CORRECTION_ERROR_FIT,
                     _("%d of the %d frames were flagged (%s): no two frames "
-                      "agree on a drift trajectory"),
+                      "agree on a drift trajectory (featureless frames, frames "
+                      "of other areas, or a drift that moves the content more "
+                      "than a quarter of the frame's smaller side from frame to "
+                      "frame)"),
                     series->n_frames - frames_kept(correction), series->n_frames,
                     first_flag_reason(correction));
     else if (!ok)
