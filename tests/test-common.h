@@ -13,6 +13,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <glib.h>
 #include <glib/gstdio.h>
 #include <sys/wait.h>
@@ -79,6 +80,19 @@ test_skip_part(const gchar *program, const gchar *format, ...)
 
 /* The folder of the measured data: $LOCALSCAN_MEASURED_DIR, else
  * ../shared/data/measured beside the source tree. */
+/* Whether one of the strings (notes, warnings) holds text. */
+static inline gboolean
+test_strings_hold(const GPtrArray *strings, const gchar *text)
+{
+    guint i;
+
+    for (i = 0; i < strings->len; i++) {
+        if (strstr(g_ptr_array_index(strings, i), text))
+            return TRUE;
+    }
+    return FALSE;
+}
+
 static inline const gchar*
 test_measured_dir(void)
 {

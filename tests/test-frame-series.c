@@ -373,19 +373,6 @@ START_TEST(test_channel_range_beyond_the_file)
 }
 END_TEST
 
-/* Whether a note of the series holds text. */
-static gboolean
-noted(const FrameSeries *series, const gchar *text)
-{
-    guint i;
-
-    for (i = 0; i < series->notes->len; i++) {
-        if (strstr(g_ptr_array_index(series->notes, i), text))
-            return TRUE;
-    }
-    return FALSE;
-}
-
 /* Channels of one file taken as frames with nothing chosen, under titles
  * of different signals (Height and Amplitude in the same unit): loaded,
  * with a note naming the titles; a movie's "Height", "Height 1", ...
@@ -404,7 +391,7 @@ START_TEST(test_mixed_titles_noted)
 
     series = frame_series_from_files(&data, &name, 1, NULL, &error);
     ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
-    ck_assert(!noted(series, "different titles"));
+    ck_assert(!test_strings_hold(series->notes, "different titles"));
     frame_series_free(series);
     for (k = 0; k < 3; k++)
         gwy_container_set_const_string(data, gwy_app_get_data_title_key_for_id(k),
@@ -412,7 +399,7 @@ START_TEST(test_mixed_titles_noted)
     series = frame_series_from_files(&data, &name, 1, NULL, &error);
     ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
     ck_assert_int_eq(series->n_frames, 3);
-    ck_assert_msg(noted(series, "frames.gwy: the frames are channels of 2 different titles "
+    ck_assert_msg(test_strings_hold(series->notes, "frames.gwy: the frames are channels of 2 different titles "
                         "('Height', 'Amplitude'), taken as one series in channel order"),
                   "no note of the mixed titles");
     frame_series_free(series);
@@ -421,14 +408,14 @@ START_TEST(test_mixed_titles_noted)
     options.last_id = 2;
     series = frame_series_from_files(&data, &name, 1, &options, &error);
     ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
-    ck_assert(!noted(series, "different titles"));
+    ck_assert(!test_strings_hold(series->notes, "different titles"));
     frame_series_free(series);
     for (k = 0; k < 3; k++)
         gwy_container_set_const_string(data, gwy_app_get_data_title_key_for_id(k),
                                        (const guchar*)movie[k]);
     series = frame_series_from_files(&data, &name, 1, NULL, &error);
     ck_assert_msg(series != NULL, "%s", error ? error->message : "?");
-    ck_assert(!noted(series, "different titles"));
+    ck_assert(!test_strings_hold(series->notes, "different titles"));
     frame_series_free(series);
     g_object_unref(data);
     g_free(name);

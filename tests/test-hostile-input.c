@@ -705,11 +705,6 @@ child_environment_for(const gchar *home, gboolean sound_input)
     return envp;
 }
 
-static gchar**
-child_environment(const gchar *home)
-{
-    return child_environment_for(home, FALSE);
-}
 
 /* Runs argv under coreutils' timeout, which ends with 124 past the limit. */
 static void

@@ -548,13 +548,7 @@ END_TEST
 static gboolean
 warned_of(const SeriesCorrection *correction, const gchar *text)
 {
-    guint w;
-
-    for (w = 0; w < correction->warnings->len; w++) {
-        if (strstr(g_ptr_array_index(correction->warnings, w), text))
-            return TRUE;
-    }
-    return FALSE;
+    return test_strings_hold(correction->warnings, text);
 }
 
 /* A featureless frame between two good ones (a constant, or zeros: a
