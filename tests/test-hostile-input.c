@@ -705,7 +705,6 @@ child_environment_for(const gchar *home, gboolean sound_input)
     return envp;
 }
 
-
 /* Runs argv under coreutils' timeout, which ends with 124 past the limit. */
 static void
 run_case(HostileCase *hc, const gchar *home, CaseRun *run)
