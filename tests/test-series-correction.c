@@ -730,6 +730,27 @@ START_TEST(test_all_frames_flagged_refused)
 }
 END_TEST
 
+/* Two frames, the second featureless (a channel that recorded nothing):
+ * refused, naming the frame (it said only that too few blocks
+ * registered). */
+START_TEST(test_featureless_second_of_two_named)
+{
+    FrameSeries *series = steady_series(2, 64, 3.0, 1.0);
+    SeriesCorrection correction;
+    GError *error = NULL;
+
+    gwy_data_field_fill(series->frames[1].field, 2e-9);
+    ck_assert(!series_correction_compute(series, NULL, NULL, &correction, &error));
+    ck_assert(g_error_matches(error, SERIES_CORRECTION_ERROR, SERIES_CORRECTION_ERROR_FIT));
+    ck_assert_str_eq(error->message, "too few blocks of the frames could be registered against "
+                     "each other to fit a drift trajectory: frame 1 (steady) is featureless, "
+                     "every pixel the same");
+    g_clear_error(&error);
+    series_correction_clear(&correction);
+    frame_series_free(series);
+}
+END_TEST
+
 /* The area --crop common keeps is the one the frames not flagged share:
  * frame 0 lacks its first 4 columns, frame 2 its last 4 rows, and frame 1,
  * flagged, a random 1 % of its pixels, which would leave a sliver. */
@@ -1021,6 +1042,7 @@ main(void)
     tcase_add_loop_test(tc, test_featureless_frame_between, 0, 2);
     tcase_add_test(tc, test_featureless_frame_jump_unseparable);
     tcase_add_test(tc, test_all_frames_flagged_refused);
+    tcase_add_test(tc, test_featureless_second_of_two_named);
     tcase_add_test(tc, test_trusted_area_leaves_flagged_frames_out);
     tcase_add_test(tc, test_frames_overlay);
     tcase_add_test(tc, test_long_series);

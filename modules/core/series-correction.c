@@ -1512,6 +1512,41 @@ first_flag_reason(const SeriesCorrection *correction)
     return "";
 }
 
+/* The first frame whose pixels are all alike (a channel that recorded
+ * nothing), or -1. */
+static gint
+featureless_frame(const FrameSeries *series)
+{
+    gdouble min, max;
+    gint k;
+
+    for (k = 0; k < series->n_frames; k++) {
+        gwy_data_field_get_min_max(series->frames[k].field, &min, &max);
+        if (min == max)
+            return k;
+    }
+    return -1;
+}
+
+/* Too few blocks registered to fit anything: said with the frame to
+ * blame where one is featureless (two frames, the second constant, were
+ * refused without a word of it). */
+static void
+refuse_unregistered(const FrameSeries *series, GError **error)
+{
+    gint k = featureless_frame(series);
+
+    if (k >= 0)
+        g_set_error(error, SERIES_CORRECTION_ERROR, SERIES_CORRECTION_ERROR_FIT,
+                    _("too few blocks of the frames could be registered against each "
+                      "other to fit a drift trajectory: frame %d (%s) is featureless, "
+                      "every pixel the same"), k, series->frames[k].label);
+    else
+        g_set_error(error, SERIES_CORRECTION_ERROR, SERIES_CORRECTION_ERROR_FIT,
+                    _("too few blocks of the frames could be registered "
+                      "against each other to fit a drift trajectory"));
+}
+
 gboolean
 series_correction_compute_progress(const FrameSeries *series,
                                    const DisplacementOptions *doptions,
@@ -1603,10 +1638,7 @@ series_correction_compute_progress(const FrameSeries *series,
                     series->n_frames - frames_kept(correction), series->n_frames,
                     first_flag_reason(correction));
     else if (!ok)
-        g_set_error(error, SERIES_CORRECTION_ERROR,
-                    SERIES_CORRECTION_ERROR_FIT,
-                    _("too few blocks of the frames could be registered "
-                      "against each other to fit a drift trajectory"));
+        refuse_unregistered(series, error);
     g_free(registered);
     return ok;
 }
