@@ -864,30 +864,39 @@ make_scratch(const gchar *what)
     return scratch;
 }
 
+/* Runs the case (argv without its terminator) and judges it, the inputs'
+ * checksums taken before. */
+static void
+run_and_judge(HostileCase *hc, const gchar *home)
+{
+    GPtrArray *sums = g_ptr_array_new_with_free_func(g_free);
+    CaseRun run;
+    guint j;
+
+    for (j = 0; j < hc->inputs->len; j++)
+        g_ptr_array_add(sums, checksum_of(g_ptr_array_index(hc->inputs, j)));
+    g_ptr_array_add(hc->argv, NULL);
+    run_case(hc, home, &run);
+    g_ptr_array_remove_index(hc->argv, hc->argv->len - 1);
+    judge_case(hc, &run, sums);
+    g_free(run.err);
+    g_ptr_array_free(sums, TRUE);
+}
+
 START_TEST(test_generated_cases)
 {
     gchar *scratch = make_scratch("cases"), *home = g_build_filename(scratch, "home", NULL);
     GRand *rng = g_rand_new_with_seed(seed);
     HostileCase *hc;
-    GPtrArray *sums;
-    CaseRun run;
-    guint i, j, k, passed = 0;
+    guint i, k, passed = 0;
 
     g_mkdir(home, 0700);
     for (i = 0; i < N_CASES; i++) {
         k = g_rand_int_range(rng, 0, G_N_ELEMENTS(case_kinds));
         hc = case_new(scratch, i, case_kinds[k].name, case_kinds[k].program);
         case_kinds[k].make(hc, rng);
-        sums = g_ptr_array_new_with_free_func(g_free);
-        for (j = 0; j < hc->inputs->len; j++)
-            g_ptr_array_add(sums, checksum_of(g_ptr_array_index(hc->inputs, j)));
-        g_ptr_array_add(hc->argv, NULL);
-        run_case(hc, home, &run);
-        g_ptr_array_remove_index(hc->argv, hc->argv->len - 1);
-        judge_case(hc, &run, sums);
+        run_and_judge(hc, home);
         passed++;
-        g_free(run.err);
-        g_ptr_array_free(sums, TRUE);
         case_free(hc);
     }
     printf("test-hostile-input: %u of %d generated cases passed (seed %u)\n", passed, N_CASES, seed);
@@ -909,9 +918,7 @@ START_TEST(test_warning_then_failure)
     gchar *scratch = make_scratch("warn"), *home = g_build_filename(scratch, "home", NULL);
     GRand *rng = g_rand_new_with_seed(seed);
     gchar *input, *table, *output;
-    GPtrArray *sums;
     HostileCase *hc;
-    CaseRun run;
     gint k;
 
     g_mkdir(home, 0700);
@@ -925,15 +932,7 @@ START_TEST(test_warning_then_failure)
         add_args(hc, "-o", output, "-d", table, "-m", "continuous", input, NULL);
         hc->expect = EXPECT_FAILURE;
         hc->must_say = k ? "missing" : "cannot write";
-        sums = g_ptr_array_new_with_free_func(g_free);
-        g_ptr_array_add(sums, checksum_of(input));
-        g_ptr_array_add(sums, checksum_of(table));
-        g_ptr_array_add(hc->argv, NULL);
-        run_case(hc, home, &run);
-        g_ptr_array_remove_index(hc->argv, hc->argv->len - 1);
-        judge_case(hc, &run, sums);
-        g_free(run.err);
-        g_ptr_array_free(sums, TRUE);
+        run_and_judge(hc, home);
         g_free(input);
         g_free(table);
         g_free(output);
@@ -968,9 +967,9 @@ slow_case(const gchar *scratch, GRand *rng, gint index)
 {
     HostileCase *hc = case_new(scratch, index, "killed run", TOOL_PATH);
     gchar *input = write_image(hc, rng, "big.gwy", 2048, 2048, 0.0);
+    gchar *table = write_table(hc, rng, "drift.csv", 32);
 
     hc->sound_input = TRUE;
-    gchar *table = write_table(hc, rng, "drift.csv", 32);
 
     add_output(hc, "-o", "out.gwy");
     add_output(hc, "--write-drift", "used.csv");
