@@ -73,14 +73,23 @@ summed_area_table(const gdouble *values, gint xres, gint yres, SummedQuantity wh
         gdouble *t = table + (gsize)(r + 1)*w, *above = t - w, s = 0.0;
 
         t[0] = 0.0;
-        for (c = 0; c < xres; c++) {
-            if (what == SUM_VALUES)
-                s += row[c];
-            else if (what == SUM_SQUARES)
-                s += row[c]*row[c];
-            else
-                s += (row[c] > 0.0);
-            t[c + 1] = above[c + 1] + s;
+        /* One loop per quantity: the tables are built for every stripe of
+         * every pair, and a test per pixel cost what the sum does. */
+        switch (what) {
+            case SUM_VALUES:
+            for (c = 0; c < xres; c++)
+                t[c + 1] = above[c + 1] + (s += row[c]);
+            break;
+
+            case SUM_SQUARES:
+            for (c = 0; c < xres; c++)
+                t[c + 1] = above[c + 1] + (s += row[c]*row[c]);
+            break;
+
+            case SUM_PRESENT:
+            for (c = 0; c < xres; c++)
+                t[c + 1] = above[c + 1] + (s += (row[c] > 0.0));
+            break;
         }
     }
 }
