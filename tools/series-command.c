@@ -568,7 +568,7 @@ static gboolean
 add_text(OutputFiles *files, const gchar *filename, gchar *text, gchar **printed,
          GError **error)
 {
-    gboolean ok = TRUE;
+    gboolean ok;
 
     if (is_stdout(filename)) {
         g_free(*printed);

@@ -384,6 +384,14 @@ jump_separable(gint spanned, gint n_used)
     return spanned >= JUMP_MIN_SPLIT && n_used - spanned >= JUMP_MIN_SPLIT;
 }
 
+/* Whether a measurement whose step basis (its share of the step, 0 to 1
+ * over its span) is this counts as spanning the jump. */
+static gboolean
+spans_jump(gdouble step_basis)
+{
+    return fabs(step_basis) >= 0.5;
+}
+
 /* Weighted least squares for a fixed nonlinear parameter; returns the
  * weighted residual sum of squares (nm^2) over both axes; NAN for a jump
  * that cannot be told from the velocity. */
@@ -422,7 +430,7 @@ solve_fixed(const Prepared *pm, FitKind kind, gdouble theta,
         for (j = 0; j < k; j++)
             row[j] = fa[j] - fb[j];
         if (kind == DRIFT_MODEL_JUMP)
-            spanned += (fabs(row[1]) >= 0.5);
+            spanned += spans_jump(row[1]);
         for (j = 0; j < k; j++) {
             for (l = 0; l < k; l++)
                 ata[j*k + l] += pm->w[i]*row[j]*row[l];
@@ -911,7 +919,7 @@ jump_grid_rss(const Prepared *pm, const gdouble *grid, gint m)
             model_basis_mean(DRIFT_MODEL_JUMP, grid[j], pm->ta[i], pm->half[i], fa);
             model_basis_mean(DRIFT_MODEL_JUMP, grid[j], pm->tb[i], pm->half[i], fb);
             r1 = fa[1] - fb[1];
-            spanned[j] += (fabs(r1) >= 0.5);
+            spanned[j] += spans_jump(r1);
             sums1[5*j] += wi*r0*r1;
             sums1[5*j + 1] += wi*r1*r0;
             sums1[5*j + 2] += wi*r1*r1;

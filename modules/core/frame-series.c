@@ -247,16 +247,12 @@ append_channel(FrameSeries *series, GwyContainer *data, gint id,
     g_free(base);
 }
 
+/* The lowest channel id, or -1 (the ids come ascending). */
 static gint
 first_channel_id(GwyContainer *data)
 {
-    gint *ids = localscan_channel_ids(data);
-    gint i, found = -1;
+    gint *ids = localscan_channel_ids(data), found = ids[0];
 
-    for (i = 0; ids[i] >= 0; i++) {
-        if (found < 0 || ids[i] < found)
-            found = ids[i];
-    }
     g_free(ids);
     return found;
 }

@@ -841,8 +841,9 @@ warn_about_fit(SeriesCorrection *correction, const gdouble *registered)
                                     n_reg, fit->n_meas));
     /* Two frames measure one displacement per block: a drift that
      * changes between them (a jump, a drift speeding up) and steady drift
-     * fit alike (the helper's run: a jump of (5, -3) px between two
-     * frames read as steady drift, 3.2 px RMS off, in silence). */
+     * fit alike (a run on series with a known drift: a jump of (5, -3)
+     * px between two frames read as steady drift, 3.2 px RMS off, in
+     * silence). */
     if (pairs_used(fit->meas, fit->n_meas, &a, &b) == 1)
         add_warning(correction,
                     g_strdup_printf(_("the trajectory rests on one pair of frames "
