@@ -459,6 +459,43 @@ START_TEST(test_too_few_frames_said_why)
 }
 END_TEST
 
+/* One file's channels that start at the same moment are signals of one
+ * scan (a FastScan file's ZSensor, AmplitudeActual and Phase): refused as
+ * such, where 'not in time order' said nothing of why; frames of separate
+ * files stamped alike stay 'not in time order'. */
+START_TEST(test_channels_of_one_scan_refused)
+{
+    static const gdouble together[3] = { 5.0, 5.0, 5.0 };
+    GwyContainer *data = timed_frames(together), *datas[2];
+    gchar *names[2] = { g_strdup("scan.gwy"), g_strdup("again.gwy") };
+    FrameSeriesOptions options;
+    FrameSeries *series;
+    GError *error = NULL;
+
+    series = frame_series_from_files(&data, names, 1, NULL, &error);
+    ck_assert(series == NULL);
+    ck_assert_msg(g_str_has_suffix(error->message, " were scanned at the same time: they are "
+                                   "channels of one scan, not frames of a series; choose the "
+                                   "frames by title or id"), "%s", error->message);
+    g_clear_error(&error);
+    frame_series_options_init(&options);
+    options.channel_ids = (const gint[]){ 0 };
+    options.n_channel_ids = 1;
+    datas[0] = data;
+    datas[1] = timed_frames(together);
+    gwy_data_field_set_val(gwy_container_get_object(datas[1], gwy_app_get_data_key_for_id(0)),
+                           1, 1, 1e-9);
+    series = frame_series_from_files(datas, names, 2, &options, &error);
+    ck_assert(series == NULL);
+    ck_assert_msg(strstr(error->message, "frames must be in time order"), "%s", error->message);
+    g_clear_error(&error);
+    g_object_unref(datas[1]);
+    g_object_unref(data);
+    g_free(names[0]);
+    g_free(names[1]);
+}
+END_TEST
+
 /************************************************************************
  * simscan's own files: timing from simscan's metadata keys
  ************************************************************************/
@@ -668,6 +705,7 @@ main(void)
     tcase_add_test(tc_simscan, test_channel_range_beyond_the_file);
     tcase_add_test(tc_simscan, test_mixed_titles_noted);
     tcase_add_test(tc_simscan, test_too_few_frames_said_why);
+    tcase_add_test(tc_simscan, test_channels_of_one_scan_refused);
     if (probe) {
         tc = tcase_create("measured");
         tcase_add_test(tc, test_nanoscope_timing);

@@ -740,6 +740,17 @@ assign_start_times(FrameSeries *series, const MetaTiming *mts,
         gdouble overlap = (scan_timing_frame_end(&prev->timing)
                            - frame->timing.frame_start);
 
+        /* One file's channels that start together are signals of one scan
+         * (a FastScan file's ZSensor, AmplitudeActual and Phase), which
+         * 'not in time order' left the user to work out. */
+        if (frame->timing.frame_start == prev->timing.frame_start
+            && frame->file_index == prev->file_index) {
+            g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
+                        _("%s and %s were scanned at the same time: they are "
+                          "channels of one scan, not frames of a series; choose "
+                          "the frames by title or id"), prev->label, frame->label);
+            return FALSE;
+        }
         if (frame->timing.frame_start <= prev->timing.frame_start) {
             g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_TIMING,
                         _("%s starts at %g s, not after %s (%g s): frames "
