@@ -895,6 +895,46 @@ START_TEST(test_frames_overlay)
 }
 END_TEST
 
+/* Frames prepared for registration are held within a memory budget
+ * (displacement-measure.c, held_frames_within_budget); a frame no longer
+ * held is prepared again for each pair.  With room for about one frame,
+ * every pair of a short series (all pairs) and of a long one (three older
+ * partners) must read bit for bit what the frames all held read. */
+START_TEST(test_held_frames_budget)
+{
+    static const gint sizes[2] = { 6, SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4 };
+    DisplacementOptions options;
+    DriftMeasurement *all, *few;
+    gint s, n_all, n_few, i;
+
+    for (s = 0; s < 2; s++) {
+        FrameSeries *series = steady_series(sizes[s], 64, 0.6, -0.4);
+
+        displacement_options_init(&options);
+        options.n_blocks = 8;
+        options.pair_reach = s ? SERIES_CORRECTION_PAIR_REACH : 0;
+        all = displacement_measure_series(series, &options, &n_all);
+        options.held_bytes = 96*64*40;
+        few = displacement_measure_series(series, &options, &n_few);
+        ck_assert_msg(all && few && n_all == n_few && n_all >= 8*(sizes[s] - 1),
+                      "%d frames: %d and %d measurements", sizes[s], n_all, n_few);
+        for (i = 0; i < n_all; i++) {
+            ck_assert_msg(all[i].frame_a == few[i].frame_a && all[i].frame_b == few[i].frame_b
+                          && all[i].dx == few[i].dx && all[i].dy == few[i].dy
+                          && all[i].t_a == few[i].t_a && all[i].t_b == few[i].t_b
+                          && all[i].weight == few[i].weight,
+                          "%d frames, measurement %d (frames %d-%d): (%g, %g) against (%g, %g)",
+                          sizes[s], i, all[i].frame_a, all[i].frame_b,
+                          all[i].dx, all[i].dy, few[i].dx, few[i].dy);
+        }
+        printf("held frames budget, %d frames: %d measurements alike\n", sizes[s], n_all);
+        g_free(all);
+        g_free(few);
+        frame_series_free(series);
+    }
+}
+END_TEST
+
 /* A series longer than SERIES_CORRECTION_ALL_PAIRS_UP_TO registers each
  * frame against SERIES_CORRECTION_PAIR_REACH older ones only, the older
  * pairs searched narrowly (at least 6 px) around the chained shifts of the
@@ -1088,6 +1128,7 @@ main(void)
     gwy_process_type_init();
     tcase_add_loop_test(tc, test_hidden_drift_corrected, 0, N_CASES);
     tcase_add_loop_test(tc, test_jump_before_slipped_frame, 0, 3);
+    tcase_add_test(tc, test_jump_lines_matching_better_than_typical);
     tcase_add_loop_test(tc, test_jump_in_featureless_lines, 0, 2);
     tcase_add_test(tc, test_jump_in_featureless_lines_partly_predicted);
     tcase_add_test(tc, test_progress_and_cancel);
@@ -1102,6 +1143,7 @@ main(void)
     tcase_add_test(tc, test_trusted_area_leaves_flagged_frames_out);
     tcase_add_test(tc, test_frames_overlay);
     tcase_add_test(tc, test_long_series);
+    tcase_add_test(tc, test_held_frames_budget);
     tcase_add_test(tc, test_squeezed_partner_timed);
     tcase_set_timeout(tc, 120);
     return test_run_suite(s);

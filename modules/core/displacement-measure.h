@@ -15,6 +15,8 @@
 
 G_BEGIN_DECLS
 
+#define DISPLACEMENT_HELD_BYTES ((gsize)768 << 20)
+
 typedef struct {
     gint n_blocks;          /* blocks of rows per frame (default 16) */
     gdouble max_shift;      /* fraction of the frame searched for the frame's
@@ -26,6 +28,10 @@ typedef struct {
     gint pair_reach;        /* frames are registered against the earlier
                                frames up to this many apart; 0 (default):
                                every earlier frame */
+    gsize held_bytes;       /* frames prepared for registration held at
+                               once within about this (default 768 MB; 0:
+                               the default); frames not held are prepared
+                               again per pair, with the same result */
 } DisplacementOptions;
 
 void               displacement_options_init (DisplacementOptions *options);
