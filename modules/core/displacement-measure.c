@@ -95,7 +95,7 @@ register_in_band(const StripeRegistrationFrame *image,
 {
     gdouble radius = block_radius(options, xres, yres, search), centre[2] = { 0.0, 0.0 };
     gdouble *pdx = g_new(gdouble, n), *pdy = g_new(gdouble, n);
-    gint s, side = MIN(xres, yres), accepted = 0;
+    gint s, accepted = 0;
     gboolean ok;
 
     /* The frame's overall shift first, so that blocks (less content, more
@@ -112,8 +112,14 @@ register_in_band(const StripeRegistrationFrame *image,
     if (guess && search->centred && search->radius <= radius)
         ok = TRUE;
     else {
+        /* Blind, each axis is searched over its own share of the frame:
+         * a wide frame drifting along its width moves further from frame
+         * to frame than a share of its height (frames of 256 x 96 px,
+         * 51 px per frame along x, were all flagged as registered against
+         * no other frame when both axes were searched within 24 px). */
         ok = stripe_registration_frame_shift(image, reference, centre[0], centre[1],
-                                             guess ? radius : MAX(options->max_shift*side, 2.0),
+                                             guess ? radius : MAX(options->max_shift*xres, 2.0),
+                                             guess ? radius : MAX(options->max_shift*yres, 2.0),
                                              min_narrow, whole);
         if (!ok)
             whole->peak = -1.0;

@@ -1634,7 +1634,7 @@ series_correction_compute_progress(const FrameSeries *series,
                     _("%d of the %d frames were flagged (%s): no two frames "
                       "agree on a drift trajectory (featureless frames, frames "
                       "of other areas, or a drift that moves the content more "
-                      "than a quarter of the frame's smaller side from frame to "
+                      "than a quarter of the frame along an axis from frame to "
                       "frame)"),
                     series->n_frames - frames_kept(correction), series->n_frames,
                     first_flag_reason(correction));

@@ -859,7 +859,7 @@ typedef struct {
     const ConditionedFrame *image, *reference;   /* levelled views */
     const ConditionedFrame *sub_image, *sub_reference;
     gboolean uncertainty;
-    gint n, radius, workers;
+    gint n, ry, rx, workers;
     const gdouble *pdy, *pdx;
     Peak *own;
 } FineStripes;
@@ -872,14 +872,15 @@ measure_fine_share(gpointer user_data, gint worker)
     gint s;
 
     level_init(&level, fs->image, fs->reference, fs->sub_image, fs->sub_reference, fs->n,
-               fs->radius, fs->radius);
+               fs->ry, fs->rx);
     level.uncertainty = fs->uncertainty;
     for (s = worker; s < fs->n; s += fs->workers)
-        measure_stripe_peak(&level, s, fs->pdy, fs->pdx, fs->radius, fs->radius, 0, fs->own + s);
+        measure_stripe_peak(&level, s, fs->pdy, fs->pdx, fs->ry, fs->rx, 0, fs->own + s);
     level_free(&level);
 }
 
-/* Every stripe at full resolution within radius of its predicted shift.
+/* Every stripe at full resolution within ry rows and rx columns of its
+ * predicted shift.
  * Its map comes from the levelled frames: within a small window the
  * correlation's own mean removal over each shift's overlap takes what
  * stays of slow variations, and the wide cut, which a search over large
@@ -890,7 +891,7 @@ measure_fine_share(gpointer user_data, gint worker)
  * runs its pairs in parallel already). */
 static void
 measure_fine(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
-             const gdouble *pdy, const gdouble *pdx, gint radius, gdouble min_score,
+             const gdouble *pdy, const gdouble *pdx, gint ry, gint rx, gdouble min_score,
              Refinement refine, gboolean parallel, StripeShift *shifts)
 {
     ConditionedFrame image_view = levelled_view(image), reference_view = levelled_view(reference);
@@ -898,12 +899,12 @@ measure_fine(const ConditionedFrame *image, const ConditionedFrame *reference, g
     FineStripes fs = {
         &image_view, &reference_view, match ? image : NULL, match ? reference : NULL,
         refine == REFINE_MATCH_SIGMA,
-        n, radius, parallel ? CLAMP((gint)g_get_num_processors(), 1, n) : 1, pdy, pdx,
+        n, ry, rx, parallel ? CLAMP((gint)g_get_num_processors(), 1, n) : 1, pdy, pdx,
         g_new(Peak, MAX(n, 1)),
     };
 
     parallel_run(0, fs.workers, measure_fine_share, &fs);
-    set_own_shifts(fs.own, n, match, radius, radius, min_score, shifts);
+    set_own_shifts(fs.own, n, match, ry, rx, min_score, shifts);
     g_free(fs.own);
 }
 
@@ -978,8 +979,8 @@ measure_conditioned(const ConditionedFrame *image, const ConditionedFrame *refer
     }
     else {
         radius = MIN(fine_radius(factor), MIN(image->xres, image->yres)/2);
-        measure_fine(image, reference, n, pdy, pdx, radius, options->min_score, REFINE_MATCH_SIGMA, TRUE,
-                     shifts);
+        measure_fine(image, reference, n, pdy, pdx, radius, radius, options->min_score,
+                     REFINE_MATCH_SIGMA, TRUE, shifts);
         reject_beyond_search(options, shifts, n);
         for (s = 0; s < n; s++)
             shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres, pdy[s], pdx[s]);
@@ -990,13 +991,14 @@ measure_conditioned(const ConditionedFrame *image, const ConditionedFrame *refer
 }
 
 /* stripe_registration_measure_around() for frames conditioned already,
- * the shifts refined as refine says. */
+ * searched within radius_px[0] columns and radius_px[1] rows, the shifts
+ * refined as refine says. */
 static gboolean
 measure_around(const ConditionedFrame *image, const ConditionedFrame *reference, gint n,
-               const gdouble *predicted_dx, const gdouble *predicted_dy, gdouble radius_px,
+               const gdouble *predicted_dx, const gdouble *predicted_dy, const gdouble *radius_px,
                gdouble min_score, Refinement refine, StripeShift *shifts, GError **error)
 {
-    gint s, radius;
+    gint s, rx, ry;
 
     if (!check_frames(image, reference, n, error))
         return FALSE;
@@ -1009,8 +1011,9 @@ measure_around(const ConditionedFrame *image, const ConditionedFrame *reference,
             return FALSE;
         }
     }
-    radius = (gint)CLAMP(ceil(radius_px), 1, MIN(image->xres, image->yres)/2);
-    measure_fine(image, reference, n, predicted_dy, predicted_dx, radius, min_score, refine, FALSE,
+    rx = (gint)CLAMP(ceil(radius_px[0]), 1, image->xres/2);
+    ry = (gint)CLAMP(ceil(radius_px[1]), 1, image->yres/2);
+    measure_fine(image, reference, n, predicted_dy, predicted_dx, ry, rx, min_score, refine, FALSE,
                  shifts);
     for (s = 0; s < n; s++) {
         shifts[s].in_reference = stripe_in_reference(s, n, image->xres, image->yres,
@@ -1154,12 +1157,13 @@ stripe_registration_measure_around(const gdouble *image, const gdouble *referenc
                                    GError **error)
 {
     ConditionedFrame *cimage, *creference;
+    gdouble radii[2] = { radius_px, radius_px };
     gboolean ok;
 
     g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
     if (!condition_pair(image, reference, xres, yres, 1.0, &cimage, &creference, error))
         return FALSE;
-    ok = measure_around(cimage, creference, n, predicted_dx, predicted_dy, radius_px, min_score,
+    ok = measure_around(cimage, creference, n, predicted_dx, predicted_dy, radii, min_score,
                         REFINE_MATCH_SIGMA, shifts, error);
     conditioned_frame_free(cimage);
     conditioned_frame_free(creference);
@@ -1229,9 +1233,9 @@ band_passed(const StripeRegistrationFrame *frame, gdouble narrow, ConditionedFra
 static gboolean
 measure_around_pair(const StripeRegistrationFrame *image,
                     const StripeRegistrationFrame *reference, gint n,
-                    const gdouble *predicted_dx, const gdouble *predicted_dy, gdouble radius_px,
-                    gdouble min_narrow, gdouble min_score, Refinement refine, StripeShift *shifts,
-                    GError **error)
+                    const gdouble *predicted_dx, const gdouble *predicted_dy,
+                    const gdouble *radius_px, gdouble min_narrow, gdouble min_score,
+                    Refinement refine, StripeShift *shifts, GError **error)
 {
     /* The same band as condition_pair() gives the two frames, or wider. */
     gdouble narrow = MAX(MAX(image->noise_scale, reference->noise_scale), min_narrow);
@@ -1256,24 +1260,26 @@ measure_around_pair(const StripeRegistrationFrame *image,
 gboolean
 stripe_registration_frame_shift(const StripeRegistrationFrame *image,
                                 const StripeRegistrationFrame *reference,
-                                gdouble predicted_dx, gdouble predicted_dy, gdouble radius_px,
-                                gdouble min_narrow, StripeShift *shift)
+                                gdouble predicted_dx, gdouble predicted_dy, gdouble radius_x_px,
+                                gdouble radius_y_px, gdouble min_narrow, StripeShift *shift)
 {
     gdouble narrow, pdx = 0.5*predicted_dx, pdy = 0.5*predicted_dy;
+    gdouble radii[2] = { radius_x_px, radius_y_px };
+    gdouble halved[2] = { MAX(0.5*radius_x_px, 1.0), MAX(0.5*radius_y_px, 1.0) };
     ConditionedFrame *made_image, *made_reference, *small_image, *small_reference;
     const ConditionedFrame *cimage, *creference;
     gboolean ok;
 
     g_return_val_if_fail(image && reference && shift, FALSE);
     if (MIN(image->unfiltered->xres, image->unfiltered->yres) < FRAME_SHIFT_HALVED_FROM)
-        return measure_around_pair(image, reference, 1, &predicted_dx, &predicted_dy, radius_px, min_narrow,
+        return measure_around_pair(image, reference, 1, &predicted_dx, &predicted_dy, radii, min_narrow,
                                    STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, REFINE_QUADRATIC, shift, NULL);
     narrow = MAX(MAX(image->noise_scale, reference->noise_scale), min_narrow);
     cimage = band_passed(image, narrow, &made_image);
     creference = band_passed(reference, narrow, &made_reference);
     small_image = conditioned_frame_downsample(cimage, 2);
     small_reference = conditioned_frame_downsample(creference, 2);
-    ok = measure_around(small_image, small_reference, 1, &pdx, &pdy, MAX(0.5*radius_px, 1.0),
+    ok = measure_around(small_image, small_reference, 1, &pdx, &pdy, halved,
                         STRIPE_REGISTRATION_DEFAULT_MIN_SCORE, REFINE_QUADRATIC, shift, NULL);
     shift->dx *= 2.0;
     shift->dy *= 2.0;
@@ -1291,8 +1297,10 @@ stripe_registration_measure_around_frames(const StripeRegistrationFrame *image,
                                           gdouble radius_px, gdouble min_narrow, gdouble min_score,
                                           gboolean uncertainty, StripeShift *shifts, GError **error)
 {
+    gdouble radii[2] = { radius_px, radius_px };
+
     g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
-    return measure_around_pair(image, reference, n, predicted_dx, predicted_dy, radius_px,
+    return measure_around_pair(image, reference, n, predicted_dx, predicted_dy, radii,
                                min_narrow, min_score, uncertainty ? REFINE_MATCH_SIGMA : REFINE_MATCH,
                                shifts, error);
 }

@@ -157,8 +157,9 @@ gboolean     stripe_registration_measure_around_frames(const StripeRegistrationF
                                                        StripeShift *shifts,
                                                        GError **error);
 
-/* The whole frame's shift (px, table convention) within radius_px of the
- * predicted one, to the correlation map's resolution (its peak refined by
+/* The whole frame's shift (px, table convention) within radius_x_px
+ * columns and radius_y_px rows of the predicted one (each at most half the
+ * frame's side), to the correlation map's resolution (its peak refined by
  * a quadratic), without the sub-pixel match, which would cost as much as
  * all the stripes' together: where to search the stripes (at half
  * resolution on frames of 128 px and more).  shift->peak is the
@@ -167,7 +168,8 @@ gboolean     stripe_registration_frame_shift(const StripeRegistrationFrame *imag
                                              const StripeRegistrationFrame *reference,
                                              gdouble predicted_dx,
                                              gdouble predicted_dy,
-                                             gdouble radius_px,
+                                             gdouble radius_x_px,
+                                             gdouble radius_y_px,
                                              gdouble min_narrow,
                                              StripeShift *shift);
 
