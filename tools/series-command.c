@@ -64,6 +64,10 @@ typedef struct {
     GwyInterpolationType interpolation;
     gboolean crop;
     gint area[4];            /* col, row, width, height of the common area */
+    gint next_id;            /* the output's next channel id: the output is
+                                built here alone, and asking it (a walk over
+                                all its items) for every channel stored made
+                                a long series quadratic */
 } SeriesRun;
 
 static void
@@ -295,14 +299,9 @@ load_series(const SeriesCommandArgs *args, SeriesRun *run, GError **error)
 }
 
 static gint
-next_free_id(GwyContainer *data)
+next_free_id(SeriesRun *run)
 {
-    gint *ids = localscan_channel_ids(data), i, next = 0;
-
-    for (i = 0; ids[i] >= 0; i++)
-        next = MAX(next, ids[i] + 1);
-    g_free(ids);
-    return next;
+    return run->next_id++;
 }
 
 /* A mask that is no field of its channel's size (or no field at all, or
@@ -337,7 +336,7 @@ copy_inputs(SeriesRun *run, GwyContainer *out)
     for (k = 0; k < run->n_files; k++) {
         ids = localscan_channel_ids(run->datas[k]);
         for (i = 0; ids[i] >= 0; i++) {
-            gint id = next_free_id(out);
+            gint id = next_free_id(run);
 
             g_snprintf(from, sizeof(from), "/%d", ids[i]);
             g_snprintf(to, sizeof(to), "/%d", id);
@@ -382,11 +381,11 @@ corrected_meta(GwyContainer *source, gint source_id, const SeriesRun *run,
 
 /* Stores a corrected field and its mask as a new channel; returns its id. */
 static gint
-store_corrected(GwyContainer *out, const SeriesRun *run, gint k,
+store_corrected(GwyContainer *out, SeriesRun *run, gint k,
                 GwyContainer *source, gint source_id, GwyDataField *result,
                 GwyDataField *mask)
 {
-    gint id = next_free_id(out);
+    gint id = next_free_id(run);
     const gchar *title = localscan_channel_title(source, source_id);
     GwyContainer *meta;
     gchar *text, key[48];
@@ -535,6 +534,7 @@ build_output(SeriesRun *run, gboolean all_channels, GError **error)
     GwyGraphModel *graph;
     gboolean ok;
 
+    run->next_id = 0;
     copy_inputs(run, out);
     ok = correct_frames(run, all_channels, out, stored, &area, error);
     if (ok && run->crop
