@@ -373,14 +373,14 @@ note_range_beyond(FrameSeries *series, const gchar *filename,
 /* How many titles the notes list at most. */
 #define TITLES_NOTED 4
 
-/* Channels taken as frames because nothing chose them, under titles that
- * are not one signal's ("Height" beside "Amplitude" in the same unit, or
- * beside "Height 2"): a file of several signals of one scan, or of two
- * series, whose frames the user should choose.  Said, not refused: a
- * movie's frames may be titled anyhow. */
+/* Channels taken as frames because nothing chose them (the series' frames,
+ * all of this file), under titles that are not one signal's ("Height"
+ * beside "Amplitude" in the same unit, or beside "Height 2"): a file of
+ * several signals of one scan, or of two series, whose frames the user
+ * should choose.  Said, not refused: a movie's frames may be titled
+ * anyhow. */
 static void
-note_mixed_titles(FrameSeries *series, GwyContainer *data, const gchar *filename,
-                  const gint *ids, gint n)
+note_mixed_titles(FrameSeries *series, GwyContainer *data, const gchar *filename)
 {
     GPtrArray *bases = g_ptr_array_new_with_free_func(g_free);
     GString *list;
@@ -388,8 +388,9 @@ note_mixed_titles(FrameSeries *series, GwyContainer *data, const gchar *filename
     guint i;
     gint k;
 
-    for (k = 0; k < n; k++) {
-        base = frame_series_title_base(localscan_channel_title(data, ids[k]));
+    for (k = 0; k < series->n_frames; k++) {
+        base = frame_series_title_base(localscan_channel_title(data,
+                                                               series->frames[k].channel_id));
         for (i = 0; i < bases->len && strcmp(g_ptr_array_index(bases, i), base) != 0; i++)
             ;
         if (i < bases->len)
@@ -421,16 +422,15 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
                           const FrameSeriesOptions *options,
                           MetaTiming **mts, GError **error)
 {
-    gint *ids = localscan_channel_ids(data), *taken;
+    gint *ids = localscan_channel_ids(data);
     GwyDataField *first = NULL;
-    gint i, n, matched = 0, n_taken = 0;
+    gint i, n, matched = 0;
     gboolean ok, chosen = (options->channel || options->first_id >= 0
                            || options->last_id >= 0);
 
     for (n = 0; ids[n] >= 0; n++)
         ;
     *mts = g_new0(MetaTiming, n + 1);
-    taken = g_new(gint, n + 1);
     for (i = 0; i < n; i++) {
         GwyDataField *field = localscan_channel_item(data, ids[i], "data");
 
@@ -463,24 +463,20 @@ load_channels_of_one_file(FrameSeries *series, GwyContainer *data,
                           "from the first frame"),
                         filename, ids[i],
                         localscan_channel_title(data, ids[i]));
-            g_free(taken);
             g_free(ids);
             return FALSE;
         }
         append_channel(series, data, ids[i], filename, 0, TRUE, *mts);
-        taken[n_taken++] = ids[i];
     }
     if (options->channel && !matched) {
         g_set_error(error, FRAME_SERIES_ERROR, FRAME_SERIES_ERROR_CHANNEL,
                     _("%s: no channel %s"), filename, options->channel);
-        g_free(taken);
         g_free(ids);
         return FALSE;
     }
     if (!chosen)
-        note_mixed_titles(series, data, filename, taken, n_taken);
+        note_mixed_titles(series, data, filename);
     ok = note_range_beyond(series, filename, options, ids, n, matched, error);
-    g_free(taken);
     g_free(ids);
     return ok;
 }
