@@ -99,7 +99,7 @@ args_to_options(FitArgs *args, FrameSeriesOptions *options,
 static gboolean
 write_output(const gchar *filename, const gchar *text, GError **error)
 {
-    if (!filename || strcmp(filename, "-") == 0) {
+    if (!filename || output_files_is_stdout(filename)) {
         fputs(text, stdout);
         fputc('\n', stdout);
         return TRUE;
@@ -210,7 +210,7 @@ check_files(const gchar *json, gchar **files, GError **error)
         roles[i].is_input = TRUE;
     }
     roles[n].role = "--json";
-    roles[n].filename = (json && strcmp(json, "-") != 0) ? json : NULL;
+    roles[n].filename = output_files_is_stdout(json) ? NULL : json;
     roles[n].is_input = FALSE;
     ok = output_files_check_roles(roles, n + 1, error);
     g_free(roles);

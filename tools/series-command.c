@@ -202,18 +202,11 @@ check_frame_files(gchar **files, gint n, GError **error)
     return ok;
 }
 
-/* "-" names the standard output, as for simscan fit's --json. */
-static gboolean
-is_stdout(const gchar *filename)
-{
-    return filename && strcmp(filename, "-") == 0;
-}
-
 /* The file an output role checks: none for the standard output. */
 static const gchar*
 output_file(const gchar *filename)
 {
-    return is_stdout(filename) ? NULL : filename;
+    return output_files_is_stdout(filename) ? NULL : filename;
 }
 
 static gboolean
@@ -240,10 +233,10 @@ check_args(SeriesCommandArgs *args, SeriesRun *run, GError **error)
         run->crop = TRUE;
     else if (args->crop && g_ascii_strcasecmp(args->crop, "none") != 0)
         return refuse_usage(error, _("--crop must be common or none"));
-    if (is_stdout(args->output))
+    if (output_files_is_stdout(args->output))
         return refuse_usage(error, _("-o names a file: the .gwy file is not "
                                      "written to the standard output"));
-    if (is_stdout(args->trajectory) && is_stdout(args->json))
+    if (output_files_is_stdout(args->trajectory) && output_files_is_stdout(args->json))
         return refuse_usage(error, _("--trajectory and --json cannot both go "
                                      "to the standard output"));
     if (!output_files_check_kind(args->output, error)
@@ -570,7 +563,7 @@ add_text(OutputFiles *files, const gchar *filename, gchar *text, gchar **printed
 {
     gboolean ok;
 
-    if (is_stdout(filename)) {
+    if (output_files_is_stdout(filename)) {
         g_free(*printed);
         *printed = text;
         return TRUE;

@@ -128,6 +128,12 @@ output_files_same(const gchar *a, const gchar *b)
     return same;
 }
 
+gboolean
+output_files_is_stdout(const gchar *filename)
+{
+    return filename && strcmp(filename, "-") == 0;
+}
+
 gint
 output_files_finish_stdout(const gchar *program, gint status)
 {

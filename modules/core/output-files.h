@@ -46,6 +46,10 @@ gboolean      output_files_check_outside(const gchar *role,
 gint          output_files_finish_stdout(const gchar *program,
                                          gint status);
 
+/* Whether filename is "-", the name of the standard output for the
+ * command lines' text outputs (--json, --trajectory). */
+gboolean      output_files_is_stdout    (const gchar *filename);
+
 /* Refuses, naming what[i], a file name names[i] given empty ("-o ''"): a
  * slip of the command line, not a file that cannot be opened.  NULL
  * names were not given. */
