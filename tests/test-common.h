@@ -78,8 +78,6 @@ test_skip_part(const gchar *program, const gchar *format, ...)
 #define test_skip_all(program, ...) \
     (test_skip_part((program), __VA_ARGS__), TEST_EXIT_SKIP)
 
-/* The folder of the measured data: $LOCALSCAN_MEASURED_DIR, else
- * ../shared/data/measured beside the source tree. */
 /* Whether one of the strings (notes, warnings) holds text. */
 static inline gboolean
 test_strings_hold(const GPtrArray *strings, const gchar *text)
@@ -93,6 +91,8 @@ test_strings_hold(const GPtrArray *strings, const gchar *text)
     return FALSE;
 }
 
+/* The folder of the measured data: $LOCALSCAN_MEASURED_DIR, else
+ * ../shared/data/measured beside the source tree. */
 static inline const gchar*
 test_measured_dir(void)
 {
