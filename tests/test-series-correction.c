@@ -397,6 +397,9 @@ log_progress(gdouble fraction, gpointer user_data)
 }
 
 static FrameSeries* steady_series(gint n_frames, gint yres, gdouble vx_px, gdouble vy_px);
+static void steady_trajectory_error(const SeriesCorrection *correction,
+                                    const FrameSeries *series, gdouble vx, gdouble vy,
+                                    gdouble *rms, gdouble *worst);
 
 /* The correction tells how far it has come, from 0 to 1 in order, ending
  * at 1, after each chunk of frames of a long series (40 frames: three
@@ -911,31 +914,23 @@ START_TEST(test_wide_frames_fast_along_width)
     FrameSeries *series = steady_series(N_FRAMES, YRES, vx, vy);
     SeriesCorrection correction;
     GError *error = NULL;
-    gdouble sum = 0.0, worst = 0.0, dx, dy, t, e;
-    gint k, r;
+    gdouble rms, worst;
+    gint k;
 
     ck_assert_msg(series_correction_compute(series, NULL, NULL, &correction, &error),
                   "seed %u, drift (%.2f, %.2f) px per frame: %s", base_seed, vx, vy,
                   error ? error->message : "?");
-    for (k = 0; k < N_FRAMES; k++) {
+    for (k = 0; k < N_FRAMES; k++)
         ck_assert_msg(!correction.frames[k].flagged, "seed %u: frame %d flagged: %s", base_seed, k,
                       correction.frames[k].reason);
-        for (r = 0; r < YRES; r++) {
-            t = scan_timing_rows_time(&series->frames[k].timing, r, r+1);
-            series_correction_eval(&correction, t, &dx, &dy);
-            e = hypot(dx - vx*t/YRES, dy - vy*t/YRES);
-            sum += e*e;
-            worst = MAX(worst, e);
-        }
-    }
+    steady_trajectory_error(&correction, series, vx, vy, &rms, &worst);
     printf("wide frames, drift (%.2f, %.2f) px per frame: trajectory RMS %.4f px, worst %.4f px\n",
-           vx, vy, sqrt(sum/(YRES*N_FRAMES)), worst);
+           vx, vy, rms, worst);
     /* 60 px of travel: 61 seeds gave up to 0.096 px RMS, 0.17 px worst
      * (the registration's bias of about 0.2 % of a travel, as in
      * test_long_series). */
-    ck_assert_msg(sqrt(sum/(YRES*N_FRAMES)) <= 0.15 && worst <= 0.3,
-                  "seed %u: trajectory RMS %g px, worst %g px", base_seed,
-                  sqrt(sum/(YRES*N_FRAMES)), worst);
+    ck_assert_msg(rms <= 0.15 && worst <= 0.3, "seed %u: trajectory RMS %g px, worst %g px",
+                  base_seed, rms, worst);
     series_correction_clear(&correction);
     frame_series_free(series);
     g_rand_free(rng);
@@ -943,16 +938,17 @@ START_TEST(test_wide_frames_fast_along_width)
 END_TEST
 
 /* Frames prepared for registration are held within a memory budget
- * (displacement-measure.c, held_frames_within_budget); a frame no longer
- * held is prepared again for each pair.  With room for about one frame,
- * every pair of a short series (all pairs) and of a long one (three older
- * partners) must read bit for bit what the frames all held read. */
+ * (displacement_held_frames); a frame no longer held is prepared again
+ * for each pair.  With room for one frame, two are prepared per chunk and
+ * one older frame is held, and every pair of a short series (all pairs)
+ * and of a long one (three older partners) must read bit for bit what the
+ * frames all held read. */
 START_TEST(test_held_frames_budget)
 {
     static const gint sizes[2] = { 6, SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4 };
     DisplacementOptions options;
     DriftMeasurement *all, *few;
-    gint s, n_all, n_few, i;
+    gint s, n_all, n_few, i, chunk, keep;
 
     for (s = 0; s < 2; s++) {
         FrameSeries *series = steady_series(sizes[s], 64, 0.6, -0.4);
@@ -960,8 +956,14 @@ START_TEST(test_held_frames_budget)
         displacement_options_init(&options);
         options.n_blocks = 8;
         options.pair_reach = s ? SERIES_CORRECTION_PAIR_REACH : 0;
+        displacement_held_frames(series, &options, &chunk, &keep);
+        ck_assert_int_eq(chunk, 16);
+        ck_assert_int_eq(keep, s ? SERIES_CORRECTION_PAIR_REACH : 32);
         all = displacement_measure_series(series, &options, &n_all);
         options.held_bytes = 96*64*40;
+        displacement_held_frames(series, &options, &chunk, &keep);
+        ck_assert_int_eq(chunk, 2);
+        ck_assert_int_eq(keep, 1);
         few = displacement_measure_series(series, &options, &n_few);
         ck_assert_msg(all && few && n_all == n_few && n_all >= 8*(sizes[s] - 1),
                       "%d frames: %d and %d measurements", sizes[s], n_all, n_few);
@@ -982,6 +984,29 @@ START_TEST(test_held_frames_budget)
 }
 END_TEST
 
+/* How far the correction's trajectory lies from steady_series()'s drift
+ * (vx, vy px per frame of yres lines) over every line: RMS into *rms,
+ * the worst into *worst (px). */
+static void
+steady_trajectory_error(const SeriesCorrection *correction, const FrameSeries *series,
+                        gdouble vx, gdouble vy, gdouble *rms, gdouble *worst)
+{
+    gint yres = series->frames[0].timing.yres, k, r;
+    gdouble sum = 0.0, dx, dy, t, e;
+
+    *worst = 0.0;
+    for (k = 0; k < series->n_frames; k++) {
+        for (r = 0; r < yres; r++) {
+            t = scan_timing_rows_time(&series->frames[k].timing, r, r+1);
+            series_correction_eval(correction, t, &dx, &dy);
+            e = hypot(dx - vx*t/yres, dy - vy*t/yres);
+            sum += e*e;
+            *worst = MAX(*worst, e);
+        }
+    }
+    *rms = sqrt(sum/(yres*series->n_frames));
+}
+
 /* A series longer than SERIES_CORRECTION_ALL_PAIRS_UP_TO registers each
  * frame against SERIES_CORRECTION_PAIR_REACH older ones only, the older
  * pairs searched narrowly (at least 6 px) around the chained shifts of the
@@ -995,26 +1020,18 @@ START_TEST(test_long_series)
 {
     enum { N_FRAMES = SERIES_CORRECTION_ALL_PAIRS_UP_TO + 4, YRES = 128 };
     GRand *rng = g_rand_new_with_seed(base_seed + 17);
-    gint k, j, r, older = 0, older_used = 0, i, pairs = 0, tall = 0;
+    gint k, j, older = 0, older_used = 0, i, pairs = 0, tall = 0;
     gint blocks[N_FRAMES][N_FRAMES];
     gdouble speed = g_rand_double_range(rng, 2.5, 4.0), angle = g_rand_double_range(rng, 0.0, 2.0*G_PI);
     gdouble vx = speed*cos(angle), vy = speed*sin(angle);
     FrameSeries *series = steady_series(N_FRAMES, YRES, vx, vy);
     SeriesCorrection correction;
     GError *error = NULL;
-    gdouble sum = 0.0, worst = 0.0, dx, dy, t, e;
+    gdouble rms, worst;
 
     ck_assert_msg(series_correction_compute(series, NULL, NULL, &correction, &error),
                   "%s", error ? error->message : "?");
-    for (k = 0; k < N_FRAMES; k++) {
-        for (r = 0; r < YRES; r++) {
-            t = scan_timing_rows_time(&series->frames[k].timing, r, r+1);
-            series_correction_eval(&correction, t, &dx, &dy);
-            e = hypot(dx - vx*t/YRES, dy - vy*t/YRES);
-            sum += e*e;
-            worst = MAX(worst, e);
-        }
-    }
+    steady_trajectory_error(&correction, series, vx, vy, &rms, &worst);
     memset(blocks, 0, sizeof(blocks));
     for (i = 0; i < correction.fit.n_meas; i++) {
         const DriftMeasurement *m = correction.fit.meas + i;
@@ -1040,7 +1057,7 @@ START_TEST(test_long_series)
     }
     printf("long series of %d frames, drift (%.3f, %.3f) px per frame: trajectory RMS %.4f px, "
            "worst %.4f px; older pairs' blocks used %d of %d in %d pairs, %d of them tall\n",
-           N_FRAMES, vx, vy, sqrt(sum/(YRES*N_FRAMES)), worst, older_used, older, pairs, tall);
+           N_FRAMES, vx, vy, rms, worst, older_used, older, pairs, tall);
     /* 2n - 5 older pairs (reach 3). */
     ck_assert_int_eq(pairs, 2*N_FRAMES - 5);
     ck_assert_msg(2*tall >= pairs, "only %d of %d older pairs in tall blocks (seed %u)", tall, pairs,
@@ -1053,8 +1070,8 @@ START_TEST(test_long_series)
     for (k = 3; k < N_FRAMES - 3; k++)
         ck_assert_msg(correction.frames[k].n_pairs >= 5, "frame %d is in %d registered pairs (seed %u)",
                       k, correction.frames[k].n_pairs, base_seed);
-    ck_assert_msg(sqrt(sum/(YRES*N_FRAMES)) <= 0.08 && worst <= 0.15,
-                  "trajectory RMS %g px, worst %g px (seed %u)", sqrt(sum/(YRES*N_FRAMES)), worst,
+    ck_assert_msg(rms <= 0.08 && worst <= 0.15,
+                  "trajectory RMS %g px, worst %g px (seed %u)", rms, worst,
                   base_seed);
     series_correction_clear(&correction);
     frame_series_free(series);

@@ -316,10 +316,11 @@ typedef struct {
 /* A prepared frame holds two conditioned copies of it (data, weights and
  * the levelled values of the band-passed one): about 40 bytes a pixel.
  * Held frames are kept within the options' held_bytes (768 MB by
- * default), down to two per chunk and one older frame: every frame held, 8 frames of 2048 x 2048 px took
- * 2.2 GB where their data is 0.27 GB, and 16 frames of 4096 x 4096 would
- * take 11 GB for the prepared frames alone.  Frames not held are prepared
- * again for each pair they belong to (slower, the same result). */
+ * default), down to two per chunk and one older frame.  With every frame
+ * held, 8 frames of 2048 x 2048 px took 2.2 GB where their data is
+ * 0.27 GB, and 16 frames of 4096 x 4096 would take 11 GB for the prepared
+ * frames alone.  Frames not held are prepared again for each pair they
+ * belong to (slower, the same result). */
 #define PREPARED_BYTES_PER_PX 40
 #define CHUNK_MIN_FRAMES 2
 
@@ -584,19 +585,18 @@ compact_measurements(DriftMeasurement *meas, gsize n)
     return kept;
 }
 
-/* How many frames a chunk prepares (*chunk) and how many older ones stay
- * held for the next chunks' pairs (*keep), within budget bytes. */
-static void
-held_frames_within_budget(const FrameSeries *series, gint reach, gsize budget,
-                          gint *chunk, gint *keep)
+void
+displacement_held_frames(const FrameSeries *series, const DisplacementOptions *options,
+                         gint *chunk, gint *keep)
 {
     gsize frame_bytes = series->n_frames
                         ? (gsize)series->frames[0].timing.xres*series->frames[0].timing.yres
                           *PREPARED_BYTES_PER_PX : 0;
-    gsize fit = (budget ? budget : DISPLACEMENT_HELD_BYTES)/MAX(frame_bytes, 1);
+    gsize budget = options->held_bytes ? options->held_bytes : DISPLACEMENT_HELD_BYTES;
+    gsize fit = budget/MAX(frame_bytes, 1);
 
     *chunk = (gint)CLAMP(fit/2, CHUNK_MIN_FRAMES, CHUNK_FRAMES);
-    *keep = (reach > 0) ? reach : PREPARED_MAX_FRAMES;
+    *keep = (options->pair_reach > 0) ? options->pair_reach : PREPARED_MAX_FRAMES;
     if (fit < (gsize)(*chunk + *keep))
         *keep = (gint)MAX(fit - MIN(fit, (gsize)*chunk), 1);
 }
@@ -637,7 +637,7 @@ displacement_measure_series_progress(const FrameSeries *series,
         reg.far_first[k+1] = reg.far_first[k] + MAX(k-2 - oldest_partner(&reg, k) + 1, 0);
     pairs = MAX(nf - 1, 0) + reg.far_first[nf];
     reg.meas = g_new0(DriftMeasurement, MAX((gsize)pairs*options->n_blocks, 1));
-    held_frames_within_budget(series, reg.reach, options->held_bytes, &chunk, &keep);
+    displacement_held_frames(series, options, &chunk, &keep);
     for (k0 = 0; k0 < nf && go_on; k0 = k1) {
         k1 = MIN(k0 + chunk, nf);
         parallel_run(k0, k1, prepare_task, &reg);

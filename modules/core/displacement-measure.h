@@ -82,6 +82,14 @@ DriftMeasurement*  displacement_measure_series_progress(const FrameSeries *serie
                                                         const Progress *progress,
                                                         gint *n);
 
+/* How many frames displacement_measure_series() prepares per chunk
+ * (*chunk) and how many older prepared frames it holds for the next
+ * chunks' pairs (*keep): within options->held_bytes, down to 2 and 1. */
+void               displacement_held_frames (const FrameSeries *series,
+                                             const DisplacementOptions *options,
+                                             gint *chunk,
+                                             gint *keep);
+
 G_END_DECLS
 
 #endif
