@@ -62,6 +62,25 @@
  * (5.8 px on a textured line; test-series-correction seed 740000384). */
 #define ONE_SIDED_CLOSE 0.05
 
+/* Whether a one-sided line is nearly featureless beside the content its
+ * one drift predicts (that content's texture above ONE_SIDED_CONTRAST
+ * times its own) and matches that content no better than unrelated
+ * content: the drift is wrong, whatever the match level of textured lines
+ * says (a featureless line's right match costs its noise, its texture).
+ * Judged by the match level only, the featureless lines just before a
+ * jump, which the drift after it puts on a particle (their cost 0.95 of
+ * unrelated, 17 times their texture), told nothing, and two featureless
+ * lines 8 lines earlier that leaned after it by noise placed the jump
+ * there: 4.3 px on the textured lines between (test-series-correction
+ * seed 40100081, case 634). */
+static gboolean
+featureless_on_texture(const LineEvidence *ev, gdouble cost)
+{
+    return (!isnan(ev->unrelated) && !isnan(cost)
+            && ev->unrelated - ev->texture > ONE_SIDED_CONTRAST*ev->texture
+            && cost >= ONE_SIDED_RELATED*ev->unrelated);
+}
+
 /* Costs without and with the step of each line, as steady_votes() weighs
  * them (0 and 0: no evidence).  A line seen under one drift only is given
  * a cost under the other: where its content matches, that of a step off
@@ -96,6 +115,11 @@ evidence_costs(const LineEvidence *ev, gint n, gdouble *before, gdouble *after)
             continue;
         }
         cost = isnan(ev[i].before) ? ev[i].after : ev[i].before;
+        if (featureless_on_texture(ev + i, cost)) {
+            before[i] = isnan(ev[i].before) ? ev[i].texture : cost;
+            after[i] = isnan(ev[i].before) ? cost : ev[i].texture;
+            continue;
+        }
         if (!m || isnan(ev[i].control)
             || !(ev[i].control > ONE_SIDED_CONTRAST*match
                  || (cost < match && ev[i].control > match
