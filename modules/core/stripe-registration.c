@@ -1278,10 +1278,12 @@ reject_stripes_on_fringes(const StripeRegistrationFrame *frame, gint n, gint rea
     gdouble own, near;
 
     for (s = 0; s < n; s++) {
-        if (!shifts[s].accepted)
-            continue;
         lo = MAX(stripe_first_row(s, n, yres), reach);
         hi = MIN(stripe_end_row(s, n, yres), yres - reach);
+        /* A stripe within the reach of the frame's edge has no lines of
+         * its own to judge by. */
+        if (!shifts[s].accepted || lo >= hi)
+            continue;
         own = largest_texture(frame, lo, hi);
         near = MAX(largest_texture(frame, lo - reach, lo), largest_texture(frame, hi, hi + reach));
         if (own <= WEAK_TEXTURE*frame->noise_var && near > FRINGE_CONTRAST*own) {
