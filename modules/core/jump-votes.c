@@ -72,13 +72,18 @@
  * unrelated, 17 times their texture), told nothing, and two featureless
  * lines 8 lines earlier that leaned after it by noise placed the jump
  * there: 4.3 px on the textured lines between (test-series-correction
- * seed 40100081, case 634). */
+ * seed 40100081, case 634).  Nor may its content a step further off (its
+ * control) match better: a featureless line after a jump whose right
+ * drift, a fraction of a pixel off, puts it on a particle's edge costs
+ * 0.93 of unrelated content too, but its control, on the particle, four
+ * times more, and it lies where that drift puts it (seed 62000007,
+ * case 1119: voted before the jump, the jump's lines went unreported). */
 static gboolean
 featureless_on_texture(const LineEvidence *ev, gdouble cost)
 {
-    return (!isnan(ev->unrelated) && !isnan(cost)
+    return (!isnan(ev->unrelated) && !isnan(cost) && !isnan(ev->control)
             && ev->unrelated - ev->texture > ONE_SIDED_CONTRAST*ev->texture
-            && cost >= ONE_SIDED_RELATED*ev->unrelated);
+            && cost >= ONE_SIDED_RELATED*ev->unrelated && cost >= ev->control);
 }
 
 /* Costs without and with the step of each line, as steady_votes() weighs
