@@ -529,6 +529,52 @@ conditioned_frame_noise_scale(const ConditionedFrame *frame, gdouble pixel_aspec
     return CLAMP(sigma, BAND_NARROW_PX, MAX(BAND_NARROW_PX, NARROW_MAX_FRACTION*wide));
 }
 
+/* Lines the robust pixel noise is estimated on: every NOISE_LINE_STEP-th,
+ * plenty for a median and a fraction of the cost of all. */
+#define NOISE_LINE_STEP 4
+
+gdouble
+conditioned_frame_pixel_noise(const ConditionedFrame *frame)
+{
+    gint xres = frame->xres, yres = frame->yres, r, c, m = 0;
+    gdouble *d = g_new(gdouble, MAX((gsize)(xres - 1)*(yres/NOISE_LINE_STEP + 1), 1)), med;
+    gsize k;
+
+    for (r = 0; r < yres; r += NOISE_LINE_STEP) {
+        for (c = 0; c + 1 < xres; c++) {
+            k = (gsize)r*xres + c;
+            if (frame->weight[k] >= 1.0 && frame->weight[k+1] >= 1.0)
+                d[m++] = fabs(frame->data[k+1] - frame->data[k]);
+        }
+    }
+    med = m ? median_in_place(d, m) : 0.0;
+    g_free(d);
+    /* The median |d| of white noise of variance v is 0.6745 sqrt(2 v). */
+    return 0.5*(med/0.6745)*(med/0.6745);
+}
+
+gdouble*
+conditioned_frame_line_variances(const ConditionedFrame *frame)
+{
+    gint xres = frame->xres, yres = frame->yres, r, c, m;
+    gdouble *variance = g_new(gdouble, yres), sum, sum2;
+
+    for (r = 0; r < yres; r++) {
+        const gdouble *row = frame->data + (gsize)r*xres, *w = frame->weight + (gsize)r*xres;
+
+        sum = sum2 = 0.0;
+        for (c = m = 0; c < xres; c++) {
+            if (w[c] >= 1.0) {
+                sum += row[c];
+                sum2 += row[c]*row[c];
+                m++;
+            }
+        }
+        variance[r] = (m >= 8) ? MAX(sum2/m - (sum/m)*(sum/m), 0.0) : NAN;
+    }
+    return variance;
+}
+
 /* A missing pixel among data: the narrow blur there is an estimate as
  * good as its neighbours' (the pixel's own value is a sixth of a
  * pixel-wide blur), which the matches take with the blur's coverage for

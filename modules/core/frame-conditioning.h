@@ -63,6 +63,17 @@ ConditionedFrame* frame_condition_level    (const gdouble *data,
 /* ... the narrow blur (px) a levelled frame's pixel noise calls for, ... */
 gdouble           conditioned_frame_noise_scale(const ConditionedFrame *frame,
                                                 gdouble pixel_aspect);
+/* The variance of a levelled frame's white pixel noise, robustly: from
+ * the median difference of neighbouring pixels along the lines, which
+ * sparse features raise for few pixels.  (The noise scale above weighs
+ * noise against the features by mean squares, where a few small sharp
+ * particles count as noise: on a simulated series' frame that read about
+ * 200 times this, and featureless lines could not be told by it.) */
+gdouble           conditioned_frame_pixel_noise(const ConditionedFrame *frame);
+/* The variance of each line's valid pixels (NaN with fewer than 8), for
+ * a levelled frame (its lines' offsets, plane and bow removed); an array
+ * of yres for g_free(). */
+gdouble*          conditioned_frame_line_variances(const ConditionedFrame *frame);
 /* ... and the rest, with the larger of the two frames' narrow blurs. */
 void              conditioned_frame_band_pass(ConditionedFrame *frame,
                                               gdouble pixel_aspect,

@@ -34,11 +34,12 @@
  * featureless line matches featureless content a step off as well as its
  * own while its control may meet a particle (seed 21).  A line matching
  * better than the match level is judged where its control stands that
- * far above its own cost (and above the match level): the match level is the median line's, and the
- * lines after a jump 1.5 s before a frame's end matched five times better
- * (6.3e-19 against 3.3e-18) with a control only 6.5 times the level; told
- * nothing, they let the jump go 2 s late, 5.3 px on a textured line
- * (test-series-correction seed 20000352, case 504). */
+ * far above its own cost (and above the match level): the match level is
+ * the median line's, and the lines after a jump 1.5 s before a frame's
+ * end matched five times better (6.3e-19 against 3.3e-18) with a control
+ * only 6.5 times the level; told nothing, they let the jump go 2 s late,
+ * 5.3 px on a textured line (test-series-correction seed 20000352, case
+ * 504). */
 #define ONE_SIDED_MISMATCH 0.2
 #define ONE_SIDED_CONTRAST 8.0
 /* A minimum means something only where the line resembles the content its

@@ -1175,61 +1175,10 @@ struct _StripeRegistrationFrame {
     gdouble noise_scale;           /* the narrow blur its own noise calls for */
     gdouble pixel_aspect;
     ConditionedFrame *passed;      /* band-passed with noise_scale */
-    gdouble *row_texture;          /* per row of unfiltered: mean square
-                                      after its quadratic, valid pixels */
-    gdouble noise_var;             /* of unfiltered's pixel noise */
+    gdouble *row_texture;          /* per row of unfiltered: the variance
+                                      of its valid pixels */
+    gdouble noise_var;             /* of unfiltered's white pixel noise */
 };
-
-/* Lines a frame's pixel noise is estimated on: every NOISE_LINE_STEP-th,
- * plenty for a median and a fraction of the cost of all. */
-#define NOISE_LINE_STEP 4
-
-/* The pixel noise of a conditioned frame: from the differences of
- * neighbouring pixels along its lines (median |d| of white noise of
- * variance v is 0.6745 sqrt(2 v)); features raise few of them. */
-static gdouble
-pixel_noise_variance(const ConditionedFrame *frame)
-{
-    gint xres = frame->xres, yres = frame->yres, r, c, m = 0;
-    gdouble *d = g_new(gdouble, MAX((gsize)(xres - 1)*(yres/NOISE_LINE_STEP + 1), 1)), med;
-    gsize k;
-
-    for (r = 0; r < yres; r += NOISE_LINE_STEP) {
-        for (c = 0; c + 1 < xres; c++) {
-            k = (gsize)r*xres + c;
-            if (frame->weight[k] >= 1.0 && frame->weight[k+1] >= 1.0)
-                d[m++] = fabs(frame->data[k+1] - frame->data[k]);
-        }
-    }
-    med = m ? median_in_place(d, m) : 0.0;
-    g_free(d);
-    return 0.5*(med/0.6745)*(med/0.6745);
-}
-
-/* Each line's texture: the variance of its valid pixels (NaN with fewer
- * than 8).  Conditioning has taken the lines' offsets, the plane and the
- * bow away already. */
-static gdouble*
-line_textures(const ConditionedFrame *frame)
-{
-    gint xres = frame->xres, yres = frame->yres, r, c, m;
-    gdouble *texture = g_new(gdouble, yres), sum, sum2;
-
-    for (r = 0; r < yres; r++) {
-        const gdouble *row = frame->data + (gsize)r*xres, *w = frame->weight + (gsize)r*xres;
-
-        sum = sum2 = 0.0;
-        for (c = m = 0; c < xres; c++) {
-            if (w[c] >= 1.0) {
-                sum += row[c];
-                sum2 += row[c]*row[c];
-                m++;
-            }
-        }
-        texture[r] = (m >= 8) ? MAX(sum2/m - (sum/m)*(sum/m), 0.0) : NAN;
-    }
-    return texture;
-}
 
 /* A stripe's lines show little of their own where their texture stays
  * below this many times the pixel noise (featureless lines of the
@@ -1319,8 +1268,8 @@ stripe_registration_frame_new(const gdouble *data, gint xres, gint yres, gdouble
     /* Frames of a series have alike noise: a pair mostly asks for the
      * band each frame's own noise calls for. */
     frame->passed = band_pass_copy(frame, frame->noise_scale);
-    frame->row_texture = line_textures(unfiltered);
-    frame->noise_var = pixel_noise_variance(unfiltered);
+    frame->row_texture = conditioned_frame_line_variances(unfiltered);
+    frame->noise_var = conditioned_frame_pixel_noise(unfiltered);
     return frame;
 }
 
