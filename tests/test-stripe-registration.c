@@ -723,6 +723,61 @@ START_TEST(test_fringe_stripe_not_measured)
 }
 END_TEST
 
+/* The same stripe where the image's first row shows a sliver of the rough
+ * rows above (the image lies dy = 0.2 to 0.5 px lower) and only the
+ * reference's rows are featureless: the match then rests on the
+ * reference's fringe alone, which reads the shift as poorly.  A series'
+ * frame 0 whose first rows showed a particle cut by the frame's edge, and
+ * whose third row missed it by a few hundredths of a pixel where the
+ * other frames' caught its rim, read 0.5 px off in every pair with it and
+ * made a jump of nothing (test-series-correction seed 62000021, case
+ * 10).  Without the reference judged, every one of the FRINGE_DRAWS
+ * draws measured the stripe (seeds 1, 7 and 9), up to 0.5 px off. */
+START_TEST(test_reference_fringe_stripe_not_measured)
+{
+    enum { N = 16, ROWS = 128/N };
+    GRand *rng = test_rand_salted(test_seed, 43);
+    FramePairSpec spec;
+    FramePair *pair;
+    StripeRegistrationFrame *image, *reference;
+    StripeShift shifts[N];
+    gdouble px[N], py[N], tx[N], ty[N];
+    GError *error = NULL;
+    gint k, s, flat, measured = 0;
+
+    for (k = 0; k < FRINGE_DRAWS; k++) {
+        flat = g_rand_int_range(rng, 3, N - 3);
+        frame_pair_spec_init(&spec);
+        spec.xres = spec.yres = 128;
+        spec.particle_density = 0.0;
+        spec.roughness = 0.4;
+        spec.drift = FALSE;
+        spec.shift_x = g_rand_double_range(rng, -0.5, 0.5);
+        spec.shift_y = g_rand_double_range(rng, 0.2, 0.5);
+        spec.flat_from = flat*ROWS;
+        spec.flat_to = (flat + 1)*ROWS + 1;
+        pair = frame_pair_generate(&spec, g_rand_int(rng));
+        frame_pair_stripe_truth(pair, N, tx, ty);
+        image = stripe_registration_frame_new(pair->image, pair->xres, pair->yres, 1.0);
+        reference = stripe_registration_frame_new(pair->reference, pair->xres, pair->yres, 1.0);
+        for (s = 0; s < N; s++)
+            px[s] = py[s] = 0.0;
+        ck_assert(stripe_registration_measure_around_frames(image, reference, N, px, py, 4.0, 0.0,
+                                                            STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
+                                                            FALSE, shifts, &error));
+        printf("stripe %2d on the reference's fringe: accepted %d, off by (%.3f, %.3f) px\n", flat,
+               shifts[flat].accepted, shifts[flat].dx - tx[flat], shifts[flat].dy - ty[flat]);
+        measured += shifts[flat].accepted;
+        stripe_registration_frame_free(image);
+        stripe_registration_frame_free(reference);
+        frame_pair_free(pair);
+    }
+    g_rand_free(rng);
+    ck_assert_msg(measured == 0, "%d of %d stripes on the reference's fringe measured (seed %u)",
+                  measured, FRINGE_DRAWS, test_seed);
+}
+END_TEST
+
 /* A strong lattice with almost nothing else: every stripe matches many
  * lattice positions equally well, so nearly all must be rejected. */
 START_TEST(test_periodic_texture_lowers_score)
@@ -1196,6 +1251,7 @@ registration_suite(void)
     tcase_add_test(tc, test_stripe_half_off_reference);
     tcase_add_test(tc, test_featureless_stripe_rejected);
     tcase_add_test(tc, test_fringe_stripe_not_measured);
+    tcase_add_test(tc, test_reference_fringe_stripe_not_measured);
     tcase_add_test(tc, test_periodic_texture_lowers_score);
     tcase_add_test(tc, test_grating_honest);
     tcase_add_test(tc, test_search_around_prediction);

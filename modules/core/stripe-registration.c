@@ -1218,24 +1218,53 @@ largest_texture(const StripeRegistrationFrame *frame, gint lo, gint hi)
  * correlations of 0.99 (test-series-correction seed 20000037, case 11).
  * Featureless lines beside featureless lines are left to the correlation
  * (white noise scores low), and so are fine textures whose lines all look
- * alike, which the pixel noise estimate takes for noise. */
-static void
-reject_stripes_on_fringes(const StripeRegistrationFrame *frame, gint n, gint reach,
-                          StripeShift *shifts)
+ * alike, which the pixel noise estimate takes for noise.
+ *
+ * Whether lines lo .. hi-1 of frame (those beyond reach of its edge) show
+ * nothing while a line within reach beyond them shows a feature. */
+static gboolean
+lines_on_fringe(const StripeRegistrationFrame *frame, gint lo, gint hi, gint reach)
 {
-    gint yres = frame->unfiltered->yres, s, lo, hi;
+    gint yres = frame->unfiltered->yres;
     gdouble own, near;
 
+    lo = MAX(lo, reach);
+    hi = MIN(hi, yres - reach);
+    /* Lines within the reach of the frame's edge have no lines of their
+     * own to judge by. */
+    if (lo >= hi)
+        return FALSE;
+    own = largest_texture(frame, lo, hi);
+    near = MAX(largest_texture(frame, lo - reach, lo), largest_texture(frame, hi, hi + reach));
+    return own <= WEAK_TEXTURE*frame->noise_var && near > FRINGE_CONTRAST*own;
+}
+
+/* Either frame of the pair: the stripe matched on the fringe of one
+ * frame reads the shift as poorly as on both.  A series' frame 0 whose
+ * first lines showed a particle cut by the frame's edge, and whose third
+ * line missed its rim by a few hundredths of a pixel where the other
+ * frames' caught it, read 0.5 px off as the reference of every pair
+ * (test-series-correction seed 62000021, case 10). */
+static void
+reject_stripes_on_fringes(const StripeRegistrationFrame *image,
+                          const StripeRegistrationFrame *reference, gint n, gint reach,
+                          StripeShift *shifts)
+{
+    gint yres = image->unfiltered->yres, s, lo, hi;
+    gdouble dy;
+
     for (s = 0; s < n; s++) {
-        lo = MAX(stripe_first_row(s, n, yres), reach);
-        hi = MIN(stripe_end_row(s, n, yres), yres - reach);
-        /* A stripe within the reach of the frame's edge has no lines of
-         * its own to judge by. */
-        if (!shifts[s].accepted || lo >= hi)
+        if (!shifts[s].accepted)
             continue;
-        own = largest_texture(frame, lo, hi);
-        near = MAX(largest_texture(frame, lo - reach, lo), largest_texture(frame, hi, hi + reach));
-        if (own <= WEAK_TEXTURE*frame->noise_var && near > FRINGE_CONTRAST*own) {
+        lo = stripe_first_row(s, n, yres);
+        hi = stripe_end_row(s, n, yres);
+        /* The reference's own lines are those wholly under the stripe's
+         * lines shifted back; a line partly under them lends it its
+         * content through the interpolation, as one beside does through
+         * the blur. */
+        dy = shifts[s].dy;
+        if (lines_on_fringe(image, lo, hi, reach)
+            || lines_on_fringe(reference, (gint)ceil(lo - dy), (gint)floor(hi - 1 - dy) + 1, reach)) {
             shifts[s].accepted = FALSE;
             g_debug("registration: stripe %d: matched on a fringe only", s);
         }
@@ -1316,7 +1345,7 @@ measure_around_pair(const StripeRegistrationFrame *image,
     ok = measure_around(cimage, creference, n, predicted_dx, predicted_dy, radius_px, min_score,
                         refine, shifts, error);
     if (ok)
-        reject_stripes_on_fringes(image, n, edge_margin(cimage), shifts);
+        reject_stripes_on_fringes(image, reference, n, edge_margin(cimage), shifts);
     conditioned_frame_free(made_image);
     conditioned_frame_free(made_reference);
     return ok;
