@@ -661,18 +661,22 @@ END_TEST
  * that rejection about every other draw measured the stripe, 0.1 to
  * 2.8 px off. */
 #define FRINGE_DRAWS 12
+#define FRINGE_STRIPES 16
+#define FRINGE_ROWS (128/FRINGE_STRIPES)
 
+/* Rough rows but for the band [flat_from, flat_to) of the surface, the
+ * image shifted by shift_y (drawn between sy_lo and sy_hi), registered
+ * as the series does; shifts and their truth (tx, ty) per stripe. */
 static void
-check_fringe_stripe(GRand *rng)
+register_flat_band(GRand *rng, gint flat_from, gint flat_to, gdouble sy_lo, gdouble sy_hi,
+                   StripeShift *shifts, gdouble *tx, gdouble *ty)
 {
-    enum { N = 16, ROWS = 128/N };
     FramePairSpec spec;
     FramePair *pair;
     StripeRegistrationFrame *image, *reference;
-    StripeShift shifts[N];
-    gdouble px[N], py[N], tx[N], ty[N];
+    gdouble px[FRINGE_STRIPES], py[FRINGE_STRIPES];
     GError *error = NULL;
-    gint s, flat = g_rand_int_range(rng, 3, N - 3);
+    gint s;
 
     frame_pair_spec_init(&spec);
     spec.xres = spec.yres = 128;
@@ -680,18 +684,33 @@ check_fringe_stripe(GRand *rng)
     spec.roughness = 0.4;
     spec.drift = FALSE;
     spec.shift_x = g_rand_double_range(rng, -0.5, 0.5);
-    spec.shift_y = g_rand_double_range(rng, -0.5, 0.5);
-    spec.flat_from = flat*ROWS - 1;
-    spec.flat_to = (flat + 1)*ROWS + 1;
+    spec.shift_y = g_rand_double_range(rng, sy_lo, sy_hi);
+    spec.flat_from = flat_from;
+    spec.flat_to = flat_to;
     pair = frame_pair_generate(&spec, g_rand_int(rng));
-    frame_pair_stripe_truth(pair, N, tx, ty);
+    frame_pair_stripe_truth(pair, FRINGE_STRIPES, tx, ty);
     image = stripe_registration_frame_new(pair->image, pair->xres, pair->yres, 1.0);
     reference = stripe_registration_frame_new(pair->reference, pair->xres, pair->yres, 1.0);
-    for (s = 0; s < N; s++)
+    for (s = 0; s < FRINGE_STRIPES; s++)
         px[s] = py[s] = 0.0;
-    ck_assert(stripe_registration_measure_around_frames(image, reference, N, px, py, 4.0, 0.0,
+    ck_assert(stripe_registration_measure_around_frames(image, reference, FRINGE_STRIPES, px, py,
+                                                        4.0, 0.0,
                                                         STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
                                                         FALSE, shifts, &error));
+    stripe_registration_frame_free(image);
+    stripe_registration_frame_free(reference);
+    frame_pair_free(pair);
+}
+
+static void
+check_fringe_stripe(GRand *rng)
+{
+    StripeShift shifts[FRINGE_STRIPES];
+    gdouble tx[FRINGE_STRIPES], ty[FRINGE_STRIPES];
+    gint s, flat = g_rand_int_range(rng, 3, FRINGE_STRIPES - 3);
+
+    register_flat_band(rng, flat*FRINGE_ROWS - 1, (flat + 1)*FRINGE_ROWS + 1, -0.5, 0.5,
+                       shifts, tx, ty);
     printf("stripe %2d between rough rows: accepted %d, peak %.3f, off by (%.3f, %.3f) px\n", flat,
            shifts[flat].accepted, shifts[flat].peak, shifts[flat].dx - tx[flat],
            shifts[flat].dy - ty[flat]);
@@ -699,7 +718,7 @@ check_fringe_stripe(GRand *rng)
                   flat, test_seed);
     /* The stripes either side share a featureless row and its edge, and
      * may or may not be measured. */
-    for (s = 0; s < N; s++) {
+    for (s = 0; s < FRINGE_STRIPES; s++) {
         if (abs(s - flat) <= 1)
             continue;
         ck_assert_msg(shifts[s].accepted, "rough stripe %d not measured (seed %u)", s, test_seed);
@@ -707,9 +726,6 @@ check_fringe_stripe(GRand *rng)
                       "rough stripe %d off by (%g, %g) px (seed %u)", s, shifts[s].dx - tx[s],
                       shifts[s].dy - ty[s], test_seed);
     }
-    stripe_registration_frame_free(image);
-    stripe_registration_frame_free(reference);
-    frame_pair_free(pair);
 }
 
 START_TEST(test_fringe_stripe_not_measured)
@@ -729,48 +745,24 @@ END_TEST
  * reference's fringe alone, which reads the shift as poorly.  A series'
  * frame 0 whose first rows showed a particle cut by the frame's edge, and
  * whose third row missed it by a few hundredths of a pixel where the
- * other frames' caught its rim, read 0.5 px off in every pair with it and
+ * other frames' caught it, read 0.5 px off in every pair with it and
  * made a jump of nothing (test-series-correction seed 62000021, case
  * 10).  Without the reference judged, every one of the FRINGE_DRAWS
  * draws measured the stripe (seeds 1, 7 and 9), up to 0.5 px off. */
 START_TEST(test_reference_fringe_stripe_not_measured)
 {
-    enum { N = 16, ROWS = 128/N };
     GRand *rng = test_rand_salted(test_seed, 43);
-    FramePairSpec spec;
-    FramePair *pair;
-    StripeRegistrationFrame *image, *reference;
-    StripeShift shifts[N];
-    gdouble px[N], py[N], tx[N], ty[N];
-    GError *error = NULL;
-    gint k, s, flat, measured = 0;
+    StripeShift shifts[FRINGE_STRIPES];
+    gdouble tx[FRINGE_STRIPES], ty[FRINGE_STRIPES];
+    gint k, flat, measured = 0;
 
     for (k = 0; k < FRINGE_DRAWS; k++) {
-        flat = g_rand_int_range(rng, 3, N - 3);
-        frame_pair_spec_init(&spec);
-        spec.xres = spec.yres = 128;
-        spec.particle_density = 0.0;
-        spec.roughness = 0.4;
-        spec.drift = FALSE;
-        spec.shift_x = g_rand_double_range(rng, -0.5, 0.5);
-        spec.shift_y = g_rand_double_range(rng, 0.2, 0.5);
-        spec.flat_from = flat*ROWS;
-        spec.flat_to = (flat + 1)*ROWS + 1;
-        pair = frame_pair_generate(&spec, g_rand_int(rng));
-        frame_pair_stripe_truth(pair, N, tx, ty);
-        image = stripe_registration_frame_new(pair->image, pair->xres, pair->yres, 1.0);
-        reference = stripe_registration_frame_new(pair->reference, pair->xres, pair->yres, 1.0);
-        for (s = 0; s < N; s++)
-            px[s] = py[s] = 0.0;
-        ck_assert(stripe_registration_measure_around_frames(image, reference, N, px, py, 4.0, 0.0,
-                                                            STRIPE_REGISTRATION_DEFAULT_MIN_SCORE,
-                                                            FALSE, shifts, &error));
+        flat = g_rand_int_range(rng, 3, FRINGE_STRIPES - 3);
+        register_flat_band(rng, flat*FRINGE_ROWS, (flat + 1)*FRINGE_ROWS + 1, 0.2, 0.5,
+                           shifts, tx, ty);
         printf("stripe %2d on the reference's fringe: accepted %d, off by (%.3f, %.3f) px\n", flat,
                shifts[flat].accepted, shifts[flat].dx - tx[flat], shifts[flat].dy - ty[flat]);
         measured += shifts[flat].accepted;
-        stripe_registration_frame_free(image);
-        stripe_registration_frame_free(reference);
-        frame_pair_free(pair);
     }
     g_rand_free(rng);
     ck_assert_msg(measured == 0, "%d of %d stripes on the reference's fringe measured (seed %u)",
