@@ -665,18 +665,11 @@ END_TEST
 #define FRINGE_ROWS (128/FRINGE_STRIPES)
 
 /* Rough rows but for the band [flat_from, flat_to) of the surface, the
- * image shifted by shift_y (drawn between sy_lo and sy_hi), registered
- * as the series does; shifts and their truth (tx, ty) per stripe. */
-static void
-register_flat_band(GRand *rng, gint flat_from, gint flat_to, gdouble sy_lo, gdouble sy_hi,
-                   StripeShift *shifts, gdouble *tx, gdouble *ty)
+ * image shifted by shift_y (drawn between sy_lo and sy_hi). */
+static FramePair*
+flat_band_pair(GRand *rng, gint flat_from, gint flat_to, gdouble sy_lo, gdouble sy_hi)
 {
     FramePairSpec spec;
-    FramePair *pair;
-    StripeRegistrationFrame *image, *reference;
-    gdouble px[FRINGE_STRIPES], py[FRINGE_STRIPES];
-    GError *error = NULL;
-    gint s;
 
     frame_pair_spec_init(&spec);
     spec.xres = spec.yres = 128;
@@ -687,8 +680,25 @@ register_flat_band(GRand *rng, gint flat_from, gint flat_to, gdouble sy_lo, gdou
     spec.shift_y = g_rand_double_range(rng, sy_lo, sy_hi);
     spec.flat_from = flat_from;
     spec.flat_to = flat_to;
-    pair = frame_pair_generate(&spec, g_rand_int(rng));
-    frame_pair_stripe_truth(pair, FRINGE_STRIPES, tx, ty);
+    return frame_pair_generate(&spec, g_rand_int(rng));
+}
+
+/* The pair registered as a series registers its frames (around no
+ * shift) or, with reference_mode, as the reference mode does (the whole
+ * frame searched). */
+static void
+register_fringe_pair(const FramePair *pair, gboolean reference_mode, StripeShift *shifts)
+{
+    StripeRegistrationFrame *image, *reference;
+    gdouble px[FRINGE_STRIPES], py[FRINGE_STRIPES];
+    GError *error = NULL;
+    gint s;
+
+    if (reference_mode) {
+        ck_assert(stripe_registration_measure(pair->image, pair->reference, pair->xres, pair->yres,
+                                              FRINGE_STRIPES, NULL, shifts, &error));
+        return;
+    }
     image = stripe_registration_frame_new(pair->image, pair->xres, pair->yres, 1.0);
     reference = stripe_registration_frame_new(pair->reference, pair->xres, pair->yres, 1.0);
     for (s = 0; s < FRINGE_STRIPES; s++)
@@ -699,33 +709,42 @@ register_flat_band(GRand *rng, gint flat_from, gint flat_to, gdouble sy_lo, gdou
                                                         FALSE, shifts, &error));
     stripe_registration_frame_free(image);
     stripe_registration_frame_free(reference);
-    frame_pair_free(pair);
 }
+
+static const gchar *fringe_mode_names[2] = { "series", "reference mode" };
 
 static void
 check_fringe_stripe(GRand *rng)
 {
     StripeShift shifts[FRINGE_STRIPES];
     gdouble tx[FRINGE_STRIPES], ty[FRINGE_STRIPES];
-    gint s, flat = g_rand_int_range(rng, 3, FRINGE_STRIPES - 3);
+    gint s, mode, flat = g_rand_int_range(rng, 3, FRINGE_STRIPES - 3);
+    FramePair *pair = flat_band_pair(rng, flat*FRINGE_ROWS - 1, (flat + 1)*FRINGE_ROWS + 1,
+                                     -0.5, 0.5);
 
-    register_flat_band(rng, flat*FRINGE_ROWS - 1, (flat + 1)*FRINGE_ROWS + 1, -0.5, 0.5,
-                       shifts, tx, ty);
-    printf("stripe %2d between rough rows: accepted %d, peak %.3f, off by (%.3f, %.3f) px\n", flat,
-           shifts[flat].accepted, shifts[flat].peak, shifts[flat].dx - tx[flat],
-           shifts[flat].dy - ty[flat]);
-    ck_assert_msg(!shifts[flat].accepted, "stripe %d of noise between rough rows measured (seed %u)",
-                  flat, test_seed);
-    /* The stripes either side share a featureless row and its edge, and
-     * may or may not be measured. */
-    for (s = 0; s < FRINGE_STRIPES; s++) {
-        if (abs(s - flat) <= 1)
-            continue;
-        ck_assert_msg(shifts[s].accepted, "rough stripe %d not measured (seed %u)", s, test_seed);
-        ck_assert_msg(hypot(shifts[s].dx - tx[s], shifts[s].dy - ty[s]) < 0.5,
-                      "rough stripe %d off by (%g, %g) px (seed %u)", s, shifts[s].dx - tx[s],
-                      shifts[s].dy - ty[s], test_seed);
+    frame_pair_stripe_truth(pair, FRINGE_STRIPES, tx, ty);
+    for (mode = 0; mode < 2; mode++) {
+        register_fringe_pair(pair, mode, shifts);
+        printf("%s: stripe %2d between rough rows: accepted %d, peak %.3f, "
+               "off by (%.3f, %.3f) px\n", fringe_mode_names[mode], flat, shifts[flat].accepted,
+               shifts[flat].peak, shifts[flat].dx - tx[flat], shifts[flat].dy - ty[flat]);
+        ck_assert_msg(!shifts[flat].accepted,
+                      "%s: stripe %d of noise between rough rows measured (seed %u)",
+                      fringe_mode_names[mode], flat, test_seed);
+        /* The stripes either side share a featureless row and its edge,
+         * and may or may not be measured. */
+        for (s = 0; s < FRINGE_STRIPES; s++) {
+            if (abs(s - flat) <= 1)
+                continue;
+            ck_assert_msg(shifts[s].accepted, "%s: rough stripe %d not measured (seed %u)",
+                          fringe_mode_names[mode], s, test_seed);
+            ck_assert_msg(hypot(shifts[s].dx - tx[s], shifts[s].dy - ty[s]) < 0.5,
+                          "%s: rough stripe %d off by (%g, %g) px (seed %u)",
+                          fringe_mode_names[mode], s, shifts[s].dx - tx[s],
+                          shifts[s].dy - ty[s], test_seed);
+        }
     }
+    frame_pair_free(pair);
 }
 
 START_TEST(test_fringe_stripe_not_measured)
@@ -754,19 +773,27 @@ START_TEST(test_reference_fringe_stripe_not_measured)
     GRand *rng = test_rand_salted(test_seed, 43);
     StripeShift shifts[FRINGE_STRIPES];
     gdouble tx[FRINGE_STRIPES], ty[FRINGE_STRIPES];
-    gint k, flat, measured = 0;
+    gint k, flat, mode, measured[2] = { 0, 0 };
+    FramePair *pair;
 
     for (k = 0; k < FRINGE_DRAWS; k++) {
         flat = g_rand_int_range(rng, 3, FRINGE_STRIPES - 3);
-        register_flat_band(rng, flat*FRINGE_ROWS, (flat + 1)*FRINGE_ROWS + 1, 0.2, 0.5,
-                           shifts, tx, ty);
-        printf("stripe %2d on the reference's fringe: accepted %d, off by (%.3f, %.3f) px\n", flat,
-               shifts[flat].accepted, shifts[flat].dx - tx[flat], shifts[flat].dy - ty[flat]);
-        measured += shifts[flat].accepted;
+        pair = flat_band_pair(rng, flat*FRINGE_ROWS, (flat + 1)*FRINGE_ROWS + 1, 0.2, 0.5);
+        frame_pair_stripe_truth(pair, FRINGE_STRIPES, tx, ty);
+        for (mode = 0; mode < 2; mode++) {
+            register_fringe_pair(pair, mode, shifts);
+            printf("%s: stripe %2d on the reference's fringe: accepted %d, "
+                   "off by (%.3f, %.3f) px\n", fringe_mode_names[mode], flat,
+                   shifts[flat].accepted, shifts[flat].dx - tx[flat], shifts[flat].dy - ty[flat]);
+            measured[mode] += shifts[flat].accepted;
+        }
+        frame_pair_free(pair);
     }
     g_rand_free(rng);
-    ck_assert_msg(measured == 0, "%d of %d stripes on the reference's fringe measured (seed %u)",
-                  measured, FRINGE_DRAWS, test_seed);
+    for (mode = 0; mode < 2; mode++)
+        ck_assert_msg(measured[mode] == 0,
+                      "%s: %d of %d stripes on the reference's fringe measured (seed %u)",
+                      fringe_mode_names[mode], measured[mode], FRINGE_DRAWS, test_seed);
 }
 END_TEST
 

@@ -13,6 +13,7 @@
 #include "parallel-run.h"
 #include "stripe-correlation.h"
 #include "stripe-geometry.h"
+#include "stripe-fringe.h"
 #include "stripe-subpixel.h"
 #include "registration-binning.h"
 #include "localscan-intl.h"
@@ -1027,6 +1028,7 @@ measure_around(const ConditionedFrame *image, const ConditionedFrame *reference,
 typedef struct {
     const gdouble *data[2];
     ConditionedFrame *frame[2];
+    LineTextures *textures;     /* two, of the levelled frames */
     gint xres, yres;
     gdouble aspect, narrow;
 } PairConditioning;
@@ -1037,6 +1039,8 @@ level_one_of_pair(gpointer user_data, gint i)
     PairConditioning *pc = user_data;
 
     pc->frame[i] = frame_condition_level(pc->data[i], NULL, pc->xres, pc->yres);
+    if (pc->frame[i])
+        line_textures_init(pc->textures + i, pc->frame[i]);
 }
 
 static void
@@ -1047,13 +1051,17 @@ band_pass_one_of_pair(gpointer user_data, gint i)
     conditioned_frame_band_pass(pc->frame[i], pc->aspect, pc->narrow);
 }
 
+/* The two frames conditioned, and textures[2] the lines of each levelled
+ * one (cleared by the caller after a success). */
 static gboolean
 condition_pair(const gdouble *image, const gdouble *reference, gint xres, gint yres, gdouble aspect,
-               ConditionedFrame **cimage, ConditionedFrame **creference, GError **error)
+               ConditionedFrame **cimage, ConditionedFrame **creference, LineTextures *textures,
+               GError **error)
 {
-    PairConditioning pc = { { image, reference }, { NULL, NULL }, xres, yres, aspect, 0.0 };
+    PairConditioning pc = { { image, reference }, { NULL, NULL }, textures, xres, yres, aspect, 0.0 };
 
     *cimage = *creference = NULL;
+    gwy_clear(textures, 2);
     if (xres < 4 || yres < 4) {
         g_set_error(error, STRIPE_REGISTRATION_ERROR, STRIPE_REGISTRATION_ERROR_SIZE,
                     _("The image (%d x %d px) is too small to register: it needs at least 4 x 4 px."),
@@ -1068,6 +1076,8 @@ condition_pair(const gdouble *image, const gdouble *reference, gint xres, gint y
                     : _("The image has no valid pixel (all are NaN or infinite)."));
         conditioned_frame_free(pc.frame[0]);
         conditioned_frame_free(pc.frame[1]);
+        line_textures_clear(textures);
+        line_textures_clear(textures + 1);
         return FALSE;
     }
     /* One band for both frames: the noisier one decides. */
@@ -1084,14 +1094,19 @@ measure_at_resolution(const gdouble *image, const gdouble *reference, gint xres,
                       const StripeRegistrationOptions *options, StripeShift *shifts, GError **error)
 {
     ConditionedFrame *cimage, *creference;
+    LineTextures textures[2];
     gboolean ok;
 
     if (!condition_pair(image, reference, xres, yres, options ? options->pixel_aspect : 1.0,
-                        &cimage, &creference, error))
+                        &cimage, &creference, textures, error))
         return FALSE;
     ok = measure_conditioned(cimage, creference, n, options, shifts, error);
+    if (ok)
+        stripe_fringe_reject(textures, textures + 1, n, edge_margin(cimage), shifts);
     conditioned_frame_free(cimage);
     conditioned_frame_free(creference);
+    line_textures_clear(textures);
+    line_textures_clear(textures + 1);
     return ok;
 }
 
@@ -1157,16 +1172,21 @@ stripe_registration_measure_around(const gdouble *image, const gdouble *referenc
                                    GError **error)
 {
     ConditionedFrame *cimage, *creference;
+    LineTextures textures[2];
     gdouble radii[2] = { radius_px, radius_px };
     gboolean ok;
 
     g_return_val_if_fail(image && reference && predicted_dx && predicted_dy && shifts, FALSE);
-    if (!condition_pair(image, reference, xres, yres, 1.0, &cimage, &creference, error))
+    if (!condition_pair(image, reference, xres, yres, 1.0, &cimage, &creference, textures, error))
         return FALSE;
     ok = measure_around(cimage, creference, n, predicted_dx, predicted_dy, radii, min_score,
                         REFINE_MATCH_SIGMA, shifts, error);
+    if (ok)
+        stripe_fringe_reject(textures, textures + 1, n, edge_margin(cimage), shifts);
     conditioned_frame_free(cimage);
     conditioned_frame_free(creference);
+    line_textures_clear(textures);
+    line_textures_clear(textures + 1);
     return ok;
 }
 
@@ -1175,101 +1195,8 @@ struct _StripeRegistrationFrame {
     gdouble noise_scale;           /* the narrow blur its own noise calls for */
     gdouble pixel_aspect;
     ConditionedFrame *passed;      /* band-passed with noise_scale */
-    gdouble *row_texture;          /* per row of unfiltered: the variance
-                                      of its valid pixels */
-    gdouble noise_var;             /* of unfiltered's white pixel noise */
+    LineTextures textures;         /* of unfiltered's lines */
 };
-
-/* A stripe's lines show little of their own where their texture stays
- * below this many times the pixel noise (featureless lines of the
- * simulator's series read 3 to 4 times it: the noise estimate from
- * neighbouring pixels reads noise correlated along the lines low) ... */
-#define WEAK_TEXTURE 8.0
-/* ... and what they show comes from beyond them where a line within the
- * filters' reach beyond them stands this many times above them (200 to
- * 300 times for the particle's fringe of seed 20000037 below; lines of
- * one fine texture differ by a few times at most).  Not against the
- * noise: a fine texture raises the noise estimate too. */
-#define FRINGE_CONTRAST 16.0
-
-/* The largest texture of lines lo .. hi-1 within the frame. */
-static gdouble
-largest_texture(const StripeRegistrationFrame *frame, gint lo, gint hi)
-{
-    gdouble largest = 0.0;
-    gint r;
-
-    for (r = MAX(lo, 0); r < MIN(hi, frame->unfiltered->yres); r++) {
-        if (frame->row_texture[r] > largest)
-            largest = frame->row_texture[r];
-    }
-    return largest;
-}
-
-/* Stripes whose lines that take part in the match (those beyond the
- * filters' reach of the frame's edge) show nothing, while a line within
- * that reach beyond them shows a feature: the narrow blur carries the
- * feature's fringe into the stripe, and a fringe matches its counterpart
- * with a high correlation but a poorly held shift across the lines (an
- * exponential tail shifted is the same tail scaled).  Such a stripe is not
- * measured.  A series' frame whose first lines were featureless but for a
- * particle just below, and for one cut by the frame's edge, read the
- * start of a fast settling 0.4 px off in every pair alike, with
- * correlations of 0.99 (test-series-correction seed 20000037, case 11).
- * Featureless lines beside featureless lines are left to the correlation
- * (white noise scores low), and so are fine textures whose lines all look
- * alike, which the pixel noise estimate takes for noise.
- *
- * Whether lines lo .. hi-1 of frame (those beyond reach of its edge) show
- * nothing while a line within reach beyond them shows a feature. */
-static gboolean
-lines_on_fringe(const StripeRegistrationFrame *frame, gint lo, gint hi, gint reach)
-{
-    gint yres = frame->unfiltered->yres;
-    gdouble own, near;
-
-    lo = MAX(lo, reach);
-    hi = MIN(hi, yres - reach);
-    /* Lines within the reach of the frame's edge have no lines of their
-     * own to judge by. */
-    if (lo >= hi)
-        return FALSE;
-    own = largest_texture(frame, lo, hi);
-    near = MAX(largest_texture(frame, lo - reach, lo), largest_texture(frame, hi, hi + reach));
-    return own <= WEAK_TEXTURE*frame->noise_var && near > FRINGE_CONTRAST*own;
-}
-
-/* Either frame of the pair: the stripe matched on the fringe of one
- * frame reads the shift as poorly as on both.  A series' frame 0 whose
- * first lines showed a particle cut by the frame's edge, and whose third
- * line missed its rim by a few hundredths of a pixel where the other
- * frames' caught it, read 0.5 px off as the reference of every pair
- * (test-series-correction seed 62000021, case 10). */
-static void
-reject_stripes_on_fringes(const StripeRegistrationFrame *image,
-                          const StripeRegistrationFrame *reference, gint n, gint reach,
-                          StripeShift *shifts)
-{
-    gint yres = image->unfiltered->yres, s, lo, hi;
-    gdouble dy;
-
-    for (s = 0; s < n; s++) {
-        if (!shifts[s].accepted)
-            continue;
-        lo = stripe_first_row(s, n, yres);
-        hi = stripe_end_row(s, n, yres);
-        /* The reference's own lines are those wholly under the stripe's
-         * lines shifted back; a line partly under them lends it its
-         * content through the interpolation, as one beside does through
-         * the blur. */
-        dy = shifts[s].dy;
-        if (lines_on_fringe(image, lo, hi, reach)
-            || lines_on_fringe(reference, (gint)ceil(lo - dy), (gint)floor(hi - 1 - dy) + 1, reach)) {
-            shifts[s].accepted = FALSE;
-            g_debug("registration: stripe %d: matched on a fringe only", s);
-        }
-    }
-}
 
 /* A frame band-passed with narrow. */
 static ConditionedFrame*
@@ -1297,8 +1224,7 @@ stripe_registration_frame_new(const gdouble *data, gint xres, gint yres, gdouble
     /* Frames of a series have alike noise: a pair mostly asks for the
      * band each frame's own noise calls for. */
     frame->passed = band_pass_copy(frame, frame->noise_scale);
-    frame->row_texture = conditioned_frame_line_variances(unfiltered);
-    frame->noise_var = conditioned_frame_pixel_noise(unfiltered);
+    line_textures_init(&frame->textures, unfiltered);
     return frame;
 }
 
@@ -1309,7 +1235,7 @@ stripe_registration_frame_free(StripeRegistrationFrame *frame)
         return;
     conditioned_frame_free(frame->unfiltered);
     conditioned_frame_free(frame->passed);
-    g_free(frame->row_texture);
+    line_textures_clear(&frame->textures);
     g_free(frame);
 }
 
@@ -1345,7 +1271,7 @@ measure_around_pair(const StripeRegistrationFrame *image,
     ok = measure_around(cimage, creference, n, predicted_dx, predicted_dy, radius_px, min_score,
                         refine, shifts, error);
     if (ok)
-        reject_stripes_on_fringes(image, reference, n, edge_margin(cimage), shifts);
+        stripe_fringe_reject(&image->textures, &reference->textures, n, edge_margin(cimage), shifts);
     conditioned_frame_free(made_image);
     conditioned_frame_free(made_reference);
     return ok;
