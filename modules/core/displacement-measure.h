@@ -37,7 +37,7 @@ typedef struct {
 void               displacement_options_init (DisplacementOptions *options);
 
 /* Registers one image against a reference of the same size with the core's
- * stripe registration (stripe_registration_measure_around): n blocks of
+ * stripe registration (stripe_registration_measure_around_frames): n blocks of
  * rows, each giving (dx, dy) px in the drift-table convention (content of the
  * reference at (r, c) appears in the image at (r + dy, c + dx)) and a score
  * (the normalised correlation at the peak of a block the registration

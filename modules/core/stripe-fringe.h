@@ -16,7 +16,8 @@ G_BEGIN_DECLS
 
 /* What each line of a levelled frame shows. */
 typedef struct {
-    gdouble *variance;      /* per line: the variance of its valid pixels */
+    gdouble *variance;      /* per line: the variance of its valid pixels
+                               (NaN with fewer than 8, never judged) */
     gint yres;
     gdouble noise_var;      /* of the frame's white pixel noise */
 } LineTextures;
