@@ -13,8 +13,9 @@
 G_BEGIN_DECLS
 
 /* What the frames near a line tell of which side of the jump it lies on:
- * its mean mismatch under the drift without the step and with it over the
- * frames that show its content under both (two_sided), else over those
+ * its mean mismatch (each the lowest within half a pixel of the place the
+ * fitted drift predicts) under the drift without the step and with it
+ * over the frames that show its content under both (two_sided), else over those
  * that show it under one of them only (a line at a frame's edge, whose
  * content the step takes out of every other frame), with the mismatch of
  * that one side's content displaced by the step once more (control): what
@@ -27,8 +28,8 @@ typedef struct {
                                 its quadratic over the pixels its one
                                 drift predicts; NAN otherwise */
     gdouble nearby;          /* one-sided only: the lowest mismatch of its
-                                content a pixel off the place its one drift
-                                predicts (left, right, up or down); NAN
+                                content a pixel off the best place its one
+                                drift predicts (left, right, up or down); NAN
                                 where not seen */
     gdouble unrelated;       /* one-sided only: what content unrelated to the
                                 line would cost, its texture plus that of
