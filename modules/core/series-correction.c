@@ -920,17 +920,18 @@ eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
 /* Frames this far from a line's own compared with it. */
 #define JUMP_PARTNER_REACH 2
 
-/* Content of frame k's line r as frame j shows it, with the drift of line
- * r taken from `side`: each pixel's true position, then where frame j saw
- * it (its row's own time found by two fixed-point steps), moved by
- * (off_x, off_y) px, sampled bilinearly; NAN outside frame j. */
+/* Where frame j saw the content of frame k's line r, with the drift of
+ * line r taken from `side`: each pixel's true position, then where frame
+ * j saw it (its row's own time found by two fixed-point steps).  place
+ * holds 3 rows of xres: the column before frame j's drift, that drift's
+ * column part and the row in frame j.  Found once for the place and every
+ * offset around it: the drift's evaluation costs far more than sampling. */
 static void
-predict_line(const SeriesCorrection *correction, const SeriesFrame *fk,
-             const SeriesFrame *fj, const gdouble *ref, gint r, JumpSide side,
-             gdouble off_x, gdouble off_y, gdouble *line)
+place_line(const SeriesCorrection *correction, const SeriesFrame *fk,
+           const SeriesFrame *fj, gint r, JumpSide side, gdouble *place)
 {
-    gint xres = fk->timing.xres, yres = fk->timing.yres, c, it, x0, y0;
-    gdouble t, dx, dy, x, y, yj, tj, jx, jy, fx, fy;
+    gint xres = fk->timing.xres, c, it;
+    gdouble t, dx, dy, x, y, yj, tj, jx, jy;
 
     for (c = 0; c < xres; c++) {
         t = scan_timing_pixel_time(&fk->timing, r, c);
@@ -944,8 +945,24 @@ predict_line(const SeriesCorrection *correction, const SeriesFrame *fk,
             eval_side(correction, tj, JUMP_AS_FITTED, &jx, &jy);
             yj = y + jy;
         }
-        x += jx + off_x;
-        yj += off_y;
+        place[c] = x;
+        place[xres + c] = jx;
+        place[2*xres + c] = yj;
+    }
+}
+
+/* Frame j's data (ref) at the place of each pixel of a line (place_line())
+ * moved by (off_x, off_y) px, sampled bilinearly; NAN outside frame j. */
+static void
+sample_place(const SeriesFrame *fk, const gdouble *ref, const gdouble *place,
+             gdouble off_x, gdouble off_y, gdouble *line)
+{
+    gint xres = fk->timing.xres, yres = fk->timing.yres, c, x0, y0;
+    gdouble x, yj, fx, fy;
+
+    for (c = 0; c < xres; c++) {
+        x = place[c] + (place[xres + c] + off_x);
+        yj = place[2*xres + c] + off_y;
         x0 = (gint)floor(x);
         y0 = (gint)floor(yj);
         if (x0 < 0 || y0 < 0 || x0 + 1 >= xres || y0 + 1 >= yres) {
@@ -1016,15 +1033,14 @@ line_texture_where(const gdouble *data, const gdouble *pred, gint n,
     return line_residual(data, pred, n, TRUE, u, d);
 }
 
-/* The lowest mismatch of line r of frame k (data row) with its content as
- * frame j shows it under `side`, moved from base (the best place that
- * side_mismatch() found) a pixel left, right, up or down (NAN where none
- * of them lies in frame j): a line under its right drift costs less where
- * it is than a pixel off (jump-votes.c).  line is work space of 3 rows. */
+/* The lowest mismatch of a line (data row) with its content at place
+ * (place_line()) moved from base (the best place that side_mismatch()
+ * found) a pixel left, right, up or down (NAN where none of them lies in
+ * the other frame): a line under its right drift costs less where it is
+ * than a pixel off (jump-votes.c).  line is work space of 3 rows. */
 static gdouble
-nearby_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
-                const SeriesFrame *fj, const gdouble *ref, gint r,
-                JumpSide side, const gdouble *base, const gdouble *row,
+nearby_mismatch(const SeriesFrame *fk, const gdouble *ref,
+                const gdouble *place, const gdouble *base, const gdouble *row,
                 gdouble *line)
 {
     static const gdouble offsets[4][2] = { { -1, 0 }, { 1, 0 }, { 0, -1 }, { 0, 1 } };
@@ -1032,7 +1048,7 @@ nearby_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
     gdouble lowest = NAN, e;
 
     for (i = 0; i < 4; i++) {
-        predict_line(correction, fk, fj, ref, r, side, base[0] + offsets[i][0],
+        sample_place(fk, ref, place, base[0] + offsets[i][0],
                      base[1] + offsets[i][1], line);
         e = line_mismatch(row, line, xres, line + xres, line + 2*xres);
         if (!isnan(e) && !(lowest <= e))
@@ -1051,18 +1067,20 @@ nearby_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
  * met the rim 0.5 px off and was voted before the jump (test-series-
  * correction seed 68000339), and a textured line after one cost more
  * than a pixel off, so was no minimum and told nothing (seed 68000484).
- * line is work space of 3 rows. */
+ * line is work space of 3 rows, place of 3 more (left holding the place
+ * of the line's content under `side`, place_line()). */
 static gdouble
 side_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
               const SeriesFrame *fj, const gdouble *ref, gint r,
               JumpSide side, const gdouble *row, gdouble *line,
-              gdouble *offset)
+              gdouble *place, gdouble *offset)
 {
     gint xres = fk->timing.xres, i, j;
     gdouble lowest, e;
 
     offset[0] = offset[1] = 0.0;
-    predict_line(correction, fk, fj, ref, r, side, 0.0, 0.0, line);
+    place_line(correction, fk, fj, r, side, place);
+    sample_place(fk, ref, place, 0.0, 0.0, line);
     lowest = line_mismatch(row, line, xres, line + xres, line + 2*xres);
     if (isnan(lowest))
         return NAN;
@@ -1070,8 +1088,7 @@ side_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
         for (j = -2; j <= 2; j++) {
             if (!i && !j)
                 continue;
-            predict_line(correction, fk, fj, ref, r, side, 0.25*j, 0.25*i,
-                         line);
+            sample_place(fk, ref, place, 0.25*j, 0.25*i, line);
             e = line_mismatch(row, line, xres, line + xres, line + 2*xres);
             if (e < lowest) {
                 lowest = e;
@@ -1089,7 +1106,7 @@ side_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
  * without the step and with it.  Frames that show the line's content
  * under both count alone when there are any: content seen under one only
  * is compared with nothing under the other.  line is work space of 3
- * rows and a fourth of zeros. */
+ * rows, a fourth of zeros and 3 more rows (a place, place_line()). */
 static void
 line_costs(const SeriesCorrection *correction, const FrameSeries *series,
            gint k, gint r, gdouble *line, LineEvidence *ev)
@@ -1101,7 +1118,7 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     gdouble near_a = 0.0, near_b = 0.0, cost_a = 0.0, cost_b = 0.0;
     gdouble et, ew, ta = 0.0, tb = 0.0, wa = 0.0, wb = 0.0;
     gdouble off_b[2], off_a[2], off_c[2], *offset;
-    gdouble *u = line + xres, *d = u + xres, *zeros = d + xres;
+    gdouble *u = line + xres, *d = u + xres, *zeros = d + xres, *place = zeros + xres;
     const gdouble *ref;
     JumpSide seen;
 
@@ -1111,8 +1128,10 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
             continue;
         fj = series->frames + j;
         ref = gwy_data_field_get_data_const(fj->field);
-        eb = side_mismatch(correction, fk, fj, ref, r, JUMP_NEVER, row, line, off_b);
-        ea = side_mismatch(correction, fk, fj, ref, r, JUMP_ALWAYS, row, line, off_a);
+        eb = side_mismatch(correction, fk, fj, ref, r, JUMP_NEVER, row, line,
+                           place, off_b);
+        ea = side_mismatch(correction, fk, fj, ref, r, JUMP_ALWAYS, row, line,
+                           place, off_a);
         if (!isnan(eb) && !isnan(ea)) {
             sb += eb;
             sa += ea;
@@ -1123,14 +1142,19 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
             continue;
         seen = isnan(eb) ? JUMP_ALWAYS : JUMP_NEVER;
         offset = isnan(eb) ? off_a : off_b;
-        predict_line(correction, fk, fj, ref, r, seen, offset[0], offset[1], line);
+        /* The seen side's place is still there when it was the drift with
+         * the step. */
+        if (seen == JUMP_NEVER)
+            place_line(correction, fk, fj, r, seen, place);
+        sample_place(fk, ref, place, offset[0], offset[1], line);
         et = line_mismatch(zeros, line, xres, u, d);
         ew = line_texture_where(row, line, xres, u, d);
+        en = nearby_mismatch(fk, ref, place, offset, row, line);
         ec = side_mismatch(correction, fk, fj, ref, r,
-                           isnan(eb) ? JUMP_TWICE : JUMP_BACKWARDS, row, line, off_c);
+                           isnan(eb) ? JUMP_TWICE : JUMP_BACKWARDS, row, line,
+                           place, off_c);
         if (isnan(ec))
             continue;
-        en = nearby_mismatch(correction, fk, fj, ref, r, seen, offset, row, line);
         if (isnan(eb)) {
             oa += ea;
             ca += ec;
@@ -1258,7 +1282,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
     /* Its fourth row stays zero: line_costs() compares lines with it. */
-    line = g_new0(gdouble, 4*series->frames[0].timing.xres);
+    line = g_new0(gdouble, 7*series->frames[0].timing.xres);
     when = g_new(gdouble, 2*most);
     ends = when + most;
     frame = g_new(gint, most);
