@@ -350,9 +350,10 @@ END_TEST
  * 0, 1 and 6 once: particles 0.41-0.58 px off, paper mode 1.8-2.6 px);
  * that is an extrapolation of unobserved drift, not the bridging of blank
  * stripes this test is about. */
-START_TEST(test_accuracy_blank_stripes)
+static void
+check_blank_stripes(gint loop)
 {
-    GRand *rng = test_rand_salted(test_seed, 30 + _i);
+    GRand *rng = test_rand_salted(test_seed, 30 + loop);
     gboolean blank[10];
     Motion motion;
     Accuracy acc;
@@ -363,7 +364,7 @@ START_TEST(test_accuracy_blank_stripes)
         do {
             s = g_rand_int_range(rng, 0, 10);
         } while (blank[s]
-                 || (_i == 0 && (s == 0 || s == 9 || blank[s-1] || blank[s+1]))
+                 || (loop == 0 && (s == 0 || s == 9 || blank[s-1] || blank[s+1]))
                  || (s <= 1 && blank[1 - s]));
         blank[s] = TRUE;
     }
@@ -374,13 +375,33 @@ START_TEST(test_accuracy_blank_stripes)
     }
     printf("\n");
     random_motion(&motion, TRUE, rng);
-    measure_accuracy(&motion, SCAN_DIRECTION_DOWN, 10, blank, 32 + _i, &acc);
-    ck_assert_msg(acc.rms_continuous < (_i ? 0.25 : 0.1)*acc.rms_paper,
+    measure_accuracy(&motion, SCAN_DIRECTION_DOWN, 10, blank, 32 + loop, &acc);
+    ck_assert_msg(acc.rms_continuous < (loop ? 0.25 : 0.1)*acc.rms_paper,
                   "RMS continuous %g, paper %g",
                   acc.rms_continuous, acc.rms_paper);
-    ck_assert_msg(acc.particle_continuous < (_i ? 0.4 : 0.15),
+    ck_assert_msg(acc.particle_continuous < (loop ? 0.4 : 0.15),
                   "particle centre error %g px", acc.particle_continuous);
     g_rand_free(rng);
+}
+
+START_TEST(test_accuracy_blank_stripes)
+{
+    check_blank_stripes(_i);
+}
+END_TEST
+
+/* The draw of seed 71000482, loop 0 (blank stripes 2, 4 and 7): seven
+ * exact knots of a steep settling start, which the noise from differences
+ * on one axis could not tell from noise; smoothed 0.08-0.09 px off at the
+ * first knots, interior RMS 0.112 of paper mode's (drift-trajectory.c,
+ * FEW_KNOTS_NOISE_OVER_DIFFERENCES_MAX).  Replayed whatever the seed. */
+START_TEST(test_blank_stripes_seven_exact_knots)
+{
+    guint32 saved = test_seed;
+
+    test_seed = 71000482;
+    check_blank_stripes(0);
+    test_seed = saved;
 }
 END_TEST
 
@@ -813,6 +834,7 @@ continuous_compensate_suite(void)
     tcase_set_timeout(tc, 120);
     tcase_add_loop_test(tc, test_accuracy_against_paper_mode, 0, 4);
     tcase_add_loop_test(tc, test_accuracy_blank_stripes, 0, 2);
+    tcase_add_test(tc, test_blank_stripes_seven_exact_knots);
     tcase_add_test(tc, test_zero_drift_exact);
     tcase_add_loop_test(tc, test_whole_pixel_equals_paper_mode, 0, 2);
     tcase_add_test(tc, test_fractional_shift_matches_gwyddion);
