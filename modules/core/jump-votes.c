@@ -19,12 +19,14 @@
  * the content's features cost as their square): above a fifth of the
  * scale the side is wrong.  Below it the line lies on its side only where
  * its content sits exactly where that drift puts it: its cost is lower
- * than a pixel off in any direction (nearby).  The scale alone does not
- * tell: lines after a jump cost 0.12 and 0.15 of it (their content at the
- * frame's edge, seeds 560100016 and 560100232 of test-series-correction),
- * lines before one 0.10 and 0.14 (content that merely resembles what lies
- * a step away, seeds 572000020 and 572000004), but the first were minima
- * (1.3-1.5 times lower than a pixel off) and the second not (0.6-1.0): a
+ * than a pixel off in any direction (nearby; both measured from the best
+ * place within half a pixel of the drift's, series-correction.c).  The
+ * scale alone does not tell: lines after a jump cost 0.12 and 0.15 of it
+ * (their content at the frame's edge, seeds 560100016 and 560100232 of
+ * test-series-correction), lines before one 0.10 and 0.14 (content that
+ * merely resembles what lies a step away, seeds 572000020 and 572000004),
+ * but the first were minima (1.3-1.5 times lower than a pixel off) and the
+ * second not (0.6-1.0; these figures measured at the exact place): a
  * step off, a line meets other content, whose mismatch does not rise on
  * every side.  A line below a fifth that is no minimum, or no match at
  * all (ONE_SIDED_RELATED), tells nothing.

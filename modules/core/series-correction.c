@@ -919,13 +919,21 @@ eval_side(const SeriesCorrection *correction, gdouble t, JumpSide side,
 #define JUMP_SEARCH_BLOCKS 3.0
 /* Frames this far from a line's own compared with it. */
 #define JUMP_PARTNER_REACH 2
+/* Rows of the line-by-line work space: a predicted line and the two rows
+ * line_residual() works in, a row that stays zero (a line's texture is
+ * its mismatch with it), and the places (place_line(), 3 rows each) of a
+ * line's content under the drift without the step, with it and its
+ * control's. */
+#define JUMP_WORK_ROWS 13
 
 /* Where frame j saw the content of frame k's line r, with the drift of
  * line r taken from `side`: each pixel's true position, then where frame
  * j saw it (its row's own time found by two fixed-point steps).  place
  * holds 3 rows of xres: the column before frame j's drift, that drift's
- * column part and the row in frame j.  Found once for the place and every
- * offset around it: the drift's evaluation costs far more than sampling. */
+ * column part (apart, so that sample_place() adds an offset to it as the
+ * prediction always did, to the last bit) and the row in frame j.  Found
+ * once for the place and every offset around it: the drift's evaluation
+ * costs far more than sampling. */
 static void
 place_line(const SeriesCorrection *correction, const SeriesFrame *fk,
            const SeriesFrame *fj, gint r, JumpSide side, gdouble *place)
@@ -951,13 +959,14 @@ place_line(const SeriesCorrection *correction, const SeriesFrame *fk,
     }
 }
 
-/* Frame j's data (ref) at the place of each pixel of a line (place_line())
- * moved by (off_x, off_y) px, sampled bilinearly; NAN outside frame j. */
+/* Frame j's data (ref, xres by yres) at the place of each pixel of a line
+ * (place_line()) moved by (off_x, off_y) px, sampled bilinearly; NAN
+ * outside frame j. */
 static void
-sample_place(const SeriesFrame *fk, const gdouble *ref, const gdouble *place,
+sample_place(gint xres, gint yres, const gdouble *ref, const gdouble *place,
              gdouble off_x, gdouble off_y, gdouble *line)
 {
-    gint xres = fk->timing.xres, yres = fk->timing.yres, c, x0, y0;
+    gint c, x0, y0;
     gdouble x, yj, fx, fy;
 
     for (c = 0; c < xres; c++) {
@@ -1037,18 +1046,21 @@ line_texture_where(const gdouble *data, const gdouble *pred, gint n,
  * (place_line()) moved from base (the best place that side_mismatch()
  * found) a pixel left, right, up or down (NAN where none of them lies in
  * the other frame): a line under its right drift costs less where it is
- * than a pixel off (jump-votes.c).  line is work space of 3 rows. */
+ * than a pixel off (jump-votes.c).  From a best place at the edge of the
+ * searched square, the place a pixel back lies inside the square's
+ * reflection and may cost no less than the best: the minimum is then
+ * judged by three directions.  line is work space of 3 rows. */
 static gdouble
 nearby_mismatch(const SeriesFrame *fk, const gdouble *ref,
                 const gdouble *place, const gdouble *base, const gdouble *row,
                 gdouble *line)
 {
     static const gdouble offsets[4][2] = { { -1, 0 }, { 1, 0 }, { 0, -1 }, { 0, 1 } };
-    gint xres = fk->timing.xres, i;
+    gint xres = fk->timing.xres, yres = fk->timing.yres, i;
     gdouble lowest = NAN, e;
 
     for (i = 0; i < 4; i++) {
-        sample_place(fk, ref, place, base[0] + offsets[i][0],
+        sample_place(xres, yres, ref, place, base[0] + offsets[i][0],
                      base[1] + offsets[i][1], line);
         e = line_mismatch(row, line, xres, line + xres, line + 2*xres);
         if (!isnan(e) && !(lowest <= e))
@@ -1058,58 +1070,78 @@ nearby_mismatch(const SeriesFrame *fk, const gdouble *ref,
 }
 
 /* The mismatch of line r of frame k with its content as frame j shows it
- * under `side`, the lowest within half a pixel in x and y of the place
- * that drift predicts (quarter pixel steps; NAN where that place is not in
- * frame j), and the offset where it is lowest.  Near a jump the fitted
- * drift is only that accurate: the step and the velocity are fitted with
- * the jump where the blocks put it.  At the exact place, a featureless
- * line after a jump whose content lies beside a particle's steep rim
- * met the rim 0.5 px off and was voted before the jump (test-series-
- * correction seed 68000339), and a textured line after one cost more
- * than a pixel off, so was no minimum and told nothing (seed 68000484).
- * line is work space of 3 rows, place of 3 more (left holding the place
- * of the line's content under `side`, place_line()). */
+ * under `side`, the lowest within reach px in x and y of the place that
+ * drift predicts (five places a side; NAN where that place is not in
+ * frame j), and the offset where it is lowest (offset may be NULL).  Near
+ * a jump the fitted drift is only about half a pixel accurate: the step
+ * and the velocity are fitted with the jump where the blocks put it.  At
+ * the exact place, a featureless line after a jump whose content lies
+ * beside a particle's steep rim met the rim 0.5 px off and was voted
+ * before the jump (test-series-correction seed 68000339), and a textured
+ * line after one cost more than a pixel off, so was no minimum and told
+ * nothing (seed 68000484).  line is work space of 3 rows; place (3 rows)
+ * is left holding the place of the line's content under `side`
+ * (place_line()). */
 static gdouble
 side_mismatch(const SeriesCorrection *correction, const SeriesFrame *fk,
               const SeriesFrame *fj, const gdouble *ref, gint r,
-              JumpSide side, const gdouble *row, gdouble *line,
+              JumpSide side, gdouble reach, const gdouble *row, gdouble *line,
               gdouble *place, gdouble *offset)
 {
-    gint xres = fk->timing.xres, i, j;
-    gdouble lowest, e;
+    gint xres = fk->timing.xres, yres = fk->timing.yres, i, j;
+    gdouble lowest, e, step = 0.5*reach, best[2] = { 0.0, 0.0 };
 
-    offset[0] = offset[1] = 0.0;
     place_line(correction, fk, fj, r, side, place);
-    sample_place(fk, ref, place, 0.0, 0.0, line);
+    sample_place(xres, yres, ref, place, 0.0, 0.0, line);
     lowest = line_mismatch(row, line, xres, line + xres, line + 2*xres);
-    if (isnan(lowest))
-        return NAN;
-    for (i = -2; i <= 2; i++) {
+    for (i = -2; i <= 2 && !isnan(lowest) && reach > 0.0; i++) {
         for (j = -2; j <= 2; j++) {
             if (!i && !j)
                 continue;
-            sample_place(fk, ref, place, 0.25*j, 0.25*i, line);
+            sample_place(xres, yres, ref, place, step*j, step*i, line);
             e = line_mismatch(row, line, xres, line + xres, line + 2*xres);
             if (e < lowest) {
                 lowest = e;
-                offset[0] = 0.25*j;
-                offset[1] = 0.25*i;
+                best[0] = step*j;
+                best[1] = step*i;
             }
         }
     }
+    if (offset) {
+        offset[0] = best[0];
+        offset[1] = best[1];
+    }
     return lowest;
+}
+
+/* How far side_mismatch() looks around each drift's place, px: half a
+ * pixel, the fit's accuracy near a jump, but no more than a quarter of the
+ * step (along the axis it moves most), so that the squares searched around
+ * the two drifts' places stay half a step apart: a smaller step would let
+ * the drift on the wrong side reach the right place. */
+#define JUMP_PLACE_REACH 0.5
+
+static gdouble
+jump_place_reach(const SeriesCorrection *correction)
+{
+    const DriftFit *fit = correction->fit.fits + correction->fit.chosen;
+    gdouble sx = fabs(1e-9*fit->coef[0][1]/correction->xstep);
+    gdouble sy = fabs(1e-9*fit->coef[1][1]/correction->ystep);
+
+    return fmin(JUMP_PLACE_REACH, 0.25*fmax(sx, sy));
 }
 
 /* How well line r of frame k matches the frames near it (those not
  * flagged, up to JUMP_PARTNER_REACH away: the next frame may be flagged,
  * the previous one may not show the line's content) with the drift
- * without the step and with it.  Frames that show the line's content
- * under both count alone when there are any: content seen under one only
- * is compared with nothing under the other.  line is work space of 3
- * rows, a fourth of zeros and 3 more rows (a place, place_line()). */
+ * without the step and with it, each within reach of its place
+ * (side_mismatch()).  Frames that show the line's content under both
+ * count alone when there are any: content seen under one only is compared
+ * with nothing under the other.  line is work space of JUMP_WORK_ROWS
+ * rows. */
 static void
 line_costs(const SeriesCorrection *correction, const FrameSeries *series,
-           gint k, gint r, gdouble *line, LineEvidence *ev)
+           gint k, gint r, gdouble reach, gdouble *line, LineEvidence *ev)
 {
     const SeriesFrame *fk = series->frames + k, *fj;
     gint j, count = 0, nb = 0, na = 0, xres = fk->timing.xres;
@@ -1117,10 +1149,11 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
     gdouble eb, ea, ec, en, sb = 0.0, sa = 0.0, ob = 0.0, oa = 0.0, cb = 0.0, ca = 0.0;
     gdouble near_a = 0.0, near_b = 0.0, cost_a = 0.0, cost_b = 0.0;
     gdouble et, ew, ta = 0.0, tb = 0.0, wa = 0.0, wb = 0.0;
-    gdouble off_b[2], off_a[2], off_c[2], *offset;
-    gdouble *u = line + xres, *d = u + xres, *zeros = d + xres, *place = zeros + xres;
+    gdouble off_b[2], off_a[2], *offset;
+    gdouble *u = line + xres, *d = u + xres, *zeros = d + xres;
+    gdouble *place_b = zeros + xres, *place_a = place_b + 3*xres;
+    gdouble *place_c = place_a + 3*xres, *place;
     const gdouble *ref;
-    JumpSide seen;
 
     for (j = k - JUMP_PARTNER_REACH; j <= k + JUMP_PARTNER_REACH; j++) {
         if (j == k || j < 0 || j >= series->n_frames
@@ -1128,10 +1161,10 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
             continue;
         fj = series->frames + j;
         ref = gwy_data_field_get_data_const(fj->field);
-        eb = side_mismatch(correction, fk, fj, ref, r, JUMP_NEVER, row, line,
-                           place, off_b);
-        ea = side_mismatch(correction, fk, fj, ref, r, JUMP_ALWAYS, row, line,
-                           place, off_a);
+        eb = side_mismatch(correction, fk, fj, ref, r, JUMP_NEVER, reach, row,
+                           line, place_b, off_b);
+        ea = side_mismatch(correction, fk, fj, ref, r, JUMP_ALWAYS, reach, row,
+                           line, place_a, off_a);
         if (!isnan(eb) && !isnan(ea)) {
             sb += eb;
             sa += ea;
@@ -1140,19 +1173,15 @@ line_costs(const SeriesCorrection *correction, const FrameSeries *series,
         }
         if (isnan(eb) && isnan(ea))
             continue;
-        seen = isnan(eb) ? JUMP_ALWAYS : JUMP_NEVER;
         offset = isnan(eb) ? off_a : off_b;
-        /* The seen side's place is still there when it was the drift with
-         * the step. */
-        if (seen == JUMP_NEVER)
-            place_line(correction, fk, fj, r, seen, place);
-        sample_place(fk, ref, place, offset[0], offset[1], line);
+        place = isnan(eb) ? place_a : place_b;
+        sample_place(xres, fk->timing.yres, ref, place, offset[0], offset[1], line);
         et = line_mismatch(zeros, line, xres, u, d);
         ew = line_texture_where(row, line, xres, u, d);
         en = nearby_mismatch(fk, ref, place, offset, row, line);
         ec = side_mismatch(correction, fk, fj, ref, r,
-                           isnan(eb) ? JUMP_TWICE : JUMP_BACKWARDS, row, line,
-                           place, off_c);
+                           isnan(eb) ? JUMP_TWICE : JUMP_BACKWARDS, reach, row,
+                           line, place_c, NULL);
         if (isnan(ec))
             continue;
         if (isnan(eb)) {
@@ -1271,7 +1300,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
 {
     DriftFit *fit = correction->fit.fits + correction->fit.chosen;
     gint nf = series->n_frames, k, r, i, n = 0, first, last, lo, hi, most = 0;
-    gdouble *line, *when, *ends, t, t_lo, t_hi;
+    gdouble *line, *when, *ends, t, t_lo, t_hi, reach;
     LineEvidence *evidence;
     gint *frame;
 
@@ -1281,8 +1310,8 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
                        JUMP_SEARCH_BLOCKS*block_span, &t_lo, &t_hi);
     for (k = 0; k < nf; k++)
         most += series->frames[k].timing.yres;
-    /* Its fourth row stays zero: line_costs() compares lines with it. */
-    line = g_new0(gdouble, 7*series->frames[0].timing.xres);
+    line = g_new0(gdouble, JUMP_WORK_ROWS*series->frames[0].timing.xres);
+    reach = jump_place_reach(correction);
     when = g_new(gdouble, 2*most);
     ends = when + most;
     frame = g_new(gint, most);
@@ -1297,7 +1326,7 @@ localise_jump(SeriesCorrection *correction, const FrameSeries *series,
             t = scan_timing_rows_time(&fk->timing, r, r+1);
             if (t < t_lo || t > t_hi)
                 continue;
-            line_costs(correction, series, k, r, line, evidence + n);
+            line_costs(correction, series, k, r, reach, line, evidence + n);
             evidence[n].frame_edge = (i == 0 || i == fk->timing.yres-1);
             when[n] = scan_timing_row_start(&fk->timing, r);
             ends[n] = when[n] + fk->timing.line_time;
