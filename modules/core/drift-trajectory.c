@@ -122,13 +122,13 @@
 #define NOISE_MIN_RESIDUAL_FRACTION 0.5
 
 /* Below this many knots cross-validation's preference for interpolation
- * is not needed to call the data exact, only a hint (estimate_is_bias()):
- * left out, a knot of a steep settling start with a blank stripe beside it
- * is predicted across three stripes by interpolation worse than by a
- * smoother fit, so exact data looked like noise of 0.15 px and were
- * smoothed 0.2 px off in the bend (test-continuous-compensate, seed
- * 81001636: 7 knots, blank stripes 2, 4 and 7; the differences' noise
- * was 26 times below that). */
+ * is not required to call the data exact; it only lowers the bar
+ * (estimate_is_bias()): left out, a knot of a steep settling start with a
+ * blank stripe beside it is predicted across three stripes by
+ * interpolation worse than by a smoother fit, so exact data looked like
+ * noise of 0.15 px and were smoothed 0.2 px off in the bend
+ * (test-continuous-compensate, seed 81001636: 7 knots, blank stripes 2, 4
+ * and 7; the differences' noise was 26 times below that). */
 #define CV_SIGHTED_KNOTS 10
 /* Below CV_SIGHTED_KNOTS knots, the noise estimate from differences
  * (the larger of the two axes') this many times below the one from
@@ -151,20 +151,14 @@
  * x only, means and 95th percentiles stayed within 6 % either way (0.1 px
  * noise, one blank stripe: the worst 1.16 -> 0.46 px). */
 #define FEW_KNOTS_NOISE_OVER_DIFFERENCES_MAX 10.0
-/* ... and this many times below it is enough where cross-validation on
- * the axis also preferred interpolation.  That preference alone means
- * little with few knots (60 % of fits of data with 0.01 px noise), but
- * both together are rare on noisy data: 0-0.3 % of fits with 0.1 px
- * noise, 0-3 % with 0.01 px, and there interpolating costs little, while
- * exact settling is recognised in 49-73 % of fits instead of 26-43 %.
- * Seed 76000205 of test-continuous-compensate (blank stripes 3, 5 and 8
- * of 10) had the differences 9.2 times below on x and was smoothed to an
- * interior RMS 0.106 of paper mode's.  Over 600 draws of each of 10
- * stripes with 1-3 blank (and of 8 stripes with 0 or 2), settling or
- * constant velocity, exact or with 0.001-0.1 px noise: exact and 0.001 px
- * settling 5-10 % better in mean, 95th percentiles up to 10 %; with
- * 0.1 px noise means within 0.4 % and 95th percentiles within 2 %.  At
- * three, the worst of 0.1 px noise grew by 11 %. */
+/* ... and this many times below it where cross-validation on the axis
+ * also preferred interpolation.  With few knots that preference alone
+ * means little (60 % of fits of data with 0.01 px noise), but together
+ * with differences four times below it is rare on noisy data and catches
+ * exact settling about twice as often.  Seed 76000205 of
+ * test-continuous-compensate had the differences 9.2 (x) and 4.8 (y)
+ * times below and was smoothed to an interior RMS 0.106 of paper mode's;
+ * the calibration is in docs/accuracy.md (trajectory, known limits). */
 #define FEW_KNOTS_CV_NOISE_OVER_DIFFERENCES_MAX 4.0
 
 enum {
@@ -994,15 +988,16 @@ readmit_knots(DriftTrajectory *trajectory, Smoother *smoother, const gdouble *me
  * sigma^2 ((n - T) + 2 COMPLEXITY_PRICE T), is always below
  * interpolation's, 2 COMPLEXITY_PRICE n sigma^2: such data were smoothed,
  * which flattened the steep start and moved the extrapolated half stripe
- * at the frame edge by 0.03-0.04 px.  Two signs, each alone seen on noisy
- * data about once in a thousand fits (never both in the same), say that
- * sigma is bias: cross-validation preferred a fit too close to
- * interpolation to estimate noise, and the noise estimated from
- * differences of the trusted knots is far below sigma.  A local scan
- * rejected on either axis found a wrong particle and is left out on both:
- * its other coordinate may be off by less than the rejection threshold.
- * Counts per knot are not weighed in: several measurements of one image
- * time are rare and only make the knot's own error smaller.
+ * at the frame edge by 0.03-0.04 px.  From CV_SIGHTED_KNOTS knots on,
+ * two signs, each alone seen on noisy data about once in a thousand fits
+ * (never both in the same), say that sigma is bias: cross-validation
+ * preferred a fit too close to interpolation to estimate noise, and the
+ * noise estimated from differences of the trusted knots is far below
+ * sigma.  A local scan rejected on either axis found a wrong particle and
+ * is left out on both: its other coordinate may be off by less than the
+ * rejection threshold.  Counts per knot are not weighed in: several
+ * measurements of one image time are rare and only make the knot's own
+ * error smaller.
  *
  * Below CV_SIGHTED_KNOTS knots the differences decide, both axes count
  * (FEW_KNOTS_NOISE_OVER_DIFFERENCES_MAX), and cross-validation's
@@ -1012,7 +1007,7 @@ estimate_is_bias(gint n, const gdouble *t, const gdouble *measured,
                  const gdouble *robust, const gdouble *variance,
                  const gboolean *cv_interpolates, gint axis)
 {
-    gdouble scale;
+    gdouble scale, bar;
 
     if (variance[axis] <= 0.0)
         return FALSE;
@@ -1025,11 +1020,9 @@ estimate_is_bias(gint n, const gdouble *t, const gdouble *measured,
      * when both are. */
     scale = fmax(trusted_difference_noise(n, t, measured, robust),
                  trusted_difference_noise(n, t, measured + n, robust));
-    if (isnan(scale))
-        return FALSE;
-    return (sqrt(variance[axis]) > FEW_KNOTS_NOISE_OVER_DIFFERENCES_MAX*scale
-            || (cv_interpolates[axis]
-                && sqrt(variance[axis]) > FEW_KNOTS_CV_NOISE_OVER_DIFFERENCES_MAX*scale));
+    bar = (cv_interpolates[axis] ? FEW_KNOTS_CV_NOISE_OVER_DIFFERENCES_MAX
+           : FEW_KNOTS_NOISE_OVER_DIFFERENCES_MAX);
+    return !isnan(scale) && sqrt(variance[axis]) > bar*scale;
 }
 
 /* Smooths the knot values of both axes (count: measurements per knot),
